@@ -1,0 +1,7 @@
+//! `finrs`: host tools for segmented IPMC fins.
+//!
+//! The command line in `main.rs` is a thin layer over this library: every
+//! command is a function here, so that tests call the same code users run.
+#![deny(missing_docs)]
+
+pub mod recording;

@@ -1,0 +1,4 @@
+//! The `finrs` command line.
+fn main() {
+    println!("finrs");
+}

@@ -1,0 +1,1 @@
+//! Reading and writing recordings in the `ipmc-bench/1` format.

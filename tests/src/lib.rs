@@ -1,0 +1,3 @@
+//! Scenarios shared by the x86 tests and the QEMU program.
+#![no_std]
+#![deny(missing_docs)]
