@@ -25,6 +25,7 @@ mod beam;
 pub mod matrix;
 mod params;
 mod real;
+mod shape;
 mod strip;
 pub mod zoh;
 
