@@ -4,4 +4,9 @@
 //! command is a function here, so that tests call the same code users run.
 #![deny(missing_docs)]
 
+pub mod params;
+pub mod plot;
 pub mod recording;
+pub mod simulate;
+pub mod synth;
+pub mod wave;

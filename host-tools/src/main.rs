@@ -1,4 +1,154 @@
-//! The `finrs` command line.
-fn main() {
-    println!("finrs");
+//! The `finrs` command line: a thin layer over the `finrs` library.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context};
+use clap::{Parser, Subcommand, ValueEnum};
+use finrs::params::{Geometry, ModelFile};
+use finrs::recording::{Fixture, Recording};
+use finrs::simulate::simulate;
+use finrs::wave::Wave;
+use finrs::{plot, synth};
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Tools for segmented IPMC fins.
+#[derive(Parser)]
+#[command(name = "finrs", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Predict what the model does for a recording's drive, or for a wave.
+    Simulate(SimulateArgs),
+    /// Print a parameter file (the `thesis_2006` preset) to edit.
+    Params,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum FixtureArg {
+    Free,
+    Blocked,
+}
+
+#[derive(clap::Args)]
+struct SimulateArgs {
+    /// Recording whose voltage columns drive the model (ipmc-bench/1).
+    #[arg(long, conflicts_with = "wave", required_unless_present = "wave")]
+    input: Option<PathBuf>,
+    /// A wave instead of a recording: step:V[,V..], sine:AMP,HZ,LAG_DEG,
+    /// chirp:AMP,HZ0,HZ1 or pulses:AMP,ON_S,OFF_S.
+    #[arg(long)]
+    wave: Option<String>,
+    /// Segments, with --wave.
+    #[arg(long, default_value_t = 3)]
+    segments: usize,
+    /// Fixture, with --wave.
+    #[arg(long, value_enum, default_value_t = FixtureArg::Free)]
+    fixture: FixtureArg,
+    /// Rest at 0 V before the wave, s.
+    #[arg(long, default_value_t = 1.0)]
+    rest_s: f64,
+    /// Duration of the wave, s.
+    #[arg(long, default_value_t = 10.0)]
+    duration_s: f64,
+    /// Rest at 0 V after the wave, s.
+    #[arg(long, default_value_t = 0.0)]
+    off_s: f64,
+    /// Sample rate, Hz.
+    #[arg(long, default_value_t = 1000.0)]
+    rate_hz: f64,
+    /// Parameter file (TOML); default: the thesis_2006 preset.
+    #[arg(long)]
+    params: Option<PathBuf>,
+    /// Finite elements per segment (1, 2 or 4).
+    #[arg(long, default_value_t = 1)]
+    elements: usize,
+    /// Where to write the simulated recording (CSV).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write a PNG plot here.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Simulate(args) => run_simulate(args),
+        Command::Params => {
+            print!("{}", ModelFile::thesis_2006().to_toml());
+            Ok(())
+        }
+    }
+}
+
+fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
+    let model = match &args.params {
+        Some(p) => ModelFile::read(p)?,
+        None => ModelFile::thesis_2006(),
+    };
+    let (name, input) = match (&args.input, &args.wave) {
+        (Some(path), _) => (path.display().to_string(), Recording::read(path)?),
+        (None, Some(spec)) => {
+            let wave = Wave::parse(spec).map_err(anyhow::Error::msg)?;
+            let fixture = match args.fixture {
+                FixtureArg::Free => Fixture::Free,
+                FixtureArg::Blocked => Fixture::Blocked,
+            };
+            let drive = synth::Drive {
+                segments: args.segments,
+                fixture,
+                rest_s: args.rest_s,
+                duration_s: args.duration_s,
+                off_s: args.off_s,
+                rate_hz: args.rate_hz,
+            };
+            (spec.clone(), synth::drive_recording(&wave, &drive)?)
+        }
+        (None, None) => bail!("give --input REC.csv or --wave SPEC"),
+    };
+    let geometry = Geometry {
+        length_m: input.meta.length_m,
+        width_m: input.meta.width_m,
+        thickness_m: input.meta.thickness_m,
+    };
+    let params = model.params_for(&geometry).with_context(|| name.clone())?;
+
+    let bar = ProgressBar::new(input.t_s.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows ({eta})")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_message("simulating");
+    let sim = simulate(&name, &input, &params, args.elements, &mut |n| {
+        bar.set_position(n)
+    })?;
+    bar.finish_and_clear();
+
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    }
+    sim.write(&args.out)?;
+    eprintln!("wrote {} ({} rows)", args.out.display(), sim.t_s.len());
+    if let Some(png) = &args.plot {
+        let measured = args.input.as_ref().map(|_| &input);
+        plot::plot(png, &format!("finrs simulate: {name}"), measured, &sim)
+            .with_context(|| png.display().to_string())?;
+        eprintln!("wrote {}", png.display());
+    }
+    Ok(())
 }

@@ -218,3 +218,5 @@ impl fmt::Display for ParamError {
         }
     }
 }
+
+impl core::error::Error for ParamError {}

@@ -1,0 +1,288 @@
+//! The metadata lines, `# key = value`, values as in TOML.
+
+use super::error::RecordingError;
+
+/// The only format this reader knows.
+pub const FORMAT: &str = "ipmc-bench/1";
+
+/// How the tip is held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Fixture {
+    /// Tip free; a camera tracks it.
+    Free,
+    /// Tip held at rest by the load cell.
+    Blocked,
+}
+
+/// What surrounds the strip.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Medium {
+    /// Air.
+    Air,
+    /// Water.
+    Water,
+}
+
+/// The metadata of a recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Metadata {
+    /// Independently driven segments N, 1..=8, equal length.
+    pub segments: usize,
+    /// Free length, m.
+    pub length_m: f64,
+    /// Width, m.
+    pub width_m: f64,
+    /// Thickness, m.
+    pub thickness_m: f64,
+    /// How the tip is held.
+    pub fixture: Fixture,
+    /// What surrounds the strip.
+    pub medium: Medium,
+    /// Sample id.
+    pub sample: Option<String>,
+    /// Cation of the sample.
+    pub cation: Option<String>,
+    /// Arc-length position of each tracked dot from the clamp, m.
+    pub dots_s_m: Option<Vec<f64>>,
+    /// Free text.
+    pub notes: Option<String>,
+}
+
+const REQUIRED: [&str; 7] = [
+    "format",
+    "segments",
+    "length_m",
+    "width_m",
+    "thickness_m",
+    "fixture",
+    "medium",
+];
+const OPTIONAL: [&str; 4] = ["sample", "cation", "dots_s_m", "notes"];
+
+/// Collects metadata lines, then checks them as a whole.
+#[derive(Default)]
+pub(crate) struct MetaBuilder {
+    values: Vec<(String, toml::Value, usize)>,
+}
+
+impl MetaBuilder {
+    /// Takes one `# key = value` line (`line` 1-based).
+    pub fn line(&mut self, file: &str, line: usize, text: &str) -> Result<(), RecordingError> {
+        let body = text.strip_prefix('#').unwrap_or(text);
+        let table: toml::Table = body.parse().map_err(|e: toml::de::Error| {
+            RecordingError::at(
+                file,
+                line,
+                format!(
+                    "metadata must be `# key = value` with a TOML value: {}",
+                    e.message()
+                ),
+            )
+        })?;
+        if table.len() != 1 {
+            return Err(RecordingError::at(
+                file,
+                line,
+                "metadata must be `# key = value`, one key per line",
+            ));
+        }
+        let (key, value) = table.into_iter().next().expect("one entry");
+        if !REQUIRED.contains(&key.as_str()) && !OPTIONAL.contains(&key.as_str()) {
+            return Err(RecordingError::at(
+                file,
+                line,
+                format!("unknown metadata key `{key}`"),
+            ));
+        }
+        if let Some((_, _, first)) = self.values.iter().find(|(k, _, _)| *k == key) {
+            return Err(RecordingError::at(
+                file,
+                line,
+                format!("metadata key `{key}` given twice (first on line {first})"),
+            ));
+        }
+        self.values.push((key, value, line));
+        Ok(())
+    }
+
+    /// Checks the collected keys; `header_line` is where a missing key is
+    /// reported.
+    pub fn finish(self, file: &str, header_line: usize) -> Result<Metadata, RecordingError> {
+        let get = |key: &str| self.values.iter().find(|(k, _, _)| k == key);
+        for key in REQUIRED {
+            if get(key).is_none() {
+                return Err(RecordingError::at(
+                    file,
+                    header_line,
+                    format!("required metadata key `{key}` is missing before the header"),
+                ));
+            }
+        }
+        let string = |key: &str| -> Result<Option<(String, usize)>, RecordingError> {
+            match get(key) {
+                None => Ok(None),
+                Some((_, toml::Value::String(s), l)) => Ok(Some((s.clone(), *l))),
+                Some((_, _, l)) => Err(RecordingError::at(
+                    file,
+                    *l,
+                    format!("`{key}` must be a quoted string"),
+                )),
+            }
+        };
+        let number = |key: &str| -> Result<f64, RecordingError> {
+            let (_, v, l) = get(key).expect("required");
+            let x = match v {
+                toml::Value::Float(f) => *f,
+                toml::Value::Integer(i) => *i as f64,
+                _ => {
+                    return Err(RecordingError::at(
+                        file,
+                        *l,
+                        format!("`{key}` must be a number"),
+                    ))
+                }
+            };
+            if !x.is_finite() || x <= 0.0 {
+                return Err(RecordingError::at(
+                    file,
+                    *l,
+                    format!("`{key}` must be positive and finite, got {x}"),
+                ));
+            }
+            Ok(x)
+        };
+
+        let (format, format_line) = string("format")?.expect("required");
+        if format != FORMAT {
+            return Err(RecordingError::at(
+                file,
+                format_line,
+                format!("format must be \"{FORMAT}\", got \"{format}\""),
+            ));
+        }
+        let (_, seg_value, seg_line) = get("segments").expect("required");
+        let segments = match seg_value {
+            toml::Value::Integer(n) if (1..=8).contains(n) => *n as usize,
+            _ => {
+                return Err(RecordingError::at(
+                    file,
+                    *seg_line,
+                    format!("`segments` must be a whole number from 1 to 8, got {seg_value}"),
+                ))
+            }
+        };
+        let length_m = number("length_m")?;
+        let width_m = number("width_m")?;
+        let thickness_m = number("thickness_m")?;
+        let (fixture, l) = string("fixture")?.expect("required");
+        let fixture = match fixture.as_str() {
+            "free" => Fixture::Free,
+            "blocked" => Fixture::Blocked,
+            other => {
+                return Err(RecordingError::at(
+                    file,
+                    l,
+                    format!("fixture must be \"free\" or \"blocked\", got \"{other}\""),
+                ))
+            }
+        };
+        let (medium, l) = string("medium")?.expect("required");
+        let medium = match medium.as_str() {
+            "air" => Medium::Air,
+            "water" => Medium::Water,
+            other => {
+                return Err(RecordingError::at(
+                    file,
+                    l,
+                    format!("medium must be \"air\" or \"water\", got \"{other}\""),
+                ))
+            }
+        };
+        let dots_s_m = match get("dots_s_m") {
+            None => None,
+            Some((_, v, l)) => Some(dots(file, *l, v, length_m)?),
+        };
+        Ok(Metadata {
+            segments,
+            length_m,
+            width_m,
+            thickness_m,
+            fixture,
+            medium,
+            sample: string("sample")?.map(|s| s.0),
+            cation: string("cation")?.map(|s| s.0),
+            dots_s_m,
+            notes: string("notes")?.map(|s| s.0),
+        })
+    }
+}
+
+fn dots(
+    file: &str,
+    line: usize,
+    v: &toml::Value,
+    length_m: f64,
+) -> Result<Vec<f64>, RecordingError> {
+    let err = |m: String| RecordingError::at(file, line, m);
+    let toml::Value::Array(items) = v else {
+        return Err(err("`dots_s_m` must be an array of numbers".to_string()));
+    };
+    if items.is_empty() {
+        return Err(err("`dots_s_m` must name at least one dot".to_string()));
+    }
+    let mut out = Vec::with_capacity(items.len());
+    for item in items {
+        let s = match item {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(i) => *i as f64,
+            _ => return Err(err("`dots_s_m` must be an array of numbers".to_string())),
+        };
+        if !(s.is_finite() && s > 0.0 && s <= length_m) {
+            return Err(err(format!(
+                "`dots_s_m` positions must lie in (0, length_m = {length_m}], got {s}"
+            )));
+        }
+        if out.last().is_some_and(|&prev| s <= prev) {
+            return Err(err("`dots_s_m` must be strictly increasing".to_string()));
+        }
+        out.push(s);
+    }
+    Ok(out)
+}
+
+impl Metadata {
+    /// The metadata lines, in the order the format lists them.
+    pub(crate) fn to_lines(&self) -> String {
+        let q = |s: &str| toml::Value::String(s.to_string()).to_string();
+        let mut out = String::new();
+        out.push_str(&format!("# format = {}\n", q(FORMAT)));
+        out.push_str(&format!("# segments = {}\n", self.segments));
+        out.push_str(&format!("# length_m = {:?}\n", self.length_m));
+        out.push_str(&format!("# width_m = {:?}\n", self.width_m));
+        out.push_str(&format!("# thickness_m = {:?}\n", self.thickness_m));
+        if let Some(s) = &self.sample {
+            out.push_str(&format!("# sample = {}\n", q(s)));
+        }
+        if let Some(s) = &self.cation {
+            out.push_str(&format!("# cation = {}\n", q(s)));
+        }
+        let fixture = match self.fixture {
+            Fixture::Free => "free",
+            Fixture::Blocked => "blocked",
+        };
+        out.push_str(&format!("# fixture = {}\n", q(fixture)));
+        let medium = match self.medium {
+            Medium::Air => "air",
+            Medium::Water => "water",
+        };
+        out.push_str(&format!("# medium = {}\n", q(medium)));
+        if let Some(d) = &self.dots_s_m {
+            let items: Vec<String> = d.iter().map(|x| format!("{x:?}")).collect();
+            out.push_str(&format!("# dots_s_m = [{}]\n", items.join(", ")));
+        }
+        if let Some(s) = &self.notes {
+            out.push_str(&format!("# notes = {}\n", q(s)));
+        }
+        out
+    }
+}

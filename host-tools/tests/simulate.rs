@@ -1,0 +1,138 @@
+//! `finrs simulate` end to end: waves, the seed's facts, and the example
+//! session (a baseline recording, so the model must reproduce it).
+
+use std::path::Path;
+
+use finrs::params::{Geometry, ModelFile};
+use finrs::recording::{Channel, Fixture, Recording};
+use finrs::simulate::simulate;
+use finrs::synth::{drive_recording, Drive};
+use finrs::wave::Wave;
+
+fn seed_params() -> model_core::Params {
+    ModelFile::thesis_2006()
+        .params_for(&Geometry::THESIS_2006)
+        .unwrap()
+}
+
+fn drive(fixture: Fixture, rest_s: f64, duration_s: f64) -> Drive {
+    Drive {
+        segments: 3,
+        fixture,
+        rest_s,
+        duration_s,
+        off_s: 0.0,
+        rate_hz: 1000.0,
+    }
+}
+
+fn column(r: &Recording, ch: Channel) -> Vec<f64> {
+    r.channel(ch)
+        .unwrap_or_else(|| panic!("no {}", ch.name()))
+        .iter()
+        .map(|v| v.expect("simulation fills every row"))
+        .collect()
+}
+
+#[test]
+fn seed_experiment_writes_a_valid_recording() {
+    let wave = Wave::parse("step:2,1,-2").unwrap();
+    let input = drive_recording(&wave, &drive(Fixture::Free, 0.0, 10.0)).unwrap();
+    let sim = simulate("seed", &input, &seed_params(), 1, &mut |_| {}).unwrap();
+    sim.validate("seed").unwrap();
+    let text = sim.to_csv_string();
+    let back = Recording::parse("seed.csv", &text).unwrap();
+    assert_eq!(back.t_s.len(), 10_001);
+    // Currents jump to V/R1 + V/R2 on every segment at the first row.
+    let p = seed_params();
+    for (k, v) in [2.0, 1.0, -2.0].into_iter().enumerate() {
+        let i0 = column(&back, Channel::Current(k))[0];
+        let jump = v / p.r1_ohm + v / p.r2_ohm;
+        assert!((i0 - jump).abs() < 1e-12, "segment {k}: {i0} vs {jump}");
+    }
+    // Small-deflection kinematics: nothing moves along the strip.
+    assert!(column(&back, Channel::TipX).iter().all(|&x| x == 0.0));
+}
+
+#[test]
+fn blocked_step_settles_to_three_u_over_two_l() {
+    let wave = Wave::parse("step:2").unwrap();
+    let input = drive_recording(&wave, &drive(Fixture::Blocked, 0.5, 120.0)).unwrap();
+    let p = seed_params();
+    let sim = simulate("blocked", &input, &p, 1, &mut |_| {}).unwrap();
+    let force = column(&sim, Channel::Force);
+    let tail = &force[force.len() - 20_000..];
+    let mean = tail.iter().sum::<f64>() / tail.len() as f64;
+    // After 120 s the relaxation is down to e^-12 of its overshoot.
+    let expected = 3.0 * p.dc_moment_per_volt() * 2.0 / (2.0 * p.length_m);
+    assert!((mean / expected - 1.0).abs() < 2e-3, "{mean} vs {expected}");
+    assert!(sim.channel(Channel::TipY).is_none());
+}
+
+/// The example session of `../shared/bench/examples/baseline-air` is the
+/// baseline model with sensor noise only (4 elements per segment): our
+/// simulation of its drive must match its measurements within the noise.
+#[test]
+fn example_session_is_reproduced_within_noise() {
+    let dir =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench/examples/baseline-air");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        eprintln!(
+            "skipped: {} is not here (it is beside CI's checkout)",
+            dir.display()
+        );
+        return;
+    };
+    let mut files: Vec<_> = entries.map(|e| e.unwrap().path()).collect();
+    files.sort();
+    assert_eq!(files.len(), 10);
+    for path in files {
+        let name = path.display().to_string();
+        let measured = Recording::read(&path).unwrap();
+        let p = ModelFile::thesis_2006()
+            .params_for(&Geometry {
+                length_m: measured.meta.length_m,
+                width_m: measured.meta.width_m,
+                thickness_m: measured.meta.thickness_m,
+            })
+            .unwrap();
+        let sim = simulate(&name, &measured, &p, 4, &mut |_| {}).unwrap();
+        let (channel, noise) = match measured.meta.fixture {
+            // Camera: 0.05 mm rms plus 0.109 mm pixels (uniform, ±0.055 mm).
+            Fixture::Free => (Channel::TipY, 0.05e-3_f64.hypot(0.109e-3 / 12f64.sqrt())),
+            Fixture::Blocked => (Channel::Force, 0.02e-3),
+        };
+        let meas = measured.channel(channel).unwrap();
+        let model = column(&sim, channel);
+        let (mut sq, mut n) = (0.0, 0);
+        for (m, s) in meas.iter().zip(&model) {
+            if let Some(m) = m {
+                sq += (m - s) * (m - s);
+                n += 1;
+            }
+        }
+        let rms = (sq / n as f64).sqrt();
+        eprintln!(
+            "{name}: {} residual {rms:.3e} rms, noise {noise:.3e}",
+            channel.name()
+        );
+        // Measured: 1.02-1.16 x the camera noise (the rest is each file's
+        // own rest offset, FORMAT.md), 0.99-1.00 x the load cell's.
+        assert!(
+            rms < 1.3 * noise,
+            "{name}: {} rms residual {rms:e} against noise {noise:e}",
+            channel.name()
+        );
+        let cur = measured.channel(Channel::Current(0)).unwrap();
+        let cur_model = column(&sim, Channel::Current(0));
+        let cur_rms = (cur
+            .iter()
+            .zip(&cur_model)
+            .map(|(m, s)| (m.unwrap() - s).powi(2))
+            .sum::<f64>()
+            / cur.len() as f64)
+            .sqrt();
+        // Current noise: 0.1 mA rms.
+        assert!(cur_rms < 0.15e-3, "{name}: current residual {cur_rms:e}");
+    }
+}
