@@ -253,7 +253,7 @@ fn dots(
 impl Metadata {
     /// The metadata lines, in the order the format lists them.
     pub(crate) fn to_lines(&self) -> String {
-        let q = |s: &str| toml::Value::String(s.to_string()).to_string();
+        let q = |s: &str| basic_string(s);
         let mut out = String::new();
         out.push_str(&format!("# format = {}\n", q(FORMAT)));
         out.push_str(&format!("# segments = {}\n", self.segments));
@@ -285,4 +285,25 @@ impl Metadata {
         }
         out
     }
+}
+
+/// A TOML basic string on one line: quotes, backslashes and control
+/// characters escaped (the `toml` crate would write a multi-line string for
+/// text with line breaks, which cannot stand on one metadata line).
+fn basic_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
 }

@@ -1,0 +1,247 @@
+//! Every rule of `ipmc-bench/1` broken once: each file in `data/bad` must be
+//! refused with its file name, the right line and the rule in the message.
+
+use std::path::{Path, PathBuf};
+
+use finrs::recording::{Channel, Recording};
+
+fn data(dir: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(dir)
+}
+
+/// (file, line, part of the message).
+const CASES: &[(&str, Option<usize>, &str)] = &[
+    (
+        "01_format_wrong",
+        Some(1),
+        "format must be \"ipmc-bench/1\"",
+    ),
+    (
+        "02_missing_key",
+        Some(8),
+        "required metadata key `thickness_m` is missing",
+    ),
+    (
+        "03_segments_zero",
+        Some(2),
+        "`segments` must be a whole number from 1 to 8",
+    ),
+    (
+        "04_segments_nine",
+        Some(2),
+        "`segments` must be a whole number from 1 to 8",
+    ),
+    (
+        "05_segments_float",
+        Some(2),
+        "`segments` must be a whole number from 1 to 8",
+    ),
+    (
+        "06_length_negative",
+        Some(3),
+        "`length_m` must be positive and finite",
+    ),
+    ("07_width_string", Some(4), "`width_m` must be a number"),
+    (
+        "08_fixture_unknown",
+        Some(6),
+        "fixture must be \"free\" or \"blocked\"",
+    ),
+    (
+        "09_medium_unknown",
+        Some(7),
+        "medium must be \"air\" or \"water\"",
+    ),
+    ("10_duplicate_key", Some(9), "given twice (first on line 7)"),
+    ("11_unknown_key", Some(9), "unknown metadata key `colour`"),
+    (
+        "12_metadata_not_toml",
+        Some(3),
+        "metadata must be `# key = value`",
+    ),
+    (
+        "13_dots_decreasing",
+        Some(8),
+        "`dots_s_m` must be strictly increasing",
+    ),
+    (
+        "14_dots_beyond_length",
+        Some(8),
+        "must lie in (0, length_m = 0.05]",
+    ),
+    ("15_header_not_t_s", Some(9), "header must start with t_s"),
+    ("16_voltage_count", Some(9), "header column 3 must be v2_V"),
+    ("17_unknown_column", Some(9), "unknown column `tip_z_m`"),
+    (
+        "18_duplicate_column",
+        Some(9),
+        "column `tip_y_m` appears twice",
+    ),
+    (
+        "19_current_beyond_segments",
+        Some(9),
+        "there are only 2 segments",
+    ),
+    ("20_dot_not_declared", Some(9), "needs dot 3 in `dots_s_m`"),
+    (
+        "21_force_on_free_tip",
+        Some(9),
+        "`force_N` needs fixture = \"blocked\"",
+    ),
+    (
+        "22_camera_on_blocked_tip",
+        Some(9),
+        "needs fixture = \"free\"",
+    ),
+    (
+        "23_time_not_increasing",
+        Some(12),
+        "time must be strictly increasing (0.001 after 0.001)",
+    ),
+    (
+        "24_time_negative",
+        Some(10),
+        "time must start at or after 0",
+    ),
+    (
+        "25_number_not_parsing",
+        Some(11),
+        "i2_A = `0.0191x` is not a number",
+    ),
+    ("26_nan", Some(11), "NaN and infinity are not measurements"),
+    (
+        "27_infinity",
+        Some(11),
+        "NaN and infinity are not measurements",
+    ),
+    (
+        "28_voltage_empty",
+        Some(11),
+        "v1_V is empty: voltages are never missing",
+    ),
+    (
+        "29_voltage_beyond_safe_range",
+        Some(11),
+        "beyond the safe range of ±4 V",
+    ),
+    (
+        "30_row_too_short",
+        Some(11),
+        "row has 8 fields, the header has 9",
+    ),
+    (
+        "31_row_too_long",
+        Some(11),
+        "row has 10 fields, the header has 9",
+    ),
+    (
+        "32_blank_line_in_data",
+        Some(12),
+        "blank line inside the data",
+    ),
+    (
+        "33_metadata_after_header",
+        Some(12),
+        "metadata line after the header",
+    ),
+    ("34_time_empty", Some(11), "t_s is empty"),
+    ("35_no_data_rows", Some(9), "no data rows after the header"),
+    ("36_no_header", None, "no header line after the metadata"),
+    ("37_empty_file", None, "empty file"),
+    ("38_not_utf8", Some(11), "not valid UTF-8"),
+    ("39_blank_line_before_header", Some(9), "blank line"),
+    (
+        "40_notes_not_string",
+        Some(9),
+        "`notes` must be a quoted string",
+    ),
+];
+
+#[test]
+fn every_bad_file_is_refused_for_its_rule() {
+    let dir = data("bad");
+    let mut on_disk: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    on_disk.sort();
+    let listed: Vec<String> = CASES.iter().map(|c| format!("{}.csv", c.0)).collect();
+    assert_eq!(
+        on_disk, listed,
+        "every bad file has a case, every case a file"
+    );
+    for &(file, line, needle) in CASES {
+        let path = dir.join(format!("{file}.csv"));
+        let err = Recording::read(&path).expect_err(file);
+        let msg = err.to_string();
+        assert!(
+            msg.starts_with(&path.display().to_string()),
+            "{file}: {msg}"
+        );
+        assert_eq!(err.line(), line, "{file}: {msg}");
+        assert!(
+            err.message().contains(needle),
+            "{file}: `{msg}` lacks `{needle}`"
+        );
+    }
+}
+
+#[test]
+fn good_files_read_and_round_trip() {
+    for entry in std::fs::read_dir(data("good")).unwrap() {
+        let path = entry.unwrap().path();
+        let rec = Recording::read(&path).unwrap_or_else(|e| panic!("{e}"));
+        rec.validate("round trip").unwrap();
+        let back = Recording::parse("round trip", &rec.to_csv_string()).unwrap();
+        assert_eq!(back, rec, "{}", path.display());
+    }
+    let free = Recording::read(&data("good").join("free_camera_crlf.csv")).unwrap();
+    assert_eq!(
+        free,
+        Recording::read(&data("good").join("free_camera.csv")).unwrap()
+    );
+    let tip = free.channel(Channel::TipY).unwrap();
+    assert_eq!(tip, &[Some(0.0), None, None, Some(0.0001)]);
+    assert_eq!(free.v_v[1], vec![2.5, 2.5]);
+}
+
+#[test]
+fn writer_refuses_what_the_reader_would() {
+    let mut rec = Recording::read(&data("good").join("free_camera.csv")).unwrap();
+    rec.v_v[2][0] = 5.0;
+    let err = rec.validate("made.csv").unwrap_err();
+    assert_eq!(err.line(), Some(12), "{err}");
+    assert!(err.message().contains("safe range"), "{err}");
+    let mut rec = Recording::read(&data("good").join("free_camera.csv")).unwrap();
+    rec.channels[0].1.pop();
+    assert!(rec
+        .validate("made.csv")
+        .unwrap_err()
+        .to_string()
+        .contains("i1_A has 3 values for 4 rows"));
+    let mut rec = Recording::read(&data("good").join("free_camera.csv")).unwrap();
+    rec.channels[0].1[1] = Some(f64::NAN);
+    assert!(rec
+        .write(Path::new("/nonexistent/never-written.csv"))
+        .is_err());
+}
+
+/// The example session (beside the checkout in CI) reads cleanly.
+#[test]
+fn example_session_reads() {
+    let dir =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench/examples/baseline-air");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        eprintln!("skipped: {} is not here", dir.display());
+        return;
+    };
+    for entry in entries {
+        let path = entry.unwrap().path();
+        let rec = Recording::read(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(rec.meta.segments, 3);
+        assert!(rec.t_s.len() > 9_000, "{}", path.display());
+        assert!(rec.channel(Channel::Current(2)).is_some());
+    }
+}

@@ -1,0 +1,88 @@
+//! The reader on arbitrary and on nearly valid input: it never panics, and
+//! whatever it accepts is a recording that passes every rule.
+
+use finrs::recording::{Channel, Fixture, Medium, Metadata, Recording};
+use proptest::prelude::*;
+
+const VALID: &str = include_str!("data/good/free_camera.csv");
+
+fn accepted_is_valid(rec: Result<Recording, finrs::recording::RecordingError>) {
+    match rec {
+        Ok(r) => r.validate("accepted").expect("what is read is valid"),
+        Err(e) => assert!(!e.message().is_empty()),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..2048)) {
+        accepted_is_valid(Recording::parse_bytes("fuzz.csv", &bytes));
+    }
+
+    #[test]
+    fn mutated_valid_files_never_panic(
+        at in 0usize..VALID.len(),
+        byte in any::<u8>(),
+        drop_line in 0usize..14,
+        field in "[-+0-9.eEinfNa,#= \"]{0,8}",
+    ) {
+        // A byte replaced.
+        let mut bytes = VALID.as_bytes().to_vec();
+        bytes[at] = byte;
+        accepted_is_valid(Recording::parse_bytes("mutated.csv", &bytes));
+        // A line deleted.
+        let lines: Vec<&str> = VALID.lines().collect();
+        let mut kept = lines.clone();
+        kept.remove(drop_line.min(lines.len() - 1));
+        accepted_is_valid(Recording::parse("dropped.csv", &(kept.join("\n") + "\n")));
+        // A field replaced by something number-like.
+        let mut text = VALID.to_string();
+        let commas: Vec<usize> = text.match_indices(',').map(|(i, _)| i).collect();
+        let c = commas[at % commas.len()];
+        text.insert_str(c + 1, &field);
+        accepted_is_valid(Recording::parse("field.csv", &text));
+    }
+
+    #[test]
+    fn valid_recordings_round_trip_exactly(
+        segments in 1usize..=8,
+        rows in proptest::collection::vec((1e-6f64..10.0, -4.0f64..=4.0, proptest::option::of(-1.0f64..1.0)), 1..40),
+        blocked in any::<bool>(),
+        notes in any::<String>(),
+    ) {
+        let mut t = 0.0;
+        let mut t_s = Vec::new();
+        let mut v_v = Vec::new();
+        let mut meas = Vec::new();
+        for (dt, v, m) in &rows {
+            t += dt;
+            t_s.push(t);
+            v_v.push(vec![*v; segments]);
+            meas.push(*m);
+        }
+        let fixture = if blocked { Fixture::Blocked } else { Fixture::Free };
+        let ch = if blocked { Channel::Force } else { Channel::TipY };
+        let rec = Recording {
+            meta: Metadata {
+                segments,
+                length_m: 0.05,
+                width_m: 0.01,
+                thickness_m: 2.858e-4,
+                fixture,
+                medium: Medium::Water,
+                sample: Some("p \"q\" \\ r".to_string()),
+                cation: None,
+                dots_s_m: None,
+                notes: Some(notes),
+            },
+            t_s,
+            v_v,
+            channels: vec![(Channel::Current(segments - 1), meas.clone()), (ch, meas)],
+        };
+        rec.validate("gen.csv").unwrap();
+        let back = Recording::parse("gen.csv", &rec.to_csv_string()).unwrap();
+        prop_assert_eq!(back, rec);
+    }
+}
