@@ -1,0 +1,151 @@
+//! The same model core, in `f32`, on x86 and on a Cortex-M4F in QEMU.
+//!
+//! The test builds `finrs-qemu-tests` for thumbv7em-none-eabihf (its own
+//! target directory, so it cannot wait on this `cargo test`'s lock), runs it
+//! in `qemu-system-arm -machine netduinoplus2` with semihosting, and
+//! compares every number with the same scenarios run here.
+//!
+//! Tolerance: both targets do IEEE-754 single precision with the same
+//! operation order (Rust does not contract `a * b + c` into a fused
+//! multiply-add unless asked), and the discretisation runs in `f64` on both
+//! with the same `libm`. We measured the two outputs bit-identical; the test
+//! still allows 4 units in the last place of `f32` (relative 5e-7, with a
+//! floor at 1e-12 of the scenario's largest value) so that a compiler's
+//! legitimate choice of instruction cannot fail it, while any real
+//! divergence of the model (orders of magnitude larger) does.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn build_elf() -> PathBuf {
+    let ws = workspace();
+    let target_dir = ws.join("target/qemu");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    let status = Command::new(cargo)
+        .current_dir(&ws)
+        .args(["build", "--release", "--locked", "-p", "finrs-qemu-tests"])
+        .args(["--target", TARGET])
+        .arg("--target-dir")
+        .arg(&target_dir)
+        .status()
+        .expect("cargo runs");
+    assert!(
+        status.success(),
+        "building the QEMU program failed (is the target installed? run scripts/setup)"
+    );
+    target_dir.join(TARGET).join("release/finrs-qemu-tests")
+}
+
+fn run_qemu(elf: &Path) -> String {
+    let mut child = Command::new("qemu-system-arm")
+        .args([
+            "-cpu",
+            "cortex-m4",
+            "-machine",
+            "netduinoplus2",
+            "-nographic",
+        ])
+        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .arg(elf)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("qemu-system-arm is installed (run scripts/setup)");
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            let out = child.wait_with_output().unwrap();
+            assert!(
+                status.success(),
+                "QEMU run failed ({status}): {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            return String::from_utf8(out.stdout).expect("the program prints UTF-8");
+        }
+        if start.elapsed() > Duration::from_secs(300) {
+            child.kill().unwrap();
+            panic!("QEMU did not finish in 300 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A line: scenario, sample index, numbers.
+fn parse(line: &str) -> (String, usize, Vec<f64>) {
+    let mut it = line.split(' ');
+    let name = it.next().unwrap().to_string();
+    let k = it
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap_or_else(|_| panic!("bad line `{line}`"));
+    let nums = it
+        .map(|s| {
+            s.parse::<f64>()
+                .unwrap_or_else(|_| panic!("bad number in `{line}`"))
+        })
+        .collect();
+    (name, k, nums)
+}
+
+#[test]
+fn cortex_m4f_in_qemu_matches_x86() {
+    let elf = build_elf();
+    let qemu = run_qemu(&elf);
+    let mut x86 = String::new();
+    finrs_tests::run_all::<f32, _>(&mut x86).unwrap();
+
+    let (q, h): (Vec<&str>, Vec<&str>) = (qemu.lines().collect(), x86.lines().collect());
+    assert_eq!(
+        q.len(),
+        h.len(),
+        "QEMU printed {} lines, x86 {}",
+        q.len(),
+        h.len()
+    );
+    assert!(
+        h.len() > 500,
+        "the scenarios print every {} samples",
+        finrs_tests::EVERY
+    );
+    // Each scenario's largest magnitude per column sets the absolute floor.
+    let mut scale = std::collections::HashMap::<(String, usize), f64>::new();
+    for line in &h {
+        let (name, _, nums) = parse(line);
+        for (c, v) in nums.iter().enumerate() {
+            let s = scale.entry((name.clone(), c)).or_insert(0.0);
+            *s = s.max(v.abs());
+        }
+    }
+    let (mut worst, mut bit_identical) = (0.0f64, true);
+    for (ql, hl) in q.iter().zip(&h) {
+        bit_identical &= ql == hl;
+        let (qn, qk, qv) = parse(ql);
+        let (hn, hk, hv) = parse(hl);
+        assert_eq!(
+            (&qn, qk, qv.len()),
+            (&hn, hk, hv.len()),
+            "line layout differs"
+        );
+        for (c, (a, b)) in qv.iter().zip(&hv).enumerate() {
+            let floor = 1e-12 * scale[&(hn.clone(), c)];
+            let rel = (a - b).abs() / b.abs().max(floor).max(f64::MIN_POSITIVE);
+            worst = worst.max(rel);
+            assert!(
+                rel <= 5e-7,
+                "{hn} sample {hk} column {c}: QEMU {a:e} vs x86 {b:e} (relative {rel:e})"
+            );
+        }
+    }
+    eprintln!(
+        "{} lines compared; largest relative difference {worst:e}; bit-identical: {bit_identical}",
+        h.len()
+    );
+}
