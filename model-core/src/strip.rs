@@ -231,15 +231,27 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
 
     /// Advances one sample: `x ← Φ x + Γ v`, with `v` (V per segment) held
     /// over the step.
+    ///
+    /// `Φ` is dense only where the physics couples: a mode's `η` and `ζ`
+    /// rows see their own pair and the electrical states; electrical rows
+    /// see only electrical states. Everything else is exactly zero (the
+    /// exponential of a matrix with that structure keeps it), so the loop
+    /// skips it: 186 multiply-adds for N = 3 instead of the dense 378.
     #[inline]
     pub fn step(&self, x: &mut [T; S], v: &[T; N]) {
         let mut next = [T::ZERO; S];
-        for (n, (phi_row, g_row)) in next.iter_mut().zip(self.phi.iter().zip(self.gamma.iter())) {
+        for (i, n) in next.iter_mut().enumerate() {
+            let row = &self.phi[i];
             let mut acc = T::ZERO;
-            for (&p, &xi) in phi_row.iter().zip(x.iter()) {
-                acc += p * xi;
+            if i < Self::ELEC {
+                let k = i % Self::DOF;
+                acc += row[k] * x[k];
+                acc += row[Self::DOF + k] * x[Self::DOF + k];
             }
-            for (&g, &vi) in g_row.iter().zip(v.iter()) {
+            for (&p, &xj) in row[Self::ELEC..].iter().zip(&x[Self::ELEC..]) {
+                acc += p * xj;
+            }
+            for (&g, &vi) in self.gamma[i].iter().zip(v.iter()) {
                 acc += g * vi;
             }
             *n = acc;

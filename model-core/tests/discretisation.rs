@@ -137,3 +137,29 @@ fn long_steps_stay_bounded() {
         assert!(s.tip_deflection_m(&x).abs() < 0.05);
     }
 }
+
+/// The structured step skips the entries of Φ that the physics makes zero;
+/// they must be exactly zero, in every fixture and mesh.
+#[test]
+fn phi_is_zero_outside_the_coupled_blocks() {
+    fn check<const N: usize, const E: usize, const S: usize>(fixture: Fixture) {
+        let s = Strip::<f64, N, E, S>::new(&Params::thesis_2006(), fixture, 1e-3).unwrap();
+        let dof = 2 * N * E;
+        let elec = 2 * dof;
+        for (i, row) in s.phi().iter().enumerate() {
+            for (j, &p) in row.iter().enumerate() {
+                let coupled = j >= elec || (i < elec && j % dof == i % dof);
+                assert!(
+                    coupled || p == 0.0,
+                    "{fixture:?} N={N} E={E}: Φ[{i}][{j}] = {p:e}"
+                );
+            }
+        }
+    }
+    for fixture in [Fixture::Free, Fixture::Blocked] {
+        check::<1, 1, 6>(fixture);
+        check::<3, 1, 18>(fixture);
+        check::<3, 2, { model_core::state_len(3, 2) }>(fixture);
+        check::<8, 1, { model_core::state_len(8, 1) }>(fixture);
+    }
+}
