@@ -240,23 +240,34 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     #[inline]
     pub fn step(&self, x: &mut [T; S], v: &[T; N]) {
         let mut next = [T::ZERO; S];
-        for (i, n) in next.iter_mut().enumerate() {
-            let row = &self.phi[i];
-            let mut acc = T::ZERO;
-            if i < Self::ELEC {
-                let k = i % Self::DOF;
-                acc += row[k] * x[k];
-                acc += row[Self::DOF + k] * x[Self::DOF + k];
+        let (beam, elec) = x.split_at(Self::ELEC);
+        // One pass per mode: its η and ζ rows share the pair they read.
+        for k in 0..Self::DOF {
+            let pair = [beam[k], beam[Self::DOF + k]];
+            for i in [k, Self::DOF + k] {
+                let row = &self.phi[i];
+                let mut acc = row[k] * pair[0] + row[Self::DOF + k] * pair[1];
+                acc += self.coupled(i, elec, v);
+                next[i] = acc;
             }
-            for (&p, &xj) in row[Self::ELEC..].iter().zip(&x[Self::ELEC..]) {
-                acc += p * xj;
-            }
-            for (&g, &vi) in self.gamma[i].iter().zip(v.iter()) {
-                acc += g * vi;
-            }
-            *n = acc;
+        }
+        for i in Self::ELEC..S {
+            next[i] = self.coupled(i, elec, v);
         }
         *x = next;
+    }
+
+    /// Row `i` of `Φ` over the electrical states plus row `i` of `Γ v`.
+    #[inline(always)]
+    fn coupled(&self, i: usize, elec: &[T], v: &[T; N]) -> T {
+        let mut acc = T::ZERO;
+        for (&p, &e) in self.phi[i][Self::ELEC..].iter().zip(elec) {
+            acc += p * e;
+        }
+        for (&g, &vi) in self.gamma[i].iter().zip(v.iter()) {
+            acc += g * vi;
+        }
+        acc
     }
 
     /// Tip deflection across the strip, m (zero for the blocked fixture).
