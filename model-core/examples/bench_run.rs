@@ -38,8 +38,8 @@ fn main() -> std::io::Result<()> {
         e[j] = 1.0;
         strip.tip_deflection_m(&e)
     })];
-    std::fs::write(dir.join("phi.txt"), matrix(strip.phi()))?;
-    std::fs::write(dir.join("gamma.txt"), matrix(strip.gamma()))?;
+    std::fs::write(dir.join("phi.txt"), matrix(&strip.phi()))?;
+    std::fs::write(dir.join("gamma.txt"), matrix(&strip.gamma()))?;
     std::fs::write(dir.join("c.txt"), matrix(&tip_row))?;
     let mut u = String::new();
     for v in &input {

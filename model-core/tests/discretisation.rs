@@ -138,28 +138,57 @@ fn long_steps_stay_bounded() {
     }
 }
 
-/// The structured step skips the entries of Φ that the physics makes zero;
-/// they must be exactly zero, in every fixture and mesh.
+/// `Strip::new` exponentiates block by block (one 4-state system per mode);
+/// that must equal the exponential of the whole continuous system, and the
+/// step must apply exactly that `Φ` and `Γ`.
 #[test]
-fn phi_is_zero_outside_the_coupled_blocks() {
-    fn check<const N: usize, const E: usize, const S: usize>(fixture: Fixture) {
-        let s = Strip::<f64, N, E, S>::new(&Params::thesis_2006(), fixture, 1e-3).unwrap();
-        let dof = 2 * N * E;
-        let elec = 2 * dof;
-        for (i, row) in s.phi().iter().enumerate() {
-            for (j, &p) in row.iter().enumerate() {
-                let coupled = j >= elec || (i < elec && j % dof == i % dof);
+fn block_discretisation_equals_the_dense_one() {
+    fn check<const N: usize, const E: usize, const S: usize>(fixture: Fixture, h: f64) {
+        let p = Params::thesis_2006();
+        let s = Strip::<f64, N, E, S>::new(&p, fixture, h).unwrap();
+        let (mut a, b) = Strip::<f64, N, E, S>::continuous(&p, fixture).unwrap();
+        let (mut phi, mut gamma) = ([[0.0; S]; S], [[0.0; N]; S]);
+        discretise(&mut a, &b, h, &mut phi, &mut gamma);
+        let (ours_phi, ours_gamma) = (s.phi(), s.gamma());
+        let scale_g = gamma.iter().flatten().fold(0.0f64, |m, g| m.max(g.abs()));
+        for i in 0..S {
+            for j in 0..S {
+                let d = (ours_phi[i][j] - phi[i][j]).abs();
+                // Φ is O(1); the dense run squares a larger norm, so allow its rounding.
                 assert!(
-                    coupled || p == 0.0,
-                    "{fixture:?} N={N} E={E}: Φ[{i}][{j}] = {p:e}"
+                    d < 1e-11,
+                    "{fixture:?} N={N} E={E} h={h}: Φ[{i}][{j}] off by {d:e}"
+                );
+            }
+            for j in 0..N {
+                let d = (ours_gamma[i][j] - gamma[i][j]).abs() / scale_g;
+                assert!(
+                    d < 1e-11,
+                    "{fixture:?} N={N} E={E} h={h}: Γ[{i}][{j}] off by {d:e}"
                 );
             }
         }
+        // The step applies Φ x + Γ v, for a state with every entry set.
+        let mut x: [f64; S] = core::array::from_fn(|j| ((j * 7 % 11) as f64 - 5.0) * 1e-3);
+        let v: [f64; N] = core::array::from_fn(|i| 1.0 - i as f64);
+        let want: [f64; S] = core::array::from_fn(|i| {
+            (0..S).map(|j| ours_phi[i][j] * x[j]).sum::<f64>()
+                + (0..N).map(|j| ours_gamma[i][j] * v[j]).sum::<f64>()
+        });
+        s.step(&mut x, &v);
+        for i in 0..S {
+            assert!(
+                (x[i] - want[i]).abs() < 1e-15,
+                "{fixture:?} N={N} E={E}: x[{i}]"
+            );
+        }
     }
     for fixture in [Fixture::Free, Fixture::Blocked] {
-        check::<1, 1, 6>(fixture);
-        check::<3, 1, 18>(fixture);
-        check::<3, 2, { model_core::state_len(3, 2) }>(fixture);
-        check::<8, 1, { model_core::state_len(8, 1) }>(fixture);
+        for h in [1e-4, 1e-3, 1e-2] {
+            check::<1, 1, 6>(fixture, h);
+            check::<3, 1, 18>(fixture, h);
+            check::<3, 2, { model_core::state_len(3, 2) }>(fixture, h);
+            check::<8, 1, { model_core::state_len(8, 1) }>(fixture, h);
+        }
     }
 }
