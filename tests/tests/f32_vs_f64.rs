@@ -29,9 +29,9 @@ fn sixty_seconds_of_f32_stay_close_to_f64() {
         "60 s: largest tip difference {worst:.3e} m on a peak of {peak:.3e} m ({:.2e} of it)",
         worst / peak
     );
-    // Measured on x86-64: 1.46e-6 m on a 7.66e-3 m peak (1.9e-4 of it,
+    // Measured on x86-64: 1.28e-6 m on a 7.66e-3 m peak (1.7e-4 of it,
     // 1/75 of a camera pixel). f32 stores Φ to 6e-8 relative; what builds
     // up is mostly the phase of the undamped ringing, which no rounding can
-    // damp. The bound leaves a factor of 2.5 for other compilers' rounding.
+    // damp. The bound leaves a factor of 3 for other compilers' rounding.
     assert!(worst < 5e-4 * peak, "drift {worst:e} m on {peak:e} m");
 }
