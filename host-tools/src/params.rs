@@ -273,7 +273,7 @@ mod tests {
             .replace("z_per_s = 0.077", "z_per_s = 0.5");
         let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
         assert!(
-            err.starts_with("p.toml: relaxation needs 0 < z < p"),
+            err.starts_with("p.toml: relaxation needs its zero below its pole, z < p"),
             "{err}"
         );
         let f = ModelFile::thesis_2006();

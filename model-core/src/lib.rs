@@ -22,6 +22,7 @@
 #![deny(missing_docs, unsafe_code)]
 
 mod beam;
+mod extensions;
 pub mod matrix;
 mod params;
 mod real;
@@ -29,6 +30,7 @@ mod shape;
 mod strip;
 pub mod zoh;
 
+pub use extensions::Extensions;
 pub use params::{Laminate, ParamError, Params};
 pub use real::Real;
 pub use strip::{state_len, Fixture, Strip};

@@ -143,11 +143,26 @@ impl Params {
     /// `0 < z < p` (eq. 2.3): the moment overshoots and relaxes toward its
     /// DC value, never past zero.
     pub fn validate(&self) -> Result<(), ParamError> {
+        self.validate_relaxation(false)
+    }
+
+    /// As [`Params::validate`]; with `back_relaxation`, the zero may also
+    /// be at or below zero (`z < p` still), the back-relaxation extension.
+    pub fn validate_relaxation(&self, back_relaxation: bool) -> Result<(), ParamError> {
         positive("r1_ohm", self.r1_ohm)?;
         positive("r2_ohm", self.r2_ohm)?;
         positive("c_f", self.c_f)?;
         positive("k_nm_per_c", self.k_nm_per_c)?;
-        positive("z_per_s", self.z_per_s)?;
+        if back_relaxation {
+            if !self.z_per_s.is_finite() {
+                return Err(ParamError::NotFinite {
+                    field: "z_per_s",
+                    value: self.z_per_s,
+                });
+            }
+        } else {
+            positive("z_per_s", self.z_per_s)?;
+        }
         positive("p_per_s", self.p_per_s)?;
         positive("length_m", self.length_m)?;
         positive("ei_nm2", self.ei_nm2)?;
@@ -196,6 +211,17 @@ pub enum ParamError {
         /// The pole `p`, 1/s.
         p_per_s: f64,
     },
+    /// A quantity outside its allowed open interval.
+    OutOfRange {
+        /// The field's name.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// Lower end (excluded, or included for a lower end of 0).
+        min: f64,
+        /// Upper end (excluded).
+        max: f64,
+    },
     /// The beam's mass matrix is not positive definite (numerically
     /// degenerate geometry).
     SingularMass,
@@ -212,8 +238,14 @@ impl fmt::Display for ParamError {
             }
             ParamError::RelaxationOrder { z_per_s, p_per_s } => write!(
                 f,
-                "relaxation needs 0 < z < p (eq. 2.3), got z_per_s = {z_per_s}, p_per_s = {p_per_s}"
+                "relaxation needs its zero below its pole, z < p (eq. 2.3), got z_per_s = {z_per_s}, p_per_s = {p_per_s}"
             ),
+            ParamError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+            } => write!(f, "{field} must lie between {min} and {max}, got {value}"),
             ParamError::SingularMass => write!(f, "beam mass matrix is not positive definite"),
         }
     }

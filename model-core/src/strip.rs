@@ -30,6 +30,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::beam::{assemble, modes, Assembly};
+use crate::extensions::Extensions;
 use crate::matrix::Mat;
 use crate::params::{ParamError, Params};
 use crate::real::Real;
@@ -69,6 +70,7 @@ pub const fn state_len(n: usize, e: usize) -> usize {
 #[derive(Clone, Debug)]
 pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     params: Params,
+    ext: Extensions,
     fixture: Fixture,
     dt_s: f64,
     /// The modes' own blocks of `Φ`, `[ηη, ηζ, ζη, ζζ]`, indexed by mode
@@ -91,6 +93,14 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     inv_r2: T,
     kc: T,
     z_minus_p: T,
+    /// `a` of the double layer's `v (1 + a v²)`.
+    charge_cubic: T,
+    /// `b` of the leak's `v/R2 (1 + b v²)`.
+    leak_cubic: T,
+    /// `κ`, the moment a segment puts on each neighbour.
+    crosstalk: T,
+    /// Scale of every moment (1 unless dehydration lowers it).
+    moment_gain: T,
 }
 
 /// What the modal analysis of the beam gives, in `f64`.
@@ -100,8 +110,13 @@ struct Analysis<const N: usize, const S: usize> {
     psi: Mat<S, S>,
     omega2: [f64; S],
     omega: [f64; S],
-    /// `g[k][i]`: modal force of mode `k` per unit moment of segment `i`.
+    /// `g[k][i]`: modal force of mode `k` per unit moment of segment `i`,
+    /// crosstalk included.
     g: [[f64; N]; S],
+    /// `F` with crosstalk: load on freedom `d` per unit moment of segment `i`.
+    f: [[f64; N]; S],
+    /// `2ζω` of every mode, 1/s.
+    two_zeta_omega: [f64; S],
     modes: usize,
 }
 
@@ -123,12 +138,24 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// of `Φ` and `Γ`. No `S × S` exponential is formed, which keeps the
     /// stack small enough to re-discretise on the board.
     pub fn new(params: &Params, fixture: Fixture, dt_s: f64) -> Result<Self, ParamError> {
+        Self::with_extensions(params, &Extensions::NONE, fixture, dt_s)
+    }
+
+    /// Builds the model with the optional terms of `ext` (see
+    /// [`Extensions`]) and its exact discretisation at sample time `dt_s`.
+    pub fn with_extensions(
+        params: &Params,
+        ext: &Extensions,
+        fixture: Fixture,
+        dt_s: f64,
+    ) -> Result<Self, ParamError> {
         const {
             assert!(N >= 1 && N <= 8, "segments N must be 1..=8");
             assert!(E >= 1 && E <= 8, "elements per segment E must be 1..=8");
             assert!(S == state_len(N, E), "S must be state_len(N, E) = 2N(2E+1)");
         }
-        params.validate()?;
+        params.validate_relaxation(ext.back_relaxation)?;
+        ext.validate()?;
         if !dt_s.is_finite() {
             return Err(ParamError::NotFinite {
                 field: "dt_s",
@@ -141,7 +168,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 value: dt_s,
             });
         }
-        let an = Self::analyse(params, fixture)?;
+        let an = Self::analyse(params, ext, fixture)?;
         let kc = params.k_nm_per_c * params.c_f;
         let z_minus_p = params.z_per_s - params.p_per_s;
         let inv_tau1 = 1.0 / params.tau1_s();
@@ -178,7 +205,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             // Mode k driven by one segment with unit modal coupling.
             let mut a = [
                 [0.0, w, 0.0, 0.0],
-                [-w, 0.0, 1.0 / w, z_minus_p / w],
+                [-w, -an.two_zeta_omega[k], 1.0 / w, z_minus_p / w],
                 [0.0, 0.0, -inv_tau1, 0.0],
                 [0.0, 0.0, 1.0, -params.p_per_s],
             ];
@@ -227,7 +254,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
             }
             for i in 0..N {
-                let mut per_moment = an.beam.f[t][i];
+                let mut per_moment = an.f[t][i];
                 for k in 0..an.modes {
                     per_moment -= mt_psi[k] * an.g[k][i];
                 }
@@ -238,6 +265,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
 
         Ok(Strip {
             params: *params,
+            ext: *ext,
             fixture,
             dt_s,
             rot,
@@ -251,12 +279,25 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             inv_r2: T::from_f64(1.0 / params.r2_ohm),
             kc: T::from_f64(kc),
             z_minus_p: T::from_f64(z_minus_p),
+            charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
+            leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
+            crosstalk: T::from_f64(ext.crosstalk),
+            moment_gain: T::from_f64(1.0),
         })
     }
 
     /// Assembles the beam for the fixture and finds its modes.
-    fn analyse(params: &Params, fixture: Fixture) -> Result<Analysis<N, S>, ParamError> {
-        let beam = assemble::<N, E, S>(params);
+    fn analyse(
+        params: &Params,
+        ext: &Extensions,
+        fixture: Fixture,
+    ) -> Result<Analysis<N, S>, ParamError> {
+        // The fluid's added mass moves with the strip.
+        let loaded = Params {
+            mass_per_length_kg_per_m: params.mass_per_length_kg_per_m + ext.added_mass_kg_per_m,
+            ..*params
+        };
+        let beam = assemble::<N, E, S>(&loaded);
         let mut active = [0usize; S];
         let mut n_active = 0;
         for d in 0..Self::DOF {
@@ -272,11 +313,27 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         for k in 0..n_active {
             omega[k] = libm::sqrt(omega2[k]);
         }
+        // Crosstalk: segment i's moment also acts, times κ, on i ± 1.
+        let mut f = [[0.0; N]; S];
+        for d in 0..Self::DOF {
+            for i in 0..N {
+                f[d][i] = beam.f[d][i];
+                for j in [i.wrapping_sub(1), i + 1] {
+                    if j < N {
+                        f[d][i] += ext.crosstalk * beam.f[d][j];
+                    }
+                }
+            }
+        }
         let mut g = [[0.0; N]; S];
         for (k, gk) in g.iter_mut().enumerate().take(n_active) {
             for (i, gki) in gk.iter_mut().enumerate() {
-                *gki = (0..Self::DOF).map(|d| psi[d][k] * beam.f[d][i]).sum();
+                *gki = (0..Self::DOF).map(|d| psi[d][k] * f[d][i]).sum();
             }
+        }
+        let mut two_zeta_omega = [0.0; S];
+        for k in 0..n_active {
+            two_zeta_omega[k] = ext.two_zeta_omega(omega[k], params.mass_per_length_kg_per_m);
         }
         Ok(Analysis {
             beam,
@@ -284,6 +341,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             omega2,
             omega,
             g,
+            f,
+            two_zeta_omega,
             modes: n_active,
         })
     }
@@ -291,12 +350,17 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// The continuous system `ẋ = A x + B v` in the state of this model,
     /// which [`Strip::new`] discretises: for checks and for export to other
     /// tools. Builds `S × S` arrays, so it is meant for the host.
+    ///
+    /// The electrochemical input nonlinearity and the moment gain are not
+    /// part of it (they act on `v` and on the moments).
     pub fn continuous(
         params: &Params,
+        ext: &Extensions,
         fixture: Fixture,
     ) -> Result<(Mat<S, S>, Mat<S, N>), ParamError> {
-        params.validate()?;
-        let an = Self::analyse(params, fixture)?;
+        params.validate_relaxation(ext.back_relaxation)?;
+        ext.validate()?;
+        let an = Self::analyse(params, ext, fixture)?;
         let kc = params.k_nm_per_c * params.c_f;
         let z_minus_p = params.z_per_s - params.p_per_s;
         let inv_tau1 = 1.0 / params.tau1_s();
@@ -306,6 +370,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             let (eta, zeta, w) = (k, Self::DOF + k, an.omega[k]);
             a[eta][zeta] = w;
             a[zeta][eta] = -w;
+            a[zeta][zeta] = -an.two_zeta_omega[k];
             for i in 0..N {
                 let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
                 a[zeta][vc] = an.g[k][i] * kc / w;
@@ -338,6 +403,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     #[inline]
     pub fn step(&self, x: &mut [T; S], v: &[T; N]) {
         let dof = Self::DOF;
+        // The double layer sees v (1 + a v²): exact under the hold, since
+        // v is held. The beam sees every moment times the gain.
+        let v: [T; N] = core::array::from_fn(|i| v[i] + self.charge_cubic * v[i] * v[i] * v[i]);
+        let gain = self.moment_gain;
         let mut next = [T::ZERO; S];
         let (beam_next, elec_next) = next.split_at_mut(Self::ELEC);
         let (eta, zeta) = x[..Self::ELEC].split_at(dof);
@@ -351,7 +420,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
         let elec = &x[Self::ELEC..];
         for ((cols, e), &vi) in self.drive.iter().zip(elec.chunks_exact(2)).zip(v.iter()) {
-            let (vc, r) = (e[0], e[1]);
+            let (vc, r, vi) = (gain * e[0], gain * e[1], gain * vi);
             // One column triple at a time, all modal rows: contiguous loads.
             for (((n, &c0), &c1), &c2) in beam_next
                 .iter_mut()
@@ -398,31 +467,71 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
     }
 
-    /// Bending moment of every segment, N·m.
+    /// Bending moment acting on every segment, N·m: its own, plus `κ`
+    /// times its neighbours' (crosstalk), times the moment gain.
     pub fn moments_nm(&self, x: &[T; S]) -> [T; N] {
-        let mut u = [T::ZERO; N];
-        for (i, ui) in u.iter_mut().enumerate() {
+        let own: [T; N] = core::array::from_fn(|i| {
             let (vc, r) = (x[Self::ELEC + 2 * i], x[Self::ELEC + 2 * i + 1]);
-            *ui = self.kc * (vc + self.z_minus_p * r);
-        }
-        u
+            self.kc * (vc + self.z_minus_p * r)
+        });
+        core::array::from_fn(|i| {
+            let mut u = own[i];
+            if i > 0 {
+                u += self.crosstalk * own[i - 1];
+            }
+            if i + 1 < N {
+                u += self.crosstalk * own[i + 1];
+            }
+            self.moment_gain * u
+        })
     }
 
     /// Current into every segment, A, with `v` the voltages applied now:
-    /// `i = v/R2 + (v − v_C)/R1` (eq. 2.2), which jumps at a step.
+    /// `i = v/R2 + (v − v_C)/R1` (eq. 2.2), which jumps at a step; with the
+    /// electrochemical terms, `v/R2 (1 + b v²) + (v (1 + a v²) − v_C)/R1`.
     pub fn currents_a(&self, x: &[T; S], v: &[T; N]) -> [T; N] {
-        let mut cur = [T::ZERO; N];
-        for (i, c) in cur.iter_mut().enumerate() {
-            let vc = x[Self::ELEC + 2 * i];
-            *c = v[i] * self.inv_r2 + (v[i] - vc) * self.inv_r1;
-        }
-        cur
+        core::array::from_fn(|i| {
+            let (vi, vc) = (v[i], x[Self::ELEC + 2 * i]);
+            let v2 = vi * vi;
+            let leak = vi * self.inv_r2 * (T::from_f64(1.0) + self.leak_cubic * v2);
+            leak + (vi + self.charge_cubic * v2 * vi - vc) * self.inv_r1
+        })
     }
 
     /// Force on the load cell, N (zero for the free fixture).
     #[inline]
     pub fn blocking_force_n(&self, x: &[T; S]) -> T {
-        dot(&self.force_row, x)
+        // The electrical entries carry the moments, so the gain scales them.
+        let (beam, elec) = x.split_at(Self::ELEC);
+        let (row_beam, row_elec) = self.force_row.split_at(Self::ELEC);
+        let mut inertial = T::ZERO;
+        for (&a, &b) in row_beam.iter().zip(beam) {
+            inertial += a * b;
+        }
+        let mut moments = T::ZERO;
+        for (&a, &b) in row_elec.iter().zip(elec) {
+            moments += a * b;
+        }
+        inertial + self.moment_gain * moments
+    }
+
+    /// Sets the scale of every moment (1 when built). The dehydration
+    /// extension lowers it over a session's minutes; the caller computes it
+    /// from session time, since the model knows no clock. It applies from
+    /// the next step on; a gain that changes slowly against the beam's
+    /// modes (seconds against 40 ms) is what it is meant for.
+    pub fn set_moment_gain(&mut self, gain: T) {
+        self.moment_gain = gain;
+    }
+
+    /// The moment gain now.
+    pub fn moment_gain(&self) -> T {
+        self.moment_gain
+    }
+
+    /// The optional terms the model was built with.
+    pub fn extensions(&self) -> &Extensions {
+        &self.ext
     }
 
     /// Natural frequencies of the beam in this fixture, Hz, ascending.

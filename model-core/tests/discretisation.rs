@@ -2,7 +2,7 @@
 //! (nalgebra's Padé on the augmented matrix), and exactness in the step.
 
 use model_core::zoh::discretise;
-use model_core::{Fixture, Params, Strip};
+use model_core::{Extensions, Fixture, Params, Strip};
 use nalgebra::DMatrix;
 
 const S: usize = 18;
@@ -145,8 +145,18 @@ fn long_steps_stay_bounded() {
 fn block_discretisation_equals_the_dense_one() {
     fn check<const N: usize, const E: usize, const S: usize>(fixture: Fixture, h: f64) {
         let p = Params::thesis_2006();
-        let s = Strip::<f64, N, E, S>::new(&p, fixture, h).unwrap();
-        let (mut a, b) = Strip::<f64, N, E, S>::continuous(&p, fixture).unwrap();
+        // Every linear term on, so the blocks carry damping, added mass
+        // and crosstalk too.
+        let ext = Extensions {
+            damping_mass_per_s: 3.0,
+            damping_stiffness_s: 2e-5,
+            added_mass_kg_per_m: 0.02,
+            drag_n_s_per_m2: 0.01,
+            crosstalk: 0.2,
+            ..Extensions::NONE
+        };
+        let s = Strip::<f64, N, E, S>::with_extensions(&p, &ext, fixture, h).unwrap();
+        let (mut a, b) = Strip::<f64, N, E, S>::continuous(&p, &ext, fixture).unwrap();
         let (mut phi, mut gamma) = ([[0.0; S]; S], [[0.0; N]; S]);
         discretise(&mut a, &b, h, &mut phi, &mut gamma);
         let (ours_phi, ours_gamma) = (s.phi(), s.gamma());

@@ -1,0 +1,292 @@
+//! The optional model terms: each off by default, each doing what its
+//! physics says, checked against an exact equivalence or a closed form.
+
+use model_core::{Extensions, Fixture, ParamError, Params, Strip};
+
+type S3 = Strip<f64, 3, 1, 18>;
+
+fn strip(ext: &Extensions, fixture: Fixture) -> S3 {
+    S3::with_extensions(&Params::thesis_2006(), ext, fixture, 1e-3).unwrap()
+}
+
+/// Runs `steps` samples of `v` and returns the tip after each.
+fn tips(s: &S3, v: [f64; 3], steps: usize) -> Vec<f64> {
+    let mut x = s.rest();
+    (0..steps)
+        .map(|_| {
+            s.step(&mut x, &v);
+            s.tip_deflection_m(&x)
+        })
+        .collect()
+}
+
+#[test]
+fn no_extension_is_the_baseline_bit_for_bit() {
+    let p = Params::thesis_2006();
+    for fixture in [Fixture::Free, Fixture::Blocked] {
+        let a = S3::new(&p, fixture, 1e-3).unwrap();
+        let b = S3::with_extensions(&p, &Extensions::NONE, fixture, 1e-3).unwrap();
+        let (mut xa, mut xb) = (a.rest(), b.rest());
+        for k in 0..3000 {
+            let v = [2.0, 1.0, -2.0].map(|x: f64| x * ((k / 1000) as f64 - 1.0));
+            a.step(&mut xa, &v);
+            b.step(&mut xb, &v);
+            assert_eq!(xa, xb);
+            assert_eq!(a.blocking_force_n(&xa), b.blocking_force_n(&xb));
+            assert_eq!(a.currents_a(&xa, &v), b.currents_a(&xb, &v));
+        }
+    }
+}
+
+/// Mass-proportional damping `α` decays every mode's ringing as
+/// `e^{−α t/2}`: after 1 s at `α = 4/s`, `e^{−2}` of it is left.
+#[test]
+fn rayleigh_mass_damping_decays_the_ringing_at_alpha_over_two() {
+    let alpha = 4.0;
+    let ringing = strip(
+        &Extensions {
+            damping_mass_per_s: alpha,
+            ..Extensions::NONE
+        },
+        Fixture::Free,
+    );
+    // The quasi-static tip under the uniform moment, u L²/(2 EI): the
+    // difference from it is the ringing alone.
+    let p = Params::thesis_2006();
+    let mut x = ringing.rest();
+    let ring: Vec<f64> = (0..1200)
+        .map(|_| {
+            ringing.step(&mut x, &[2.5; 3]);
+            let u = ringing.moments_nm(&x)[0];
+            ringing.tip_deflection_m(&x) - u * p.length_m * p.length_m / (2.0 * p.ei_nm2)
+        })
+        .collect();
+    let amp = |from: usize| {
+        (from..from + 100)
+            .map(|k| ring[k].abs())
+            .fold(0.0f64, f64::max)
+    };
+    let ratio = amp(1000) / amp(100);
+    let want = (-alpha * 0.9 / 2.0f64).exp();
+    assert!(
+        (ratio / want - 1.0).abs() < 0.05,
+        "decay over 0.9 s: {ratio} against e^(-α t/2) = {want}"
+    );
+}
+
+/// Added mass lowers every frequency by `√(ρA/(ρA + m_a))`.
+#[test]
+fn added_mass_lowers_the_frequencies() {
+    let p = Params::thesis_2006();
+    let m_a = 10.0 * p.mass_per_length_kg_per_m;
+    let dry = strip(&Extensions::NONE, Fixture::Free);
+    let wet = strip(
+        &Extensions {
+            added_mass_kg_per_m: m_a,
+            ..Extensions::NONE
+        },
+        Fixture::Free,
+    );
+    for (f_dry, f_wet) in dry
+        .natural_frequencies_hz()
+        .zip(wet.natural_frequencies_hz())
+    {
+        let want = f_dry * (1.0f64 / 11.0).sqrt();
+        assert!((f_wet / want - 1.0).abs() < 1e-9, "{f_wet} Hz, want {want}");
+    }
+}
+
+/// Crosstalk is linear: segment 1 driven alone with `κ` moves the beam as
+/// the baseline does with `κ` times the drive on segment 2 as well.
+#[test]
+fn crosstalk_equals_driving_the_neighbour() {
+    let kappa = 0.3;
+    let ext = strip(
+        &Extensions {
+            crosstalk: kappa,
+            ..Extensions::NONE
+        },
+        Fixture::Free,
+    );
+    let base = strip(&Extensions::NONE, Fixture::Free);
+    let a = tips(&ext, [2.0, 0.0, 0.0], 3000);
+    let b = tips(&base, [2.0, 2.0 * kappa, 0.0], 3000);
+    let peak = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+        assert!((x - y).abs() < 1e-12 * peak, "step {k}: {x} vs {y}");
+    }
+    let mut x = ext.rest();
+    ext.step(&mut x, &[2.0, 0.0, 0.0]);
+    let u = ext.moments_nm(&x);
+    assert!((u[1] - kappa * u[0]).abs() < 1e-15 && u[2] == 0.0, "{u:?}");
+}
+
+/// The double layer sees `v (1 + a v²)`: the beam moves as the baseline's
+/// under that voltage, and the current carries both cubic terms.
+#[test]
+fn electrochemical_terms_are_static_input_nonlinearities() {
+    let (a, b) = (0.02, 0.05);
+    let ext = Extensions {
+        charge_cubic_per_v2: a,
+        leak_cubic_per_v2: b,
+        ..Extensions::NONE
+    };
+    let nl = strip(&ext, Fixture::Free);
+    let base = strip(&Extensions::NONE, Fixture::Free);
+    let v = 3.0;
+    let v_eff = v * (1.0 + a * v * v);
+    let x = tips(&nl, [v; 3], 2000);
+    let y = tips(&base, [v_eff; 3], 2000);
+    for (p, q) in x.iter().zip(&y) {
+        assert!((p - q).abs() < 1e-15, "{p} vs {q}");
+    }
+    // DC current: leak only, v/R2 (1 + b v²), once the capacitor is full.
+    let mut s = nl.rest();
+    for _ in 0..2000 {
+        nl.step(&mut s, &[v; 3]);
+    }
+    let p = Params::thesis_2006();
+    let want = v / p.r2_ohm * (1.0 + b * v * v);
+    let got = nl.currents_a(&s, &[v; 3])[0];
+    assert!((got - want).abs() < 1e-9, "{got} A, want {want} A");
+}
+
+/// With `z < 0` the moment relaxes back past zero under a held voltage;
+/// only the back-relaxation extension accepts such a zero.
+#[test]
+fn back_relaxation_needs_the_extension_and_reverses_the_moment() {
+    let p = Params {
+        z_per_s: -0.03,
+        ..Params::thesis_2006()
+    };
+    assert!(matches!(
+        S3::new(&p, Fixture::Free, 1e-3),
+        Err(ParamError::NotPositive {
+            field: "z_per_s",
+            ..
+        })
+    ));
+    let ext = Extensions {
+        back_relaxation: true,
+        ..Extensions::NONE
+    };
+    let s = S3::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap();
+    let mut x = s.rest();
+    let mut first_peak = 0.0f64;
+    for k in 0..60_000 {
+        s.step(&mut x, &[2.0; 3]);
+        if k < 1000 {
+            first_peak = first_peak.max(s.moments_nm(&x)[0]);
+        }
+    }
+    let late = s.moments_nm(&x)[0];
+    assert!(first_peak > 0.0 && late < 0.0, "{first_peak} then {late}");
+    // z ≥ p stays refused even so.
+    let bad = Params {
+        z_per_s: 0.2,
+        ..Params::thesis_2006()
+    };
+    assert!(matches!(
+        S3::with_extensions(&bad, &ext, Fixture::Free, 1e-3),
+        Err(ParamError::RelaxationOrder { .. })
+    ));
+}
+
+/// The moment gain scales the whole mechanical response, free and blocked.
+#[test]
+fn moment_gain_scales_deflection_and_force() {
+    for fixture in [Fixture::Free, Fixture::Blocked] {
+        let base = strip(&Extensions::NONE, fixture);
+        let mut half = base.clone();
+        half.set_moment_gain(0.5);
+        let (mut xa, mut xb) = (base.rest(), half.rest());
+        for _ in 0..3000 {
+            base.step(&mut xa, &[2.5; 3]);
+            half.step(&mut xb, &[2.5; 3]);
+            let (ya, yb) = match fixture {
+                Fixture::Free => (base.tip_deflection_m(&xa), half.tip_deflection_m(&xb)),
+                Fixture::Blocked => (base.blocking_force_n(&xa), half.blocking_force_n(&xb)),
+            };
+            assert!((yb - 0.5 * ya).abs() < 1e-15, "{fixture:?}: {yb} vs {ya}");
+        }
+    }
+}
+
+/// A uniform moment bends the strip into a circular arc of curvature
+/// `κ = u/EI`: across `(1 − cos κs)/κ`, along `sin(κs)/κ − s`. At 2.5 V
+/// that is the model notes' 12.73 mm across and −2.2 mm along.
+#[test]
+fn large_deflection_follows_the_circular_arc() {
+    let ext = Extensions {
+        large_deflection: true,
+        damping_mass_per_s: 3000.0,
+        ..Extensions::NONE
+    };
+    let s = strip(&ext, Fixture::Free);
+    let mut x = s.rest();
+    for _ in 0..120_000 {
+        s.step(&mut x, &[2.5; 3]);
+    }
+    let u = s.moments_nm(&x)[0];
+    let kappa = u / s.params().ei_nm2;
+    for s_m in [0.01, 0.025, 0.05] {
+        let (along, across) = s.position_at_m(&x, s_m).unwrap();
+        let want_across = (1.0 - (kappa * s_m).cos()) / kappa;
+        let want_along = (kappa * s_m).sin() / kappa - s_m;
+        assert!(
+            (across - want_across).abs() < 1e-4 * want_across,
+            "s = {s_m}: across {across} vs {want_across}"
+        );
+        assert!(
+            (along - want_along).abs() < 1e-3 * want_along.abs(),
+            "s = {s_m}: along {along} vs {want_along}"
+        );
+    }
+    let (along, across) = s.position_at_m(&x, 0.05).unwrap();
+    assert!((across - 12.73e-3).abs() < 0.05e-3, "tip across {across}");
+    assert!((along + 2.21e-3).abs() < 0.05e-3, "tip along {along}");
+    // Without the extension, nothing moves along the strip.
+    let small = strip(&Extensions::NONE, Fixture::Free);
+    let (along, across) = small.position_at_m(&x, 0.05).unwrap();
+    assert_eq!(along, 0.0);
+    assert!((across - small.tip_deflection_m(&x)).abs() < 1e-15);
+}
+
+#[test]
+fn out_of_range_terms_are_refused_by_name() {
+    let p = Params::thesis_2006();
+    let cases = [
+        (
+            Extensions {
+                damping_mass_per_s: -1.0,
+                ..Extensions::NONE
+            },
+            "damping_mass_per_s",
+        ),
+        (
+            Extensions {
+                added_mass_kg_per_m: f64::NAN,
+                ..Extensions::NONE
+            },
+            "added_mass_kg_per_m",
+        ),
+        (
+            Extensions {
+                crosstalk: 1.0,
+                ..Extensions::NONE
+            },
+            "crosstalk",
+        ),
+        (
+            Extensions {
+                charge_cubic_per_v2: -0.1,
+                ..Extensions::NONE
+            },
+            "charge_cubic_per_v2",
+        ),
+    ];
+    for (ext, field) in cases {
+        let err = S3::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap_err();
+        assert!(err.to_string().starts_with(field), "{err}");
+    }
+}
