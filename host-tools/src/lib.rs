@@ -6,7 +6,9 @@
 
 pub mod params;
 pub mod plot;
+pub mod predict;
 pub mod recording;
+pub mod session;
 pub mod simulate;
 pub mod synth;
 pub mod wave;

@@ -125,7 +125,7 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
         width_m: input.meta.width_m,
         thickness_m: input.meta.thickness_m,
     };
-    let params = model.params_for(&geometry).with_context(|| name.clone())?;
+    let spec = model.spec_for(&geometry).with_context(|| name.clone())?;
 
     let bar = ProgressBar::new(input.t_s.len() as u64);
     bar.set_style(
@@ -134,7 +134,7 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
             .progress_chars("=> "),
     );
     bar.set_message("simulating");
-    let sim = simulate(&name, &input, &params, args.elements, &mut |n| {
+    let sim = simulate(&name, &input, &spec, args.elements, &mut |n| {
         bar.set_position(n)
     })?;
     bar.finish_and_clear();

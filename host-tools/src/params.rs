@@ -10,6 +10,8 @@
 use std::path::Path;
 
 use model_core::{Laminate, Params};
+
+use crate::predict::ModelSpec;
 use serde::{Deserialize, Serialize};
 
 /// Geometry of a strip, as a recording's metadata states it.
@@ -45,6 +47,69 @@ pub struct ModelFile {
     /// Optional override of the laminate formula.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub beam: Option<Beam>,
+    /// Optional model terms beyond the seed's (all off when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extensions: Option<ExtensionsFile>,
+}
+
+/// The `[extensions]` section: the terms of [`model_core::Extensions`] and
+/// the dehydration rate, each off when omitted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExtensionsFile {
+    /// Rayleigh mass-proportional damping `α`, 1/s.
+    pub damping_mass_per_s: f64,
+    /// Rayleigh stiffness-proportional damping `β`, s.
+    pub damping_stiffness_s: f64,
+    /// Added fluid mass per length, kg/m.
+    pub added_mass_kg_per_m: f64,
+    /// Linear fluid drag per length, N·s/m².
+    pub drag_n_s_per_m2: f64,
+    /// `a` of the double layer's `v (1 + a v²)`, 1/V².
+    pub charge_cubic_per_v2: f64,
+    /// `b` of the leak's `v/R2 (1 + b v²)`, 1/V².
+    pub leak_cubic_per_v2: f64,
+    /// Fraction of a segment's moment on each neighbour.
+    pub crosstalk: f64,
+    /// Lets the relaxation zero lie at or below 0.
+    pub back_relaxation: bool,
+    /// Arc kinematics for positions along the strip.
+    pub large_deflection: bool,
+    /// Moment gain `e^{−r t}` over session time `t`, `r` in 1/s.
+    pub dehydration_per_s: f64,
+}
+
+impl ExtensionsFile {
+    /// The core's terms (the dehydration rate is the caller's).
+    pub fn core(&self) -> model_core::Extensions {
+        model_core::Extensions {
+            damping_mass_per_s: self.damping_mass_per_s,
+            damping_stiffness_s: self.damping_stiffness_s,
+            added_mass_kg_per_m: self.added_mass_kg_per_m,
+            drag_n_s_per_m2: self.drag_n_s_per_m2,
+            charge_cubic_per_v2: self.charge_cubic_per_v2,
+            leak_cubic_per_v2: self.leak_cubic_per_v2,
+            crosstalk: self.crosstalk,
+            back_relaxation: self.back_relaxation,
+            large_deflection: self.large_deflection,
+        }
+    }
+
+    /// The section for a model's terms and dehydration rate.
+    pub fn from_spec(ext: &model_core::Extensions, dehydration_per_s: f64) -> ExtensionsFile {
+        ExtensionsFile {
+            damping_mass_per_s: ext.damping_mass_per_s,
+            damping_stiffness_s: ext.damping_stiffness_s,
+            added_mass_kg_per_m: ext.added_mass_kg_per_m,
+            drag_n_s_per_m2: ext.drag_n_s_per_m2,
+            charge_cubic_per_v2: ext.charge_cubic_per_v2,
+            leak_cubic_per_v2: ext.leak_cubic_per_v2,
+            crosstalk: ext.crosstalk,
+            back_relaxation: ext.back_relaxation,
+            large_deflection: ext.large_deflection,
+            dehydration_per_s,
+        }
+    }
 }
 
 /// `R1`, `R2`, `C`.
@@ -151,6 +216,7 @@ impl ModelFile {
                 film_thickness_m: lam.film_thickness_m,
             },
             beam: None,
+            extensions: None,
         }
     }
 
@@ -228,8 +294,38 @@ impl ModelFile {
             ei_nm2,
             mass_per_length_kg_per_m,
         };
-        p.validate().map_err(invalid)?;
+        let ext = self.extensions.unwrap_or_default();
+        p.validate_relaxation(ext.back_relaxation)
+            .map_err(invalid)?;
+        ext.core().validate().map_err(invalid)?;
+        let r = ext.dehydration_per_s;
+        if !r.is_finite() {
+            return Err(invalid(model_core::ParamError::NotFinite {
+                field: "dehydration_per_s",
+                value: r,
+            }));
+        }
+        if r < 0.0 {
+            return Err(invalid(model_core::ParamError::OutOfRange {
+                field: "dehydration_per_s",
+                value: r,
+                min: 0.0,
+                max: f64::INFINITY,
+            }));
+        }
         Ok(p)
+    }
+
+    /// The whole model for a strip of geometry `g`: parameters, optional
+    /// terms and dehydration rate, validated.
+    pub fn spec_for(&self, g: &Geometry) -> Result<ModelSpec, ParamsError> {
+        let params = self.params_for(g)?;
+        let ext = self.extensions.unwrap_or_default();
+        Ok(ModelSpec {
+            params,
+            ext: ext.core(),
+            dehydration_per_s: ext.dehydration_per_s,
+        })
     }
 }
 

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use finrs::params::{Geometry, ModelFile};
+use finrs::predict::ModelSpec;
 use finrs::recording::{Channel, Fixture, Recording};
 use finrs::simulate::simulate;
 use finrs::synth::{drive_recording, Drive};
@@ -38,7 +39,14 @@ fn column(r: &Recording, ch: Channel) -> Vec<f64> {
 fn seed_experiment_writes_a_valid_recording() {
     let wave = Wave::parse("step:2,1,-2").unwrap();
     let input = drive_recording(&wave, &drive(Fixture::Free, 0.0, 10.0)).unwrap();
-    let sim = simulate("seed", &input, &seed_params(), 1, &mut |_| {}).unwrap();
+    let sim = simulate(
+        "seed",
+        &input,
+        &ModelSpec::baseline(seed_params()),
+        1,
+        &mut |_| {},
+    )
+    .unwrap();
     sim.validate("seed").unwrap();
     let text = sim.to_csv_string();
     let back = Recording::parse("seed.csv", &text).unwrap();
@@ -59,7 +67,7 @@ fn blocked_step_settles_to_three_u_over_two_l() {
     let wave = Wave::parse("step:2").unwrap();
     let input = drive_recording(&wave, &drive(Fixture::Blocked, 0.5, 120.0)).unwrap();
     let p = seed_params();
-    let sim = simulate("blocked", &input, &p, 1, &mut |_| {}).unwrap();
+    let sim = simulate("blocked", &input, &ModelSpec::baseline(p), 1, &mut |_| {}).unwrap();
     let force = column(&sim, Channel::Force);
     let tail = &force[force.len() - 20_000..];
     let mean = tail.iter().sum::<f64>() / tail.len() as f64;
@@ -96,7 +104,7 @@ fn example_session_is_reproduced_within_noise() {
                 thickness_m: measured.meta.thickness_m,
             })
             .unwrap();
-        let sim = simulate(&name, &measured, &p, 4, &mut |_| {}).unwrap();
+        let sim = simulate(&name, &measured, &ModelSpec::baseline(p), 4, &mut |_| {}).unwrap();
         let (channel, noise) = match measured.meta.fixture {
             // Camera: 0.05 mm rms plus 0.109 mm pixels (uniform, ±0.055 mm).
             Fixture::Free => (Channel::TipY, 0.05e-3_f64.hypot(0.109e-3 / 12f64.sqrt())),

@@ -1,0 +1,172 @@
+//! The one engine that runs the model over a recording's drive: used by
+//! `finrs simulate` (every output on every row) and by the fit (only what
+//! the recording measured, only where it measured it).
+
+use model_core::{state_len, Extensions, Fixture as CoreFixture, ParamError, Params, Strip};
+
+use crate::recording::{Fixture, Recording};
+
+/// Elements per segment the engine supports (the seed uses 1).
+pub const ELEMENTS: [usize; 3] = [1, 2, 4];
+
+/// A whole model: the core's parameters, its optional terms, and the
+/// dehydration rate that lowers the moment gain over session time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelSpec {
+    /// The seed's parameters (fitted or preset).
+    pub params: Params,
+    /// Optional terms (all off for the baseline).
+    pub ext: Extensions,
+    /// Dehydration: the moment gain is `e^{−r t}` at session time `t`, `r` in 1/s.
+    pub dehydration_per_s: f64,
+}
+
+impl ModelSpec {
+    /// The baseline with these parameters.
+    pub fn baseline(params: Params) -> ModelSpec {
+        ModelSpec {
+            params,
+            ext: Extensions::NONE,
+            dehydration_per_s: 0.0,
+        }
+    }
+}
+
+/// Model outputs over a recording's rows. Camera outputs are computed only
+/// on the rows asked for (NaN elsewhere); the rest on every row.
+#[derive(Clone, Debug, Default)]
+pub struct Traces {
+    /// Current per segment, A: `currents_a[segment][row]`.
+    pub currents_a: Vec<Vec<f64>>,
+    /// Tip across the strip, m.
+    pub tip_y_m: Vec<f64>,
+    /// Tip along the strip, m.
+    pub tip_x_m: Vec<f64>,
+    /// Dots across, m: `dots_y_m[dot][row]`.
+    pub dots_y_m: Vec<Vec<f64>>,
+    /// Dots along, m.
+    pub dots_x_m: Vec<Vec<f64>>,
+    /// Force on the load cell, N (zero for a free tip).
+    pub force_n: Vec<f64>,
+}
+
+/// Runs `spec` over the drive of `rec` (sample time `dt_s`), the recording
+/// starting at session time `t_start_s`. `camera_rows[row]` says where to
+/// compute the camera outputs; `None` means every row.
+pub fn predict(
+    rec: &Recording,
+    spec: &ModelSpec,
+    elements: usize,
+    dt_s: f64,
+    t_start_s: f64,
+    camera_rows: Option<&[bool]>,
+    progress: &mut dyn FnMut(u64),
+) -> Result<Traces, PredictError> {
+    let fixture = match rec.meta.fixture {
+        Fixture::Free => CoreFixture::Free,
+        Fixture::Blocked => CoreFixture::Blocked,
+    };
+    let run = Run {
+        rec,
+        spec,
+        fixture,
+        dt_s,
+        t_start_s,
+        camera_rows,
+    };
+    // One monomorphisation per (segments, elements): the core is fixed-size.
+    macro_rules! dispatch {
+        ($($n:literal),*) => {
+            match (rec.meta.segments, elements) {
+                $(
+                    ($n, 1) => run.go::<$n, 1, { state_len($n, 1) }>(progress),
+                    ($n, 2) => run.go::<$n, 2, { state_len($n, 2) }>(progress),
+                    ($n, 4) => run.go::<$n, 4, { state_len($n, 4) }>(progress),
+                )*
+                (_, e) => return Err(PredictError::Elements(e)),
+            }
+        };
+    }
+    dispatch!(1, 2, 3, 4, 5, 6, 7, 8).map_err(PredictError::Model)
+}
+
+/// Why the engine refused.
+#[derive(Debug, thiserror::Error)]
+pub enum PredictError {
+    /// Unsupported mesh.
+    #[error("elements per segment must be one of {ELEMENTS:?}, got {0}")]
+    Elements(usize),
+    /// The model refused its parameters.
+    #[error("{0}")]
+    Model(ParamError),
+}
+
+struct Run<'a> {
+    rec: &'a Recording,
+    spec: &'a ModelSpec,
+    fixture: CoreFixture,
+    dt_s: f64,
+    t_start_s: f64,
+    camera_rows: Option<&'a [bool]>,
+}
+
+impl Run<'_> {
+    fn go<const N: usize, const E: usize, const S: usize>(
+        &self,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<Traces, ParamError> {
+        let spec = self.spec;
+        let mut strip = Strip::<f64, N, E, S>::with_extensions(
+            &spec.params,
+            &spec.ext,
+            self.fixture,
+            self.dt_s,
+        )?;
+        let rows = self.rec.t_s.len();
+        let dots: &[f64] = self.rec.meta.dots_s_m.as_deref().unwrap_or(&[]);
+        let free = self.fixture == CoreFixture::Free;
+        let camera_len = if free { rows } else { 0 };
+        let mut t = Traces {
+            currents_a: vec![Vec::with_capacity(rows); N],
+            tip_y_m: vec![f64::NAN; camera_len],
+            tip_x_m: vec![f64::NAN; camera_len],
+            dots_y_m: vec![vec![f64::NAN; camera_len]; dots.len()],
+            dots_x_m: vec![vec![f64::NAN; camera_len]; dots.len()],
+            force_n: Vec::with_capacity(if free { 0 } else { rows }),
+        };
+        let length_m = spec.params.length_m;
+        let mut x = strip.rest();
+        for (row, (v_row, &t_s)) in self.rec.v_v.iter().zip(&self.rec.t_s).enumerate() {
+            let mut v = [0.0; N];
+            v.copy_from_slice(&v_row[..N]);
+            if spec.dehydration_per_s != 0.0 {
+                strip.set_moment_gain((-spec.dehydration_per_s * (self.t_start_s + t_s)).exp());
+            }
+            // Outputs at this row's instant, then hold its voltage to the next.
+            for (c, i) in t.currents_a.iter_mut().zip(strip.currents_a(&x, &v)) {
+                c.push(i);
+            }
+            if free {
+                if self.camera_rows.is_none_or(|c| c[row]) {
+                    let (along, across) = strip.position_at_m(&x, length_m).unwrap_or((0.0, 0.0));
+                    t.tip_x_m[row] = along;
+                    t.tip_y_m[row] = across;
+                    for (j, &s) in dots.iter().enumerate() {
+                        let (along, across) =
+                            strip.position_at_m(&x, s).unwrap_or((f64::NAN, f64::NAN));
+                        t.dots_x_m[j][row] = along;
+                        t.dots_y_m[j][row] = across;
+                    }
+                }
+            } else {
+                t.force_n.push(strip.blocking_force_n(&x));
+            }
+            strip.step(&mut x, &v);
+            if row % 4096 == 0 {
+                progress(row as u64);
+            }
+        }
+        progress(rows as u64);
+        Ok(t)
+    }
+}

@@ -1,0 +1,194 @@
+//! A session: every recording of one sample from one day, in one folder
+//! (`shared/bench/FORMAT.md`). Fitting and diagnosis work on sessions.
+
+use std::path::{Path, PathBuf};
+
+use crate::params::Geometry;
+use crate::recording::{Metadata, Recording, RecordingError};
+use crate::simulate::sample_time;
+
+/// A recording of a session, with what the fit needs to know of it.
+#[derive(Clone, Debug)]
+pub struct SessionRecording {
+    /// File name (no folder), as reports name it.
+    pub name: String,
+    /// The recording.
+    pub rec: Recording,
+    /// Sample time, s.
+    pub dt_s: f64,
+    /// Session time at the recording's start, s (its `notes`).
+    pub t_start_s: Option<f64>,
+    /// Rows of the opening rest (all voltages zero), at least 1 s of them.
+    pub rest_rows: usize,
+}
+
+/// All recordings of a session, in file-name order (the session's order).
+#[derive(Clone, Debug)]
+pub struct Session {
+    /// The folder.
+    pub dir: PathBuf,
+    /// The recordings.
+    pub recordings: Vec<SessionRecording>,
+}
+
+/// Why a session was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The folder cannot be listed.
+    #[error("{dir}: {source}")]
+    Io {
+        /// The folder.
+        dir: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// No `.csv` file in the folder.
+    #[error("{0}: no recordings (*.csv) in this folder")]
+    Empty(String),
+    /// A recording breaks the format.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// A recording does not fit the session or the fit's needs.
+    #[error("{file}: {message}")]
+    Rule {
+        /// The file.
+        file: String,
+        /// The rule broken.
+        message: String,
+    },
+}
+
+/// `t_session_start_s = …` from a recording's notes, if it says.
+pub fn session_start_s(meta: &Metadata) -> Option<f64> {
+    let notes = meta.notes.as_deref()?;
+    let rest = &notes[notes.find("t_session_start_s")? + "t_session_start_s".len()..];
+    let rest = rest.trim_start().strip_prefix('=')?.trim_start();
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '-' | '+')))
+        .unwrap_or(rest.len());
+    rest[..end].parse::<f64>().ok().filter(|t| t.is_finite())
+}
+
+impl Session {
+    /// Reads every `*.csv` of `dir`. All must share the sample: segments,
+    /// geometry and medium; each must open with at least 1 s at zero volts
+    /// (FORMAT.md), which shows its rest and its noise.
+    pub fn read(dir: &Path) -> Result<Session, SessionError> {
+        let dir_name = dir.display().to_string();
+        let io = |source| SessionError::Io {
+            dir: dir_name.clone(),
+            source,
+        };
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map_err(io)?
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(io)?
+            .into_iter()
+            .map(|e| e.path())
+            .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+            .collect();
+        files.sort();
+        if files.is_empty() {
+            return Err(SessionError::Empty(dir_name));
+        }
+        let mut recordings = Vec::with_capacity(files.len());
+        for path in &files {
+            let rec = Recording::read(path)?;
+            recordings.push(Self::prepare(path, rec)?);
+        }
+        let first = &recordings[0];
+        for r in &recordings[1..] {
+            let (a, b) = (&first.rec.meta, &r.rec.meta);
+            let same = a.segments == b.segments
+                && a.length_m == b.length_m
+                && a.width_m == b.width_m
+                && a.thickness_m == b.thickness_m
+                && a.medium == b.medium;
+            if !same {
+                return Err(SessionError::Rule {
+                    file: path_name(&dir.join(&r.name)),
+                    message: format!(
+                        "a session is one sample: segments, length_m, width_m, thickness_m and medium must equal those of {}",
+                        first.name
+                    ),
+                });
+            }
+        }
+        Ok(Session {
+            dir: dir.to_path_buf(),
+            recordings,
+        })
+    }
+
+    fn prepare(path: &Path, rec: Recording) -> Result<SessionRecording, SessionError> {
+        let file = path_name(path);
+        let dt_s = sample_time(&file, &rec.t_s).map_err(|e| SessionError::Rule {
+            file: file.clone(),
+            message: e.to_string(),
+        })?;
+        let rest_rows = rec
+            .v_v
+            .iter()
+            .position(|v| v.iter().any(|&x| x != 0.0))
+            .unwrap_or(rec.v_v.len());
+        let rest_s = rest_rows as f64 * dt_s;
+        if rest_s < 1.0 - 0.5 * dt_s {
+            // Metadata lines, then the header, then data rows.
+            return Err(SessionError::Rule {
+                file,
+                message: format!(
+                    "data row {} (t = {} s) drives a segment after only {rest_s:.3} s at 0 V: a recording opens with at least 1 s at zero volts (FORMAT.md), which the fit needs for its rest and noise",
+                    rest_rows + 1,
+                    rec.t_s[rest_rows]
+                ),
+            });
+        }
+        Ok(SessionRecording {
+            name: path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            t_start_s: session_start_s(&rec.meta),
+            rec,
+            dt_s,
+            rest_rows,
+        })
+    }
+
+    /// The sample's geometry (all recordings share it).
+    pub fn geometry(&self) -> Geometry {
+        let m = &self.recordings[0].rec.meta;
+        Geometry {
+            length_m: m.length_m,
+            width_m: m.width_m,
+            thickness_m: m.thickness_m,
+        }
+    }
+}
+
+fn path_name(p: &Path) -> String {
+    p.display().to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn session_start_is_read_from_notes() {
+        let mut m = Recording::parse(
+            "x.csv",
+            "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n# thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\nt_s,v1_V\n0,0\n",
+        )
+        .unwrap()
+        .meta;
+        m.notes = Some("t_session_start_s = 97.000; run 5 of 10".into());
+        assert_eq!(session_start_s(&m), Some(97.0));
+        m.notes = Some("run 5, t_session_start_s=12.5".into());
+        assert_eq!(session_start_s(&m), Some(12.5));
+        m.notes = Some("t_session_start_s = soon".into());
+        assert_eq!(session_start_s(&m), None);
+        m.notes = None;
+        assert_eq!(session_start_s(&m), None);
+    }
+}
