@@ -5,8 +5,10 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context};
 use clap::{Parser, Subcommand, ValueEnum};
+use finrs::fit::{Effect, Fitter};
 use finrs::params::{Geometry, ModelFile};
 use finrs::recording::{Fixture, Recording};
+use finrs::session::Session;
 use finrs::simulate::simulate;
 use finrs::wave::Wave;
 use finrs::{plot, synth};
@@ -26,6 +28,20 @@ enum Command {
     Simulate(SimulateArgs),
     /// Print a parameter file (the `thesis_2006` preset) to edit.
     Params,
+    /// Fit the model's free parameters jointly over a session's recordings.
+    Fit(FitArgs),
+}
+
+#[derive(clap::Args)]
+struct FitArgs {
+    /// Folder of recordings of one sample (ipmc-bench/1).
+    session: PathBuf,
+    /// Effects to add to the baseline, comma separated (e.g. damping,large-deflection).
+    #[arg(long, value_delimiter = ',')]
+    effects: Vec<String>,
+    /// Where to write the fitted parameters (TOML, as `simulate --params` reads).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -88,6 +104,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Simulate(args) => run_simulate(args),
+        Command::Fit(args) => run_fit(args),
         Command::Params => {
             print!("{}", ModelFile::thesis_2006().to_toml());
             Ok(())
@@ -151,4 +168,52 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", png.display());
     }
     Ok(())
+}
+
+fn run_fit(args: FitArgs) -> anyhow::Result<()> {
+    let effects = args
+        .effects
+        .iter()
+        .map(|name| {
+            Effect::parse(name).with_context(|| {
+                let known: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+                format!(
+                    "--effects: unknown effect {name:?}; known: {}",
+                    known.join(", ")
+                )
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let session = Session::read(&args.session)?;
+    let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
+    let fitter = Fitter::new(&session);
+    let all: Vec<usize> = (0..session.recordings.len()).collect();
+    let bar = spinner("fitting");
+    let started = std::time::Instant::now();
+    let fit = fitter.fit(&all, &effects, None, fixed)?;
+    bar.finish_and_clear();
+    print!("{}", finrs::fit::report::text(&fit, fitter.targets()));
+    eprintln!(
+        "fitted {} recordings in {:.1} s ({} model evaluations, {})",
+        all.len(),
+        started.elapsed().as_secs_f64(),
+        fit.evaluations,
+        fit.termination
+    );
+    if let Some(out) = &args.out {
+        let file = ModelFile::from_fit(&fit.spec, &effects);
+        std::fs::write(out, file.to_toml()).with_context(|| out.display().to_string())?;
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn spinner(msg: &'static str) -> ProgressBar {
+    let bar = ProgressBar::new_spinner();
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("static template"),
+    );
+    bar.set_message(msg);
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
 }

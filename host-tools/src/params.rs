@@ -255,6 +255,34 @@ impl ModelFile {
         format!("# finrs model parameters, SI units\n{body}")
     }
 
+    /// The file for a fitted model: the seed's material; `[beam]` when the
+    /// fit freed `EI` (its `ρA` from the laminate of `spec`'s strip);
+    /// `[extensions]` when any effect is on.
+    pub fn from_fit(spec: &ModelSpec, effects: &[crate::fit::Effect]) -> ModelFile {
+        let mut f = ModelFile::thesis_2006();
+        let p = &spec.params;
+        f.electrical = Electrical {
+            r1_ohm: p.r1_ohm,
+            r2_ohm: p.r2_ohm,
+            c_f: p.c_f,
+        };
+        f.relaxation = Relaxation {
+            k_nm_per_c: p.k_nm_per_c,
+            z_per_s: p.z_per_s,
+            p_per_s: p.p_per_s,
+        };
+        if effects.contains(&crate::fit::Effect::BeamStiffness) {
+            f.beam = Some(Beam {
+                ei_nm2: p.ei_nm2,
+                mass_per_length_kg_per_m: p.mass_per_length_kg_per_m,
+            });
+        }
+        if !effects.is_empty() {
+            f.extensions = Some(ExtensionsFile::from_spec(&spec.ext, spec.dehydration_per_s));
+        }
+        f
+    }
+
     /// The laminate of this material with a recording's geometry.
     pub fn laminate(&self, g: &Geometry) -> Laminate {
         Laminate {

@@ -111,6 +111,9 @@ struct Run<'a> {
 }
 
 impl Run<'_> {
+    // Never inlined: the large meshes' work arrays (N = 8, E = 4) must not
+    // swell the frame of every call.
+    #[inline(never)]
     fn go<const N: usize, const E: usize, const S: usize>(
         &self,
         progress: &mut dyn FnMut(u64),

@@ -1,0 +1,306 @@
+//! `finrs fit`: estimates a model's free parameters jointly over the
+//! recordings of a session, by Levenberg–Marquardt on noise-weighted
+//! residuals, and reports what a researcher needs to trust the result:
+//! confidence intervals, fit per channel, AIC and BIC.
+//!
+//! Every channel is weighted by the noise of its sensor, measured on the
+//! opening rest of each recording (FORMAT.md guarantees at least 1 s), so
+//! the weighted residuals are in units of noise and their sum of squares is
+//! `m` when the model explains the data to the noise floor.
+
+mod data;
+mod effect;
+pub mod report;
+mod space;
+mod start;
+mod stats;
+
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use rayon::prelude::*;
+
+pub use data::{Sensor, SessionTargets, Target};
+pub use effect::Effect;
+pub use space::{Knob, Space};
+pub use stats::{nrmse, ChannelFit, Estimate, Score};
+
+use crate::predict::{predict, ModelSpec, PredictError};
+use crate::session::Session;
+
+/// Elements per segment the fit uses: the seed's one. The static shape does
+/// not depend on it, and the first modes differ from a finer mesh's by
+/// 0.01 %, far below what the data resolve.
+pub const FIT_ELEMENTS: usize = 4;
+
+/// The fit's worker threads: the model's work arrays for the largest
+/// meshes take about 2 MiB of stack, rayon's default.
+fn pool() -> &'static rayon::ThreadPool {
+    static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
+    POOL.get_or_init(|| {
+        rayon::ThreadPoolBuilder::new()
+            .stack_size(32 << 20)
+            .build()
+            .expect("threads can be started")
+    })
+}
+
+/// Why a fit failed.
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    /// The model refused a parameter set the optimiser reached.
+    #[error("{recording}: {source}")]
+    Model {
+        /// The recording.
+        recording: String,
+        /// Why.
+        source: PredictError,
+    },
+    /// Nothing to fit.
+    #[error("the fit needs at least one recording with a measured channel")]
+    NoData,
+}
+
+/// A fitted model and how well it fits.
+#[derive(Clone, Debug)]
+pub struct FitResult {
+    /// The effects on top of the baseline.
+    pub effects: Vec<Effect>,
+    /// The fitted model.
+    pub spec: ModelSpec,
+    /// Fitted parameters with 95 % confidence intervals.
+    pub estimates: Vec<Estimate>,
+    /// How well it fits the recordings it was fitted on.
+    pub score: Score,
+    /// Parameters counted by AIC and BIC.
+    pub parameters: usize,
+    /// Akaike's information criterion, `m ln(RSS/m) + 2k`.
+    pub aic: f64,
+    /// Bayesian information criterion, `m ln(RSS/m) + k ln m`.
+    pub bic: f64,
+    /// Model evaluations the optimiser used.
+    pub evaluations: usize,
+    /// Why the optimiser stopped.
+    pub termination: String,
+}
+
+/// A session prepared for fitting: its targets and noise levels.
+pub struct Fitter<'a> {
+    session: &'a Session,
+    targets: SessionTargets,
+}
+
+impl<'a> Fitter<'a> {
+    /// Prepares `session`.
+    pub fn new(session: &'a Session) -> Fitter<'a> {
+        Fitter {
+            session,
+            targets: SessionTargets::new(session),
+        }
+    }
+
+    /// The session's targets and noise levels.
+    pub fn targets(&self) -> &SessionTargets {
+        &self.targets
+    }
+
+    /// Runs the model on recording `index` and returns its weighted
+    /// residuals, target by target.
+    fn residuals_of(&self, index: usize, spec: &ModelSpec) -> Result<Vec<Vec<f64>>, FitError> {
+        let r = &self.session.recordings[index];
+        let rt = &self.targets.recordings[index];
+        let t0 = r.t_start_s.unwrap_or(0.0);
+        let traces = predict(
+            &r.rec,
+            spec,
+            FIT_ELEMENTS,
+            r.dt_s,
+            t0,
+            Some(&rt.camera_rows),
+            &mut |_| {},
+        )
+        .map_err(|source| FitError::Model {
+            recording: r.name.clone(),
+            source,
+        })?;
+        Ok(rt
+            .targets
+            .iter()
+            .map(|t| {
+                t.model(&traces)
+                    .zip(&t.values)
+                    .map(|(m, y)| (m - y) / t.sigma)
+                    .collect()
+            })
+            .collect())
+    }
+
+    /// Weighted residuals of `spec` over `recordings`, concatenated.
+    fn residuals(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Vec<f64>, FitError> {
+        let parts: Result<Vec<Vec<Vec<f64>>>, FitError> = recordings
+            .par_iter()
+            .map(|&i| self.residuals_of(i, spec))
+            .collect();
+        Ok(parts?.into_iter().flatten().flatten().collect())
+    }
+
+    /// Scores `spec` on `recordings`: per-channel fit and the pooled error.
+    pub fn score(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Score, FitError> {
+        pool().install(|| self.score_here(recordings, spec))
+    }
+
+    fn score_here(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Score, FitError> {
+        let mut channels = Vec::new();
+        for &i in recordings {
+            let res = self.residuals_of(i, spec)?;
+            for (t, r) in self.targets.recordings[i].targets.iter().zip(res) {
+                channels.push(ChannelFit::new(&self.session.recordings[i].name, t, &r));
+            }
+        }
+        Ok(Score::new(channels))
+    }
+
+    /// Fits the baseline plus `effects` on `recordings`, from `start` (or
+    /// from estimates read off the data when `None`).
+    pub fn fit(
+        &self,
+        recordings: &[usize],
+        effects: &[Effect],
+        start: Option<&ModelSpec>,
+        fixed: ModelSpec,
+    ) -> Result<FitResult, FitError> {
+        pool().install(|| self.fit_here(recordings, effects, start, fixed))
+    }
+
+    fn fit_here(
+        &self,
+        recordings: &[usize],
+        effects: &[Effect],
+        start: Option<&ModelSpec>,
+        fixed: ModelSpec,
+    ) -> Result<FitResult, FitError> {
+        let n_data: usize = recordings
+            .iter()
+            .map(|&i| {
+                self.targets.recordings[i]
+                    .targets
+                    .iter()
+                    .map(|t| t.rows.len())
+                    .sum::<usize>()
+            })
+            .sum();
+        if n_data == 0 {
+            return Err(FitError::NoData);
+        }
+        let space = Space::new(effects, fixed);
+        let start = match start {
+            Some(s) => *s,
+            None => start::from_data(self, recordings, &space)?,
+        };
+        let theta0 = DVector::from_vec(space.theta(&start));
+        let problem = Problem {
+            fitter: self,
+            recordings,
+            space: &space,
+            theta: theta0.clone(),
+            residuals: None,
+            m: n_data,
+        };
+        let mut problem = problem;
+        problem.set_params(&theta0);
+        let (problem, report) = LevenbergMarquardt::new()
+            .with_patience(40)
+            .minimize(problem);
+        // A failed step leaves the best point the optimiser saw; keep the
+        // start if even that is worse.
+        let theta = problem.theta.clone();
+        let spec = space.spec(theta.as_slice());
+        let r = self.residuals(recordings, &spec)?;
+        let m = r.len();
+        let rss: f64 = r.iter().map(|x| x * x).sum();
+        let jac = problem.jacobian_at(&theta)?;
+        let estimates = stats::estimates(&space, theta.as_slice(), &jac, rss, m);
+        let k = space.counted_parameters();
+        let score = self.score_here(recordings, &spec)?;
+        let (aic, bic) = stats::information(rss, m, k);
+        Ok(FitResult {
+            effects: space.effects.clone(),
+            spec,
+            estimates,
+            score,
+            parameters: k,
+            aic,
+            bic,
+            evaluations: report.number_of_evaluations,
+            termination: format!("{:?}", report.termination),
+        })
+    }
+}
+
+/// The least-squares problem the optimiser sees.
+struct Problem<'a, 'b> {
+    fitter: &'b Fitter<'a>,
+    recordings: &'b [usize],
+    space: &'b Space,
+    theta: DVector<f64>,
+    residuals: Option<DVector<f64>>,
+    /// Residual count.
+    m: usize,
+}
+
+impl Problem<'_, '_> {
+    /// Forward-difference Jacobian at `theta`, one column per knob, the
+    /// columns in parallel (each is a whole session's simulation).
+    fn jacobian_at(&self, theta: &DVector<f64>) -> Result<DMatrix<f64>, FitError> {
+        let base = self
+            .fitter
+            .residuals(self.recordings, &self.space.spec(theta.as_slice()))?;
+        let columns: Result<Vec<Vec<f64>>, FitError> = (0..theta.len())
+            .into_par_iter()
+            .map(|j| {
+                // θ is a logarithm or similar: a fixed step is a relative one.
+                let h = 1e-6 * theta[j].abs().max(1.0);
+                let mut t = theta.clone();
+                t[j] += h;
+                let r = self
+                    .fitter
+                    .residuals(self.recordings, &self.space.spec(t.as_slice()))?;
+                Ok(r.iter().zip(&base).map(|(a, b)| (a - b) / h).collect())
+            })
+            .collect();
+        let columns = columns?;
+        Ok(DMatrix::from_fn(base.len(), theta.len(), |i, j| {
+            columns[j][i]
+        }))
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        self.theta.copy_from(x);
+        // Where the model refuses a trial point (or it overflows), a huge
+        // residual makes the optimiser step back instead of stopping.
+        let r = self
+            .fitter
+            .residuals(self.recordings, &self.space.spec(x.as_slice()))
+            .ok()
+            .filter(|r| r.iter().all(|v| v.is_finite()))
+            .unwrap_or_else(|| vec![1e6; self.m]);
+        self.residuals = Some(DVector::from_vec(r));
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.theta.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        self.residuals.clone()
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        self.jacobian_at(&self.theta).ok()
+    }
+}

@@ -1,0 +1,191 @@
+//! What a fit reports: confidence intervals from the Jacobian, fit per
+//! channel (NRMSE, as MATLAB's `compare`), AIC and BIC.
+
+use nalgebra::DMatrix;
+
+use super::data::Target;
+use super::space::{Knob, Space};
+use crate::recording::Channel;
+
+/// A fitted parameter with its 95 % confidence interval.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// The parameter.
+    pub knob: Knob,
+    /// Its value, in its unit.
+    pub value: f64,
+    /// Lower end of the 95 % interval.
+    pub low: f64,
+    /// Upper end of the 95 % interval.
+    pub high: f64,
+}
+
+/// `1 − fit/100`: `‖y − ŷ‖ / ‖y − ȳ‖`; 0 is perfect, 1 is as good as the mean.
+pub fn nrmse(y: &[f64], model: impl Iterator<Item = f64>) -> f64 {
+    let mean = y.iter().sum::<f64>() / y.len().max(1) as f64;
+    let (mut err, mut spread) = (0.0, 0.0);
+    for (&v, m) in y.iter().zip(model) {
+        err += (v - m) * (v - m);
+        spread += (v - mean) * (v - mean);
+    }
+    if spread > 0.0 {
+        (err / spread).sqrt()
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// How well a model fits one channel of one recording.
+#[derive(Clone, Debug)]
+pub struct ChannelFit {
+    /// The recording's file name.
+    pub recording: String,
+    /// The channel.
+    pub channel: Channel,
+    /// `‖y − ŷ‖ / ‖y − ȳ‖`.
+    pub nrmse: f64,
+    /// `100 (1 − nrmse)`, MATLAB's fit percentage.
+    pub fit_percent: f64,
+    /// RMS of the residual in noise units (1 at the noise floor).
+    pub rms_in_noise: f64,
+    /// Whether the channel carries signal: its spread is over 3 noise levels.
+    pub has_signal: bool,
+    /// Weighted residuals, in sample order (for whiteness tests and plots).
+    pub residuals: Vec<f64>,
+}
+
+impl ChannelFit {
+    /// From a target and its weighted residuals `r = (ŷ − y)/σ`.
+    pub fn new(recording: &str, t: &Target, r: &[f64]) -> ChannelFit {
+        let model = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
+        let e = nrmse(&t.values, model);
+        let n = t.values.len().max(1) as f64;
+        let mean = t.values.iter().sum::<f64>() / n;
+        let spread = (t
+            .values
+            .iter()
+            .map(|v| (v - mean) * (v - mean))
+            .sum::<f64>()
+            / n)
+            .sqrt();
+        ChannelFit {
+            recording: recording.to_string(),
+            channel: t.channel,
+            nrmse: e,
+            fit_percent: 100.0 * (1.0 - e),
+            rms_in_noise: (r.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
+            has_signal: spread > 3.0 * t.sigma,
+            residuals: r.to_vec(),
+        }
+    }
+}
+
+/// A model's fit over a set of recordings.
+#[derive(Clone, Debug)]
+pub struct Score {
+    /// Per channel and recording.
+    pub channels: Vec<ChannelFit>,
+    /// Mean NRMSE over the channels that carry signal.
+    pub nrmse: f64,
+    /// Sum of squared weighted residuals.
+    pub rss: f64,
+    /// Residual count.
+    pub m: usize,
+}
+
+impl Score {
+    /// Pools per-channel fits.
+    pub fn new(channels: Vec<ChannelFit>) -> Score {
+        let signal: Vec<f64> = channels
+            .iter()
+            .filter(|c| c.has_signal)
+            .map(|c| c.nrmse)
+            .collect();
+        let nrmse = if signal.is_empty() {
+            0.0
+        } else {
+            signal.iter().sum::<f64>() / signal.len() as f64
+        };
+        let rss = channels
+            .iter()
+            .flat_map(|c| c.residuals.iter())
+            .map(|x| x * x)
+            .sum();
+        let m = channels.iter().map(|c| c.residuals.len()).sum();
+        Score {
+            channels,
+            nrmse,
+            rss,
+            m,
+        }
+    }
+}
+
+/// `(AIC, BIC)` for least squares: `m ln(RSS/m) + 2k` and `m ln(RSS/m) + k ln m`.
+pub fn information(rss: f64, m: usize, k: usize) -> (f64, f64) {
+    let m_f = m as f64;
+    let fit = m_f * (rss / m_f).ln();
+    (fit + 2.0 * k as f64, fit + k as f64 * m_f.ln())
+}
+
+/// 95 % intervals by the delta method: `cov θ = s² (JᵀJ)⁻¹` with
+/// `s² = RSS/(m − k)`, carried to each parameter through the gradient of
+/// its value with respect to all of `θ` (so `z`, which is fitted relative
+/// to `p`, carries `p`'s uncertainty too). A parameter that must be
+/// positive gets its interval on a log scale, so it stays positive.
+pub fn estimates(
+    space: &Space,
+    theta: &[f64],
+    jac: &DMatrix<f64>,
+    rss: f64,
+    m: usize,
+) -> Vec<Estimate> {
+    let k = theta.len();
+    let s2 = rss / (m.saturating_sub(k).max(1)) as f64;
+    let jtj = jac.transpose() * jac;
+    // A singular JᵀJ (a knob the data cannot see) gives an unbounded interval.
+    let cov = jtj.try_inverse().map(|c| c * s2);
+    let here = space.spec(theta);
+    space
+        .knobs
+        .iter()
+        .map(|&knob| {
+            let value = Space::value(knob, &here);
+            let grad: Vec<f64> = (0..k)
+                .map(|j| {
+                    let h = 1e-6 * theta[j].abs().max(1.0);
+                    let mut t = theta.to_vec();
+                    t[j] += h;
+                    (Space::value(knob, &space.spec(&t)) - value) / h
+                })
+                .collect();
+            let se = cov
+                .as_ref()
+                .map(|c| {
+                    let mut v = 0.0;
+                    for a in 0..k {
+                        for b in 0..k {
+                            v += grad[a] * c[(a, b)] * grad[b];
+                        }
+                    }
+                    v.max(0.0).sqrt()
+                })
+                .filter(|s| s.is_finite())
+                .unwrap_or(f64::INFINITY);
+            let (low, high) = if !se.is_finite() {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else if knob.positive() && value > 0.0 {
+                let f = (1.96 * se / value).exp();
+                (value / f, value * f)
+            } else {
+                (value - 1.96 * se, value + 1.96 * se)
+            };
+            Estimate {
+                knob,
+                value,
+                low,
+                high,
+            }
+        })
+        .collect()
+}

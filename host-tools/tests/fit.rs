@@ -1,0 +1,92 @@
+//! `finrs fit` recovers a sample's parameters, which differ from the
+//! seed's, from a session it has not seen, starting from the data alone.
+
+mod common;
+
+use finrs::fit::{Fitter, Knob};
+use finrs::params::ModelFile;
+use finrs::predict::ModelSpec;
+use finrs::session::Session;
+use model_core::Params;
+
+fn sample() -> ModelSpec {
+    ModelSpec::baseline(Params {
+        r1_ohm: 230.0,
+        r2_ohm: 520.0,
+        c_f: 1.6e-4,
+        k_nm_per_c: 4.1,
+        z_per_s: 0.06,
+        p_per_s: 0.14,
+        ..Params::thesis_2006()
+    })
+}
+
+#[test]
+fn baseline_fit_recovers_the_sample_within_its_intervals() {
+    let dir = std::env::temp_dir().join(format!("finrs-fit-{}", std::process::id()));
+    let truth = sample();
+    common::write_session(&dir, &truth, &common::short_protocol(), 11);
+    let session = Session::read(&dir).unwrap();
+    let fixed = ModelFile::thesis_2006()
+        .spec_for(&session.geometry())
+        .unwrap();
+    let fitter = Fitter::new(&session);
+    let all: Vec<usize> = (0..session.recordings.len()).collect();
+    let fit = fitter.fit(&all, &[], None, fixed).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+
+    // At the noise floor: weighted RSS per residual near 1 (the camera's
+    // whole pixels add a little to its noise).
+    let per = fit.score.rss / fit.score.m as f64;
+    assert!(per < 1.15, "RSS/m = {per}");
+    for e in &fit.estimates {
+        let want = match e.knob {
+            Knob::R1 => truth.params.r1_ohm,
+            Knob::R2 => truth.params.r2_ohm,
+            Knob::C => truth.params.c_f,
+            Knob::K => truth.params.k_nm_per_c,
+            Knob::Z => truth.params.z_per_s,
+            Knob::P => truth.params.p_per_s,
+            other => panic!("baseline fitted {other:?}"),
+        };
+        // The 95 % interval, widened by half for the rounding of the data.
+        let half = 0.75 * (e.high - e.low);
+        assert!(
+            (e.value - want).abs() <= half,
+            "{}: {} [{}, {}], truth {want}",
+            e.knob.name(),
+            e.value,
+            e.low,
+            e.high
+        );
+        assert!(
+            e.high - e.low < 0.2 * want.abs(),
+            "{} interval too wide",
+            e.knob.name()
+        );
+    }
+    // What is written is what simulate reads back.
+    let file = ModelFile::from_fit(&fit.spec, &[]);
+    let back = ModelFile::parse("fit.toml", &file.to_toml()).unwrap();
+    assert_eq!(back.spec_for(&session.geometry()).unwrap(), fit.spec);
+}
+
+#[test]
+fn noise_levels_are_read_off_the_rests() {
+    let dir = std::env::temp_dir().join(format!("finrs-noise-{}", std::process::id()));
+    common::write_session(&dir, &sample(), &common::short_protocol()[..1], 3);
+    let session = Session::read(&dir).unwrap();
+    let fitter = Fitter::new(&session);
+    std::fs::remove_dir_all(&dir).ok();
+    for (sensor, sigma) in &fitter.targets().sigma {
+        let want = match sensor {
+            finrs::fit::Sensor::Current => common::CURRENT_NOISE_A,
+            // Noise plus whole pixels: sqrt(σ² + q²/12).
+            _ => (common::CAMERA_NOISE_M.powi(2) + common::PIXEL_M.powi(2) / 12.0).sqrt(),
+        };
+        assert!(
+            (sigma / want - 1.0).abs() < 0.3,
+            "{sensor:?}: {sigma} vs {want}"
+        );
+    }
+}
