@@ -4,6 +4,7 @@
 //! command is a function here, so that tests call the same code users run.
 #![deny(missing_docs)]
 
+pub mod diagnose;
 pub mod fit;
 pub mod params;
 pub mod plot;

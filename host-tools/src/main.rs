@@ -30,6 +30,20 @@ enum Command {
     Params,
     /// Fit the model's free parameters jointly over a session's recordings.
     Fit(FitArgs),
+    /// Find what the baseline gets wrong in a session and name the cause.
+    Diagnose(DiagnoseArgs),
+}
+
+#[derive(clap::Args)]
+struct DiagnoseArgs {
+    /// Folder of recordings of one sample (ipmc-bench/1).
+    session: PathBuf,
+    /// Where to write the verdict (JSON).
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Folder for the human report (REPORT.md and plots).
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -105,6 +119,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Simulate(args) => run_simulate(args),
         Command::Fit(args) => run_fit(args),
+        Command::Diagnose(args) => run_diagnose(args),
         Command::Params => {
             print!("{}", ModelFile::thesis_2006().to_toml());
             Ok(())
@@ -216,4 +231,53 @@ fn spinner(msg: &'static str) -> ProgressBar {
     bar.set_message(msg);
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar
+}
+
+fn run_diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
+    let session = Session::read(&args.session)?;
+    let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
+    let bar = spinner("diagnosing");
+    let started = std::time::Instant::now();
+    let d = finrs::diagnose::diagnose(&session, fixed, &|msg| bar.set_message(msg.to_string()))?;
+    bar.finish_and_clear();
+    let v = &d.verdict;
+    println!(
+        "verdict: {}; causes: {}",
+        v.verdict,
+        if v.causes.is_empty() {
+            "none".to_string()
+        } else {
+            v.causes.join(", ")
+        }
+    );
+    println!(
+        "held-out NRMSE {:.4} (baseline) -> {:.4} (final): {:.1} % gain; held-out RSS/m {:.3} -> {:.3}",
+        v.baseline.holdout_nrmse,
+        v.extended.holdout_nrmse,
+        v.gain_percent,
+        v.baseline.holdout_rss_per_residual,
+        v.extended.holdout_rss_per_residual
+    );
+    for c in &v.candidates {
+        println!(
+            "  round {} {:<30} dBIC {:>12.1}  held-out gain {:>7.2} %  {}",
+            c.round + 1,
+            c.name,
+            c.delta_bic,
+            c.holdout_gain_percent,
+            if c.passed { "passed" } else { "-" }
+        );
+    }
+    eprintln!("diagnosed in {:.1} s", started.elapsed().as_secs_f64());
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(v)?;
+        std::fs::write(path, text + "\n").with_context(|| path.display().to_string())?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(dir) = &args.report {
+        finrs::diagnose::report::write(dir, &session, &d)
+            .with_context(|| dir.display().to_string())?;
+        eprintln!("wrote {}", dir.join("REPORT.md").display());
+    }
+    Ok(())
 }

@@ -43,12 +43,17 @@ pub enum Knob {
 }
 
 impl Knob {
+    /// Whether the baseline fits it.
+    pub fn is_baseline(&self) -> bool {
+        BASELINE.contains(self)
+    }
+
     /// Whether the parameter is positive by its nature (its interval is
     /// then reported on a log scale).
     pub fn positive(&self) -> bool {
-        !matches!(
+        matches!(
             self,
-            Knob::Z | Knob::ChargeCubic | Knob::LeakCubic | Knob::Crosstalk
+            Knob::R1 | Knob::R2 | Knob::C | Knob::K | Knob::P | Knob::Ei
         )
     }
 
@@ -79,6 +84,32 @@ pub const BASELINE: [Knob; 6] = [Knob::R1, Knob::R2, Knob::C, Knob::K, Knob::Z, 
 
 /// Lowest value of the cubic terms: `v (1 + a v²)` must rise up to 4 V.
 const CUBIC_MIN: f64 = -1.0 / 48.0;
+
+// The effects' knobs are linear in θ, with θ = 0 the term switched off, so
+// that an extended fit starts exactly where the model it extends stands
+// (a logarithm could not start at zero, and any other start moves the
+// undamped beam's ringing out of phase). Each scale is the term's typical
+// size, so that θ is of order one.
+/// Rayleigh `α`, 1/s.
+const ALPHA_SCALE: f64 = 1.0;
+/// Rayleigh `β`, s (`β ω₁²` is about 0.03/s at this scale).
+const BETA_SCALE: f64 = 1e-6;
+/// Added mass, kg/m (the strip itself is about 8e-3).
+const ADDED_MASS_SCALE: f64 = 1e-2;
+/// Drag, N·s/m².
+const DRAG_SCALE: f64 = 1e-2;
+/// Cubic electrochemical terms, 1/V².
+const CUBIC_SCALE: f64 = 1e-2;
+/// Crosstalk fraction.
+const CROSSTALK_SCALE: f64 = 0.1;
+/// Dehydration rate, 1/s.
+const DEHYDRATION_SCALE: f64 = 1e-3;
+
+/// A non-negative term: `s θ` above zero, zero below (the optimiser sees
+/// a flat floor, and steps back from it).
+fn ramp(t: f64, scale: f64) -> f64 {
+    (t * scale).max(0.0)
+}
 
 /// A model structure (baseline plus effects) and its parameter space.
 #[derive(Clone, Debug)]
@@ -148,14 +179,18 @@ impl Space {
                 Knob::Z => z_theta = Some(t),
                 Knob::P => p.p_per_s = t.exp(),
                 Knob::Ei => p.ei_nm2 = t.exp(),
-                Knob::Alpha => spec.ext.damping_mass_per_s = t.exp(),
-                Knob::Beta => spec.ext.damping_stiffness_s = t.exp(),
-                Knob::AddedMass => spec.ext.added_mass_kg_per_m = t.exp(),
-                Knob::Drag => spec.ext.drag_n_s_per_m2 = t.exp(),
-                Knob::ChargeCubic => spec.ext.charge_cubic_per_v2 = CUBIC_MIN + t.exp(),
-                Knob::LeakCubic => spec.ext.leak_cubic_per_v2 = CUBIC_MIN + t.exp(),
-                Knob::Crosstalk => spec.ext.crosstalk = t.tanh(),
-                Knob::Dehydration => spec.dehydration_per_s = t.exp(),
+                Knob::Alpha => spec.ext.damping_mass_per_s = ramp(t, ALPHA_SCALE),
+                Knob::Beta => spec.ext.damping_stiffness_s = ramp(t, BETA_SCALE),
+                Knob::AddedMass => spec.ext.added_mass_kg_per_m = ramp(t, ADDED_MASS_SCALE),
+                Knob::Drag => spec.ext.drag_n_s_per_m2 = ramp(t, DRAG_SCALE),
+                Knob::ChargeCubic => {
+                    spec.ext.charge_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
+                }
+                Knob::LeakCubic => {
+                    spec.ext.leak_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
+                }
+                Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
+                Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
             }
         }
         if let Some(t) = z_theta {
@@ -192,17 +227,14 @@ impl Space {
                 }
                 Knob::P => ln(p.p_per_s, 1e-9),
                 Knob::Ei => ln(p.ei_nm2, 1e-15),
-                Knob::Alpha => ln(spec.ext.damping_mass_per_s, 0.3),
-                Knob::Beta => ln(spec.ext.damping_stiffness_s, 1e-7),
-                Knob::AddedMass => ln(
-                    spec.ext.added_mass_kg_per_m,
-                    0.1 * p.mass_per_length_kg_per_m,
-                ),
-                Knob::Drag => ln(spec.ext.drag_n_s_per_m2, 1e-4),
-                Knob::ChargeCubic => ln(spec.ext.charge_cubic_per_v2 - CUBIC_MIN, 1e-9),
-                Knob::LeakCubic => ln(spec.ext.leak_cubic_per_v2 - CUBIC_MIN, 1e-9),
-                Knob::Crosstalk => spec.ext.crosstalk.clamp(-0.99, 0.99).atanh(),
-                Knob::Dehydration => ln(spec.dehydration_per_s, 1e-4),
+                Knob::Alpha => spec.ext.damping_mass_per_s / ALPHA_SCALE,
+                Knob::Beta => spec.ext.damping_stiffness_s / BETA_SCALE,
+                Knob::AddedMass => spec.ext.added_mass_kg_per_m / ADDED_MASS_SCALE,
+                Knob::Drag => spec.ext.drag_n_s_per_m2 / DRAG_SCALE,
+                Knob::ChargeCubic => spec.ext.charge_cubic_per_v2 / CUBIC_SCALE,
+                Knob::LeakCubic => spec.ext.leak_cubic_per_v2 / CUBIC_SCALE,
+                Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
+                Knob::Dehydration => spec.dehydration_per_s / DEHYDRATION_SCALE,
             })
             .collect()
     }

@@ -142,20 +142,47 @@ pub fn estimates(
 ) -> Vec<Estimate> {
     let k = theta.len();
     let s2 = rss / (m.saturating_sub(k).max(1)) as f64;
-    let jtj = jac.transpose() * jac;
-    // A singular JᵀJ (a knob the data cannot see) gives an unbounded interval.
-    let cov = jtj.try_inverse().map(|c| c * s2);
+    // A knob the residuals do not move (a term held at its floor of zero)
+    // has a zero column: leave it out of the inverse, and give it an
+    // unbounded interval, so the others keep theirs.
+    let norms: Vec<f64> = (0..k).map(|j| jac.column(j).norm()).collect();
+    let top = norms.iter().fold(0.0f64, |m, &x| m.max(x));
+    let active: Vec<usize> = (0..k).filter(|&j| norms[j] > 1e-12 * top).collect();
+    let sub = DMatrix::from_fn(jac.nrows(), active.len(), |i, a| jac[(i, active[a])]);
+    let cov = (sub.transpose() * &sub).try_inverse().map(|c| {
+        let mut full = DMatrix::from_element(k, k, 0.0);
+        for (a, &ja) in active.iter().enumerate() {
+            for (b, &jb) in active.iter().enumerate() {
+                full[(ja, jb)] = c[(a, b)] * s2;
+            }
+        }
+        for j in 0..k {
+            if !active.contains(&j) {
+                full[(j, j)] = f64::INFINITY;
+            }
+        }
+        full
+    });
     let here = space.spec(theta);
     space
         .knobs
         .iter()
-        .map(|&knob| {
+        .enumerate()
+        .map(|(j, &knob)| {
             let value = Space::value(knob, &here);
+            if !active.contains(&j) {
+                return Estimate {
+                    knob,
+                    value,
+                    low: f64::NEG_INFINITY,
+                    high: f64::INFINITY,
+                };
+            }
             let grad: Vec<f64> = (0..k)
-                .map(|j| {
-                    let h = 1e-6 * theta[j].abs().max(1.0);
+                .map(|i| {
+                    let h = 1e-6 * theta[i].abs().max(1.0);
                     let mut t = theta.to_vec();
-                    t[j] += h;
+                    t[i] += h;
                     (Space::value(knob, &space.spec(&t)) - value) / h
                 })
                 .collect();
@@ -165,7 +192,10 @@ pub fn estimates(
                     let mut v = 0.0;
                     for a in 0..k {
                         for b in 0..k {
-                            v += grad[a] * c[(a, b)] * grad[b];
+                            // 0 · ∞ from an inactive knob the value does not depend on.
+                            if grad[a] != 0.0 && grad[b] != 0.0 {
+                                v += grad[a] * c[(a, b)] * grad[b];
+                            }
                         }
                     }
                     v.max(0.0).sqrt()

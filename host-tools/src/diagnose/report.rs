@@ -1,0 +1,136 @@
+//! The human report of a diagnosis: Markdown, with PNG plots beside it.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::Diagnosis;
+use crate::plot;
+use crate::session::Session;
+use crate::simulate::simulate;
+
+/// Writes `REPORT.md` and its plots into `dir`.
+pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let v = &d.verdict;
+    let mut s = String::new();
+    let _ = writeln!(s, "# Diagnosis of `{}`\n", session.dir.display());
+    let causes = if v.causes.is_empty() {
+        "none".to_string()
+    } else {
+        v.causes.join(", ")
+    };
+    let _ = writeln!(s, "**Verdict: {}**; causes: {causes}.\n", v.verdict);
+    let _ = writeln!(
+        s,
+        "Fitted on {} recordings ({}); scored on {} held out ({}).\n",
+        v.training.len(),
+        v.training.join(", "),
+        v.holdout.len(),
+        v.holdout.join(", ")
+    );
+    let _ = writeln!(
+        s,
+        "| model | held-out NRMSE | held-out RSS/m | BIC (training) | parameters |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for (label, m) in [("baseline", &v.baseline), ("final", &v.extended)] {
+        let _ = writeln!(
+            s,
+            "| {label} | {:.4} | {:.3} | {:.1} | {} |",
+            m.holdout_nrmse, m.holdout_rss_per_residual, m.bic, m.parameters
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nHeld-out error falls by {:.1} % from the baseline to the final model. \
+         RSS/m is the weighted residual sum of squares per residual: 1 is the \
+         noise floor measured on the recordings' opening rests.\n",
+        v.gain_percent
+    );
+    let _ = writeln!(s, "## Candidates\n");
+    let _ = writeln!(
+        s,
+        "An effect is accepted when ΔBIC < {} on the training recordings and the \
+         held-out weighted RSS falls by more than {:.0} %.\n",
+        super::DELTA_BIC,
+        100.0 * super::HOLDOUT_RSS_GAIN
+    );
+    let _ = writeln!(s, "| round | effect | ΔBIC | held-out NRMSE gain % | held-out RSS gain % | passed | fitted terms |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for c in &v.candidates {
+        let terms: Vec<String> = c
+            .params
+            .iter()
+            .map(|(k, x)| format!("{k} = {x:.4e}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.1} | {:.2} | {:.2} | {} | {} |",
+            c.round + 1,
+            c.name,
+            c.delta_bic,
+            c.holdout_gain_percent,
+            c.holdout_rss_gain_percent,
+            if c.passed { "yes" } else { "no" },
+            terms.join(", ")
+        );
+    }
+    let _ = writeln!(s, "\n## Final model's parameters (95 % intervals)\n");
+    let _ = writeln!(s, "| parameter | estimate | interval |");
+    let _ = writeln!(s, "|---|---|---|");
+    for e in &d.final_fit.estimates {
+        let _ = writeln!(
+            s,
+            "| {} | {:.5e} | [{:.4e}, {:.4e}] |",
+            e.knob.name(),
+            e.value,
+            e.low,
+            e.high
+        );
+    }
+    let _ = writeln!(s, "\n## Held-out channels\n");
+    let _ = writeln!(s, "| recording | channel | baseline fit % | final fit % | Ljung–Box Q baseline | final | 99 % threshold |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let (b, f) = &d.holdout_scores;
+    for ((cb, cf), t) in b
+        .channels
+        .iter()
+        .zip(&f.channels)
+        .filter(|(cb, _)| cb.has_signal || cb.channel.is_camera())
+        .zip(&v.residual_tests)
+    {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1} |",
+            cb.recording,
+            cb.channel.name(),
+            cb.fit_percent,
+            cf.fit_percent,
+            t.baseline_ljung_box,
+            t.final_ljung_box,
+            t.threshold
+        );
+    }
+    let _ = writeln!(s, "\n## Plots\n");
+    for &i in &d.holdout {
+        let r = &session.recordings[i];
+        let stem = r.name.trim_end_matches(".csv");
+        let png = format!("{stem}_final.png");
+        let sim = simulate(
+            &r.name,
+            &r.rec,
+            &d.final_fit.spec,
+            crate::fit::FIT_ELEMENTS,
+            &mut |_| {},
+        )?;
+        plot::plot(
+            &dir.join(&png),
+            &format!("{}: measured and final model (held out)", r.name),
+            Some(&r.rec),
+            &sim,
+        )?;
+        let _ = writeln!(s, "![{}]({png})\n", r.name);
+    }
+    std::fs::write(dir.join("REPORT.md"), s)?;
+    Ok(())
+}

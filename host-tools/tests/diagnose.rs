@@ -1,0 +1,81 @@
+//! `finrs diagnose` on sessions made by the model itself with one term
+//! switched on: it must name that term, and nothing on a baseline session.
+//! (The richer rig, whose effects are not the model's own terms, is the
+//! harder test.)
+
+mod common;
+
+use finrs::diagnose::diagnose;
+use finrs::params::ModelFile;
+use finrs::predict::ModelSpec;
+use finrs::session::Session;
+use model_core::{Extensions, Params};
+
+fn sample(ext: Extensions) -> ModelSpec {
+    ModelSpec {
+        params: Params {
+            r1_ohm: 190.0,
+            r2_ohm: 610.0,
+            c_f: 1.3e-4,
+            k_nm_per_c: 5.2,
+            z_per_s: 0.07,
+            p_per_s: 0.12,
+            ..Params::thesis_2006()
+        },
+        ext,
+        dehydration_per_s: 0.0,
+    }
+}
+
+fn verdict_for(label: &str, spec: &ModelSpec, seed: u64) -> finrs::diagnose::Verdict {
+    let dir = std::env::temp_dir().join(format!("finrs-diag-{label}-{}", std::process::id()));
+    common::write_session(&dir, spec, &common::short_protocol(), seed);
+    let session = Session::read(&dir).unwrap();
+    let fixed = ModelFile::thesis_2006()
+        .spec_for(&session.geometry())
+        .unwrap();
+    let d = diagnose(&session, fixed, &|_| {}).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    d.verdict
+}
+
+#[test]
+fn a_baseline_session_is_none() {
+    let v = verdict_for("none", &sample(Extensions::NONE), 21);
+    assert_eq!(v.verdict, "none", "{v:#?}");
+    assert!(v.causes.is_empty());
+}
+
+#[test]
+fn large_deflection_is_named() {
+    let ext = Extensions {
+        large_deflection: true,
+        ..Extensions::NONE
+    };
+    let v = verdict_for("large", &sample(ext), 22);
+    assert_eq!(v.causes, ["large-deflection"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+    assert!(v.gain_percent > 10.0, "{}", v.gain_percent);
+}
+
+#[test]
+fn damping_is_named() {
+    let ext = Extensions {
+        damping_mass_per_s: 3.0,
+        ..Extensions::NONE
+    };
+    let v = verdict_for("damping", &sample(ext), 23);
+    assert_eq!(v.causes, ["damping"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
+
+#[test]
+fn crosstalk_is_named() {
+    let ext = Extensions {
+        crosstalk: 0.25,
+        ..Extensions::NONE
+    };
+    let v = verdict_for("crosstalk", &sample(ext), 24);
+    assert_eq!(v.causes, ["segment-crosstalk"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
