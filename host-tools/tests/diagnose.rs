@@ -79,3 +79,57 @@ fn crosstalk_is_named() {
     assert_eq!(v.causes, ["segment-crosstalk"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
 }
+
+#[test]
+fn electrochemical_nonlinearity_is_named() {
+    let ext = Extensions {
+        charge_cubic_per_v2: 0.03,
+        leak_cubic_per_v2: 0.05,
+        ..Extensions::NONE
+    };
+    let v = verdict_for("electro", &sample(ext), 25);
+    assert_eq!(v.causes, ["electrochemical-nonlinearity"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
+
+#[test]
+fn back_relaxation_is_named() {
+    let mut spec = sample(Extensions {
+        back_relaxation: true,
+        ..Extensions::NONE
+    });
+    spec.params.z_per_s = -0.04;
+    let v = verdict_for("back", &spec, 26);
+    assert_eq!(v.causes, ["back-relaxation"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
+
+#[test]
+fn dehydration_is_named() {
+    let mut spec = sample(Extensions::NONE);
+    spec.dehydration_per_s = 2e-3;
+    let v = verdict_for("dry", &spec, 27);
+    assert_eq!(v.causes, ["dehydration"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
+
+#[test]
+fn beam_stiffness_is_named() {
+    let mut spec = sample(Extensions::NONE);
+    spec.params.ei_nm2 *= 0.6;
+    let v = verdict_for("stiff", &spec, 28);
+    assert_eq!(v.causes, ["beam-stiffness"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
+
+#[test]
+fn hydrodynamic_loading_is_named() {
+    let spec = sample(Extensions {
+        added_mass_kg_per_m: 0.03,
+        drag_n_s_per_m2: 0.05,
+        ..Extensions::NONE
+    });
+    let v = verdict_for("water", &spec, 29);
+    assert_eq!(v.causes, ["hydrodynamic-loading"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}

@@ -27,7 +27,7 @@ pub mod whiteness;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::fit::{Effect, FitError, FitResult, Fitter, Knob, Score};
+use crate::fit::{modal, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::predict::ModelSpec;
 use crate::session::Session;
 
@@ -187,7 +187,8 @@ pub fn diagnose(
             .map(|&e| {
                 let mut effects = current.effects.clone();
                 effects.push(e);
-                let fit = fitter.fit(&train, &effects, Some(&current.spec), fixed)?;
+                let start = frequency_start(session, &train, e, &current.spec);
+                let fit = fitter.fit(&train, &effects, Some(&start), fixed)?;
                 let score = fitter.score(&hold, &fit.spec)?;
                 Ok((e, fit, score))
             })
@@ -279,6 +280,40 @@ pub fn diagnose(
         holdout_scores: (base_hold, current_hold),
         holdout: hold,
     })
+}
+
+/// Where a candidate that moves the beam's frequency starts: where the
+/// model's first blocked mode rings at the measured frequency (`EI` for
+/// beam-stiffness, added mass for hydrodynamic loading). Others start at
+/// the current model, their own terms off.
+fn frequency_start(
+    session: &Session,
+    train: &[usize],
+    e: Effect,
+    current: &ModelSpec,
+) -> ModelSpec {
+    let mut start = *current;
+    if !matches!(e, Effect::BeamStiffness | Effect::HydrodynamicLoading) {
+        return start;
+    }
+    let Some(model_hz) = modal::model_blocked_hz(current) else {
+        return start;
+    };
+    let Some(data_hz) = modal::measured_blocked_hz(session, train, 0.2 * model_hz, 3.0 * model_hz)
+    else {
+        return start;
+    };
+    // f ∝ √(EI / mass per length).
+    let ratio2 = (data_hz / model_hz).powi(2);
+    match e {
+        Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
+        _ => {
+            let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
+            start.ext.added_mass_kg_per_m =
+                (mass / ratio2 - start.params.mass_per_length_kg_per_m).max(0.0);
+        }
+    }
+    start
 }
 
 /// Whether the term that makes `e` what it is differs from "off" beyond

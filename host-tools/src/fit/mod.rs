@@ -10,6 +10,7 @@
 
 mod data;
 mod effect;
+pub mod modal;
 pub mod report;
 mod space;
 mod start;
