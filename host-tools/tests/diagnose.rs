@@ -36,6 +36,17 @@ fn verdict_for(label: &str, spec: &ModelSpec, seed: u64) -> finrs::diagnose::Ver
         .unwrap();
     let d = diagnose(&session, fixed, &|_| {}).unwrap();
     std::fs::remove_dir_all(&dir).ok();
+    // The README quotes these (`cargo test --test diagnose -- --nocapture`).
+    eprintln!(
+        "{label}: verdict {}, causes {:?}, held-out NRMSE {:.4} -> {:.4} ({:.1} % gain), RSS/m {:.3} -> {:.3}",
+        d.verdict.verdict,
+        d.verdict.causes,
+        d.verdict.baseline.holdout_nrmse,
+        d.verdict.extended.holdout_nrmse,
+        d.verdict.gain_percent,
+        d.verdict.baseline.holdout_rss_per_residual,
+        d.verdict.extended.holdout_rss_per_residual
+    );
     d.verdict
 }
 
