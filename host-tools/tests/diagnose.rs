@@ -28,6 +28,15 @@ fn sample(ext: Extensions) -> ModelSpec {
 }
 
 fn verdict_for(label: &str, spec: &ModelSpec, seed: u64) -> finrs::diagnose::Verdict {
+    verdict_and_report(label, spec, seed, None)
+}
+
+fn verdict_and_report(
+    label: &str,
+    spec: &ModelSpec,
+    seed: u64,
+    report: Option<&std::path::Path>,
+) -> finrs::diagnose::Verdict {
     let dir = std::env::temp_dir().join(format!("finrs-diag-{label}-{}", std::process::id()));
     common::write_session(&dir, spec, &common::short_protocol(), seed);
     let session = Session::read(&dir).unwrap();
@@ -35,6 +44,9 @@ fn verdict_for(label: &str, spec: &ModelSpec, seed: u64) -> finrs::diagnose::Ver
         .spec_for(&session.geometry())
         .unwrap();
     let d = diagnose(&session, fixed, &|_| {}).unwrap();
+    if let Some(out) = report {
+        finrs::diagnose::report::write(out, &session, &d).unwrap();
+    }
     std::fs::remove_dir_all(&dir).ok();
     // The README quotes these (`cargo test --test diagnose -- --nocapture`).
     eprintln!(
@@ -75,9 +87,27 @@ fn damping_is_named() {
         damping_mass_per_s: 3.0,
         ..Extensions::NONE
     };
-    let v = verdict_for("damping", &sample(ext), 23);
+    let out = std::env::temp_dir().join(format!("finrs-report-{}", std::process::id()));
+    let v = verdict_and_report("damping", &sample(ext), 23, Some(&out));
     assert_eq!(v.causes, ["damping"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
+    // The report names the cause and shows the held-out recordings.
+    let md = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    assert!(
+        md.contains("**Verdict: explained**; causes: damping."),
+        "{md}"
+    );
+    for name in &v.holdout {
+        let png = out.join(name.replace(".csv", ".png"));
+        assert!(
+            std::fs::metadata(&png).unwrap().len() > 10_000,
+            "{}",
+            png.display()
+        );
+        assert!(md.contains(&format!("]({})", name.replace(".csv", ".png"))));
+    }
+    assert!(out.join("residual_autocorrelation.png").exists());
+    std::fs::remove_dir_all(&out).ok();
 }
 
 #[test]

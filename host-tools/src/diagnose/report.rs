@@ -112,24 +112,66 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
         );
     }
     let _ = writeln!(s, "\n## Plots\n");
+    let _ = writeln!(
+        s,
+        "Held-out recordings: measured, the baseline and the final model (both fitted on the other recordings).\n"
+    );
     for &i in &d.holdout {
         let r = &session.recordings[i];
         let stem = r.name.trim_end_matches(".csv");
-        let png = format!("{stem}_final.png");
-        let sim = simulate(
-            &r.name,
-            &r.rec,
-            &d.final_fit.spec,
-            crate::fit::FIT_ELEMENTS,
-            &mut |_| {},
-        )?;
-        plot::plot(
+        let png = format!("{stem}.png");
+        let elements = crate::fit::FIT_ELEMENTS;
+        let base = simulate(&r.name, &r.rec, &d.baseline.spec, elements, &mut |_| {})?;
+        let fin = simulate(&r.name, &r.rec, &d.final_fit.spec, elements, &mut |_| {})?;
+        plot::plot_models(
             &dir.join(&png),
-            &format!("{}: measured and final model (held out)", r.name),
+            &format!("{} (held out)", r.name),
             Some(&r.rec),
-            &sim,
+            &[("baseline", &base), ("final", &fin)],
         )?;
         let _ = writeln!(s, "![{}]({png})\n", r.name);
+    }
+    // The held-out channel whose baseline residuals are least white.
+    let worst = b
+        .channels
+        .iter()
+        .zip(&f.channels)
+        .filter(|(cb, _)| cb.has_signal || cb.channel.is_camera())
+        .max_by(|x, y| {
+            let q = |c: &crate::fit::ChannelFit| super::whiteness::ljung_box(&c.residuals, 20);
+            q(x.0).total_cmp(&q(y.0))
+        });
+    if let Some((cb, cf)) = worst {
+        let lags = 60.min(cb.residuals.len().saturating_sub(1));
+        let band = 2.58 / (cb.residuals.len().max(1) as f64).sqrt();
+        let png = "residual_autocorrelation.png";
+        plot::plot_autocorrelation(
+            &dir.join(png),
+            &format!(
+                "residual autocorrelation, {} {} (held out)",
+                cb.recording,
+                cb.channel.name()
+            ),
+            &[
+                (
+                    "baseline",
+                    super::whiteness::autocorrelation(&cb.residuals, lags),
+                ),
+                (
+                    "final",
+                    super::whiteness::autocorrelation(&cf.residuals, lags),
+                ),
+            ],
+            band,
+        )?;
+        let _ = writeln!(
+            s,
+            "The least white held-out channel under the baseline, {} of {}: residual \
+             autocorrelation of baseline and final model, with the band white noise \
+             stays inside 99 % of the time.\n\n![residual autocorrelation]({png})\n",
+            cb.channel.name(),
+            cb.recording
+        );
     }
     std::fs::write(dir.join("REPORT.md"), s)?;
     Ok(())
