@@ -174,3 +174,17 @@ fn hydrodynamic_loading_is_named() {
     assert_eq!(v.causes, ["hydrodynamic-loading"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
 }
+
+#[test]
+fn a_pair_is_named_strongest_first() {
+    let ext = Extensions {
+        large_deflection: true,
+        damping_mass_per_s: 3.0,
+        ..Extensions::NONE
+    };
+    let v = verdict_for("pair", &sample(ext), 30);
+    let mut causes = v.causes.clone();
+    causes.sort();
+    assert_eq!(causes, ["damping", "large-deflection"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
