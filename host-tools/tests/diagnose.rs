@@ -188,3 +188,27 @@ fn a_pair_is_named_strongest_first() {
     assert_eq!(causes, ["damping", "large-deflection"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
 }
+
+#[test]
+fn one_recording_is_refused_with_the_reason() {
+    let dir = std::env::temp_dir().join(format!("finrs-diag-one-{}", std::process::id()));
+    common::write_session(
+        &dir,
+        &sample(Extensions::NONE),
+        &common::short_protocol()[..1],
+        31,
+    );
+    let session = Session::read(&dir).unwrap();
+    let fixed = ModelFile::thesis_2006()
+        .spec_for(&session.geometry())
+        .unwrap();
+    let err = diagnose(&session, fixed, &|_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        err.contains("at least two") && err.contains("has 1"),
+        "{err}"
+    );
+}

@@ -157,7 +157,7 @@ pub fn diagnose(
     let fitter = Fitter::new(session);
     let (train, hold) = split(session);
     if hold.is_empty() {
-        return Err(FitError::NoData);
+        return Err(FitError::TooFewToHoldOut(session.recordings.len()));
     }
     let name = |i: &usize| session.recordings[i.to_owned()].name.clone();
     let has_clock = session.recordings.iter().all(|r| r.t_start_s.is_some());

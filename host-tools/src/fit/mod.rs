@@ -59,6 +59,9 @@ pub enum FitError {
     /// Nothing to fit.
     #[error("the fit needs at least one recording with a measured channel")]
     NoData,
+    /// Too few recordings to hold some out.
+    #[error("a diagnosis holds recordings out to test on: it needs at least two, and a second of each fixture it holds out; this session has {0}")]
+    TooFewToHoldOut(usize),
 }
 
 /// A fitted model and how well it fits.
