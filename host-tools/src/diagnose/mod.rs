@@ -27,7 +27,7 @@ pub mod whiteness;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::fit::{modal, Effect, FitError, FitResult, Fitter, Knob, Score};
+use crate::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::predict::ModelSpec;
 use crate::session::Session;
 
@@ -182,12 +182,19 @@ pub fn diagnose(
             round + 1,
             untried.len()
         ));
+        // The model's and the load cell's blocked frequencies, once a round:
+        // every frequency-moving candidate of the round starts from them.
+        let frequencies = untried
+            .iter()
+            .any(|e| moves_frequency(*e))
+            .then(|| blocked_frequencies(session, &train, &current.spec))
+            .flatten();
         let results: Vec<Result<(Effect, FitResult, Score), FitError>> = untried
             .par_iter()
             .map(|&e| {
                 let mut effects = current.effects.clone();
                 effects.push(e);
-                let start = frequency_start(session, &train, e, &current.spec);
+                let start = frequency_start(e, &current.spec, frequencies);
                 let fit = fitter.fit(&train, &effects, Some(&start), fixed)?;
                 let score = fitter.score(&hold, &fit.spec)?;
                 Ok((e, fit, score))
@@ -244,11 +251,7 @@ pub fn diagnose(
         aic: fit.aic,
         parameters: fit.parameters,
     };
-    let residual_tests = base_hold
-        .channels
-        .iter()
-        .zip(&current_hold.channels)
-        .filter(|(b, _)| b.has_signal || b.channel.is_camera())
+    let residual_tests = tested_channels(&base_hold, &current_hold)
         .map(|(b, f)| ResidualTest {
             recording: b.recording.clone(),
             channel: b.channel.name(),
@@ -282,25 +285,48 @@ pub fn diagnose(
     })
 }
 
+/// The held-out channels whose residuals are tested for whiteness (those
+/// with signal, and the camera's, where motion along the strip shows),
+/// baseline and final model side by side. `Verdict::residual_tests` and
+/// the report's table follow this order.
+pub fn tested_channels<'a>(
+    baseline: &'a Score,
+    last: &'a Score,
+) -> impl Iterator<Item = (&'a ChannelFit, &'a ChannelFit)> {
+    baseline
+        .channels
+        .iter()
+        .zip(&last.channels)
+        .filter(|(b, _)| b.has_signal || b.channel.is_camera())
+}
+
+/// Whether a candidate moves the beam's natural frequencies.
+fn moves_frequency(e: Effect) -> bool {
+    matches!(e, Effect::BeamStiffness | Effect::HydrodynamicLoading)
+}
+
+/// `(model, measured)` first blocked frequency, Hz, the measurement
+/// searched between 0.2 and 3 times the model's.
+fn blocked_frequencies(
+    session: &Session,
+    train: &[usize],
+    current: &ModelSpec,
+) -> Option<(f64, f64)> {
+    let model_hz = modal::model_blocked_hz(current)?;
+    let data_hz = modal::measured_blocked_hz(session, train, 0.2 * model_hz, 3.0 * model_hz)?;
+    Some((model_hz, data_hz))
+}
+
 /// Where a candidate that moves the beam's frequency starts: where the
 /// model's first blocked mode rings at the measured frequency (`EI` for
 /// beam-stiffness, added mass for hydrodynamic loading). Others start at
 /// the current model, their own terms off.
-fn frequency_start(
-    session: &Session,
-    train: &[usize],
-    e: Effect,
-    current: &ModelSpec,
-) -> ModelSpec {
+fn frequency_start(e: Effect, current: &ModelSpec, frequencies: Option<(f64, f64)>) -> ModelSpec {
     let mut start = *current;
-    if !matches!(e, Effect::BeamStiffness | Effect::HydrodynamicLoading) {
+    if !moves_frequency(e) {
         return start;
     }
-    let Some(model_hz) = modal::model_blocked_hz(current) else {
-        return start;
-    };
-    let Some(data_hz) = modal::measured_blocked_hz(session, train, 0.2 * model_hz, 3.0 * model_hz)
-    else {
+    let Some((model_hz, data_hz)) = frequencies else {
         return start;
     };
     // f ∝ √(EI / mass per length).

@@ -92,13 +92,10 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
     let _ = writeln!(s, "| recording | channel | baseline fit % | final fit % | Ljung–Box Q baseline | final | 99 % threshold |");
     let _ = writeln!(s, "|---|---|---|---|---|---|---|");
     let (b, f) = &d.holdout_scores;
-    for ((cb, cf), t) in b
-        .channels
-        .iter()
-        .zip(&f.channels)
-        .filter(|(cb, _)| cb.has_signal || cb.channel.is_camera())
+    let tested: Vec<_> = super::tested_channels(b, f)
         .zip(&v.residual_tests)
-    {
+        .collect();
+    for &((cb, cf), t) in &tested {
         let _ = writeln!(
             s,
             "| {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1} |",
@@ -132,16 +129,10 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
         let _ = writeln!(s, "![{}]({png})\n", r.name);
     }
     // The held-out channel whose baseline residuals are least white.
-    let worst = b
-        .channels
+    let worst = tested
         .iter()
-        .zip(&f.channels)
-        .filter(|(cb, _)| cb.has_signal || cb.channel.is_camera())
-        .max_by(|x, y| {
-            let q = |c: &crate::fit::ChannelFit| super::whiteness::ljung_box(&c.residuals, 20);
-            q(x.0).total_cmp(&q(y.0))
-        });
-    if let Some((cb, cf)) = worst {
+        .max_by(|x, y| x.1.baseline_ljung_box.total_cmp(&y.1.baseline_ljung_box));
+    if let Some(&((cb, cf), _)) = worst {
         let lags = 60.min(cb.residuals.len().saturating_sub(1));
         let band = 2.58 / (cb.residuals.len().max(1) as f64).sqrt();
         let png = "residual_autocorrelation.png";

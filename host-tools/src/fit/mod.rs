@@ -201,7 +201,7 @@ impl<'a> Fitter<'a> {
             None => start::from_data(self, recordings, &space)?,
         };
         let theta0 = DVector::from_vec(space.theta(&start));
-        let problem = Problem {
+        let mut problem = Problem {
             fitter: self,
             recordings,
             space: &space,
@@ -209,22 +209,24 @@ impl<'a> Fitter<'a> {
             residuals: None,
             m: n_data,
         };
-        let mut problem = problem;
         problem.set_params(&theta0);
         let (problem, report) = LevenbergMarquardt::new()
             .with_patience(40)
             .minimize(problem);
-        // A failed step leaves the best point the optimiser saw; keep the
-        // start if even that is worse.
+        // One simulation at the optimiser's final point serves the score,
+        // the information criteria and the Jacobian's base.
         let theta = problem.theta.clone();
         let spec = space.spec(theta.as_slice());
-        let r = self.residuals(recordings, &spec)?;
-        let m = r.len();
-        let rss: f64 = r.iter().map(|x| x * x).sum();
-        let jac = problem.jacobian_at(&theta)?;
+        let score = self.score_here(recordings, &spec)?;
+        let (rss, m) = (score.rss, score.m);
+        let base: Vec<f64> = score
+            .channels
+            .iter()
+            .flat_map(|c| c.residuals.iter().copied())
+            .collect();
+        let jac = problem.jacobian_at(&theta, &base)?;
         let estimates = stats::estimates(&space, theta.as_slice(), &jac, rss, m);
         let k = space.counted_parameters();
-        let score = self.score_here(recordings, &spec)?;
         let (aic, bic) = stats::information(rss, m, k);
         Ok(FitResult {
             effects: space.effects.clone(),
@@ -246,18 +248,17 @@ struct Problem<'a, 'b> {
     recordings: &'b [usize],
     space: &'b Space,
     theta: DVector<f64>,
+    /// Residuals at `theta`; `None` where the model refused it.
     residuals: Option<DVector<f64>>,
     /// Residual count.
     m: usize,
 }
 
 impl Problem<'_, '_> {
-    /// Forward-difference Jacobian at `theta`, one column per knob, the
-    /// columns in parallel (each is a whole session's simulation).
-    fn jacobian_at(&self, theta: &DVector<f64>) -> Result<DMatrix<f64>, FitError> {
-        let base = self
-            .fitter
-            .residuals(self.recordings, &self.space.spec(theta.as_slice()))?;
+    /// Forward-difference Jacobian at `theta`, whose residuals are `base`,
+    /// one column per knob, the columns in parallel (each is a whole
+    /// session's simulation).
+    fn jacobian_at(&self, theta: &DVector<f64>, base: &[f64]) -> Result<DMatrix<f64>, FitError> {
         let columns: Result<Vec<Vec<f64>>, FitError> = (0..theta.len())
             .into_par_iter()
             .map(|j| {
@@ -268,7 +269,7 @@ impl Problem<'_, '_> {
                 let r = self
                     .fitter
                     .residuals(self.recordings, &self.space.spec(t.as_slice()))?;
-                Ok(r.iter().zip(&base).map(|(a, b)| (a - b) / h).collect())
+                Ok(r.iter().zip(base).map(|(a, b)| (a - b) / h).collect())
             })
             .collect();
         let columns = columns?;
@@ -285,15 +286,12 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
 
     fn set_params(&mut self, x: &DVector<f64>) {
         self.theta.copy_from(x);
-        // Where the model refuses a trial point (or it overflows), a huge
-        // residual makes the optimiser step back instead of stopping.
-        let r = self
+        self.residuals = self
             .fitter
             .residuals(self.recordings, &self.space.spec(x.as_slice()))
             .ok()
             .filter(|r| r.iter().all(|v| v.is_finite()))
-            .unwrap_or_else(|| vec![1e6; self.m]);
-        self.residuals = Some(DVector::from_vec(r));
+            .map(DVector::from_vec);
     }
 
     fn params(&self) -> DVector<f64> {
@@ -301,10 +299,18 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
     }
 
     fn residuals(&self) -> Option<DVector<f64>> {
-        self.residuals.clone()
+        // Where the model refuses a trial point (or it overflows), a huge
+        // residual makes the optimiser step back instead of stopping.
+        Some(
+            self.residuals
+                .clone()
+                .unwrap_or_else(|| DVector::from_element(self.m, 1e6)),
+        )
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
-        self.jacobian_at(&self.theta).ok()
+        // The cached residuals are the base: no second simulation here.
+        let base = self.residuals.as_ref()?;
+        self.jacobian_at(&self.theta, base.as_slice()).ok()
     }
 }
