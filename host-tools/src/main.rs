@@ -271,6 +271,9 @@ fn run_diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
     eprintln!("diagnosed in {:.1} s", started.elapsed().as_secs_f64());
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(v)?;
+        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).with_context(|| parent.display().to_string())?;
+        }
         std::fs::write(path, text + "\n").with_context(|| path.display().to_string())?;
         eprintln!("wrote {}", path.display());
     }

@@ -75,8 +75,11 @@ pub struct ExtensionsFile {
     pub back_relaxation: bool,
     /// Arc kinematics for positions along the strip.
     pub large_deflection: bool,
-    /// Moment gain `e^{−r t}` over session time `t`, `r` in 1/s.
+    /// Initial drying rate `r` of the moment gain over session time, 1/s.
     pub dehydration_per_s: f64,
+    /// Drying curvature `c` (`≥ 0`): the gain is `(1 + c r t)^(−1/c)`,
+    /// `e^{−r t}` at 0.
+    pub dehydration_curvature: f64,
 }
 
 impl ExtensionsFile {
@@ -96,7 +99,11 @@ impl ExtensionsFile {
     }
 
     /// The section for a model's terms and dehydration rate.
-    pub fn from_spec(ext: &model_core::Extensions, dehydration_per_s: f64) -> ExtensionsFile {
+    pub fn from_spec(
+        ext: &model_core::Extensions,
+        dehydration_per_s: f64,
+        dehydration_curvature: f64,
+    ) -> ExtensionsFile {
         ExtensionsFile {
             damping_mass_per_s: ext.damping_mass_per_s,
             damping_stiffness_s: ext.damping_stiffness_s,
@@ -108,6 +115,7 @@ impl ExtensionsFile {
             back_relaxation: ext.back_relaxation,
             large_deflection: ext.large_deflection,
             dehydration_per_s,
+            dehydration_curvature,
         }
     }
 }
@@ -278,7 +286,11 @@ impl ModelFile {
             });
         }
         if !effects.is_empty() {
-            f.extensions = Some(ExtensionsFile::from_spec(&spec.ext, spec.dehydration_per_s));
+            f.extensions = Some(ExtensionsFile::from_spec(
+                &spec.ext,
+                spec.dehydration_per_s,
+                spec.dehydration_curvature,
+            ));
         }
         f
     }
@@ -326,20 +338,21 @@ impl ModelFile {
         p.validate_relaxation(ext.back_relaxation)
             .map_err(invalid)?;
         ext.core().validate().map_err(invalid)?;
-        let r = ext.dehydration_per_s;
-        if !r.is_finite() {
-            return Err(invalid(model_core::ParamError::NotFinite {
-                field: "dehydration_per_s",
-                value: r,
-            }));
-        }
-        if r < 0.0 {
-            return Err(invalid(model_core::ParamError::OutOfRange {
-                field: "dehydration_per_s",
-                value: r,
-                min: 0.0,
-                max: f64::INFINITY,
-            }));
+        for (field, value) in [
+            ("dehydration_per_s", ext.dehydration_per_s),
+            ("dehydration_curvature", ext.dehydration_curvature),
+        ] {
+            if !value.is_finite() {
+                return Err(invalid(model_core::ParamError::NotFinite { field, value }));
+            }
+            if value < 0.0 {
+                return Err(invalid(model_core::ParamError::OutOfRange {
+                    field,
+                    value,
+                    min: 0.0,
+                    max: f64::INFINITY,
+                }));
+            }
         }
         Ok(p)
     }
@@ -353,6 +366,7 @@ impl ModelFile {
             params,
             ext: ext.core(),
             dehydration_per_s: ext.dehydration_per_s,
+            dehydration_curvature: ext.dehydration_curvature,
         })
     }
 }

@@ -17,8 +17,24 @@ pub struct ModelSpec {
     pub params: Params,
     /// Optional terms (all off for the baseline).
     pub ext: Extensions,
-    /// Dehydration: the moment gain is `e^{−r t}` at session time `t`, `r` in 1/s.
+    /// Dehydration: the moment gain falls at the rate `r`, 1/s, over
+    /// session time `t` (see [`drying_gain`]).
     pub dehydration_per_s: f64,
+    /// How drying slows as the strip loses its water, `c ≥ 0` (see
+    /// [`drying_gain`]); 0 is a constant rate.
+    pub dehydration_curvature: f64,
+}
+
+/// The moment gain after drying for `t_s` at initial rate `r` with
+/// curvature `c`: `(1 + c r t)^(−1/c)`, which is `e^{−r t}` at `c = 0` and
+/// `1/(1 + r t)` at `c = 1` (a loss that slows as the water goes).
+pub fn drying_gain(rate_per_s: f64, curvature: f64, t_s: f64) -> f64 {
+    let x = rate_per_s * t_s;
+    if curvature * x < 1e-9 {
+        (-x).exp()
+    } else {
+        (-(curvature * x).ln_1p() / curvature).exp()
+    }
 }
 
 impl ModelSpec {
@@ -28,6 +44,7 @@ impl ModelSpec {
             params,
             ext: Extensions::NONE,
             dehydration_per_s: 0.0,
+            dehydration_curvature: 0.0,
         }
     }
 }
@@ -143,7 +160,11 @@ impl Run<'_> {
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
             if spec.dehydration_per_s != 0.0 {
-                strip.set_moment_gain((-spec.dehydration_per_s * (self.t_start_s + t_s)).exp());
+                strip.set_moment_gain(drying_gain(
+                    spec.dehydration_per_s,
+                    spec.dehydration_curvature,
+                    self.t_start_s + t_s,
+                ));
             }
             // Outputs at this row's instant, then hold its voltage to the next.
             for (c, i) in t.currents_a.iter_mut().zip(strip.currents_a(&x, &v)) {

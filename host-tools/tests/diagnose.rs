@@ -24,6 +24,7 @@ fn sample(ext: Extensions) -> ModelSpec {
         },
         ext,
         dehydration_per_s: 0.0,
+        dehydration_curvature: 0.0,
     }
 }
 

@@ -19,7 +19,10 @@
 //! - `explained`: effects accepted and the held-out residuals are at the
 //!   noise floor;
 //! - `unexplained`: above the noise floor after the best model, with the
-//!   effects that did pass (possibly none).
+//!   effects that did pass (possibly none); or the DAQ's channels already
+//!   carry structure while the strip rests before its drive (most
+//!   rests fail a Ljung–Box test): every candidate is driven by the
+//!   voltage, so nothing in the catalogue can account for that.
 
 pub mod report;
 pub mod whiteness;
@@ -41,6 +44,10 @@ pub const DELTA_BIC: f64 = -10.0;
 pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
 /// Effects accepted at most (rounds of the forward search).
 pub const MAX_CAUSES: usize = 3;
+/// Share of the opening rests (DAQ channels) that may fail the whiteness
+/// test before the rest itself is called structured: white noise fails
+/// one in a hundred.
+pub const REST_STRUCTURE_SHARE: f64 = 0.5;
 
 /// How a model does on the two parts of the session.
 #[derive(Clone, Debug, Serialize)]
@@ -114,6 +121,48 @@ pub struct Verdict {
     pub holdout: Vec<String>,
     /// Whiteness of the held-out residuals.
     pub residual_tests: Vec<ResidualTest>,
+    /// Whiteness of the DAQ's channels during the opening rests.
+    pub rest: RestStructure,
+}
+
+/// Whether the measured channels carry structure before any drive.
+#[derive(Clone, Debug, Serialize)]
+pub struct RestStructure {
+    /// Opening rests tested (recording × current or force channel).
+    pub tested: usize,
+    /// Those whose Ljung–Box `Q` over 20 lags exceeds the 99 % threshold.
+    pub failing: usize,
+    /// Whether more than [`REST_STRUCTURE_SHARE`] of them fail.
+    pub structured: bool,
+}
+
+/// Tests the opening rest of every DAQ channel (currents, load cell) for
+/// whiteness; camera channels are too short there to test.
+pub fn rest_structure(session: &Session) -> RestStructure {
+    let (mut tested, mut failing) = (0, 0);
+    for r in &session.recordings {
+        for (ch, values) in &r.rec.channels {
+            if ch.is_camera() {
+                continue;
+            }
+            let rest: Option<Vec<f64>> = values[..r.rest_rows.min(values.len())]
+                .iter()
+                .copied()
+                .collect();
+            let Some(rest) = rest.filter(|v| v.len() >= 200) else {
+                continue;
+            };
+            tested += 1;
+            if whiteness::ljung_box(&rest, 20) > whiteness::chi2_99(20) {
+                failing += 1;
+            }
+        }
+    }
+    RestStructure {
+        tested,
+        failing,
+        structured: tested > 0 && failing as f64 > REST_STRUCTURE_SHARE * tested as f64,
+    }
 }
 
 /// A diagnosis with the fits behind it, for the report.
@@ -239,7 +288,8 @@ pub fn diagnose(
     let per = |s: &Score| s.rss / s.m.max(1) as f64;
     let at_floor = per(&current_hold) < NOISE_FLOOR_RATIO;
     let causes: Vec<String> = accepted.iter().map(|e| e.name().to_string()).collect();
-    let verdict = match (causes.is_empty(), at_floor) {
+    let rest = rest_structure(session);
+    let verdict = match (causes.is_empty(), at_floor && !rest.structured) {
         (true, true) => "none",
         (false, true) => "explained",
         (_, false) => "unexplained",
@@ -275,6 +325,7 @@ pub fn diagnose(
         training: train.iter().map(name).collect(),
         holdout: hold.iter().map(name).collect(),
         residual_tests,
+        rest,
     };
     Ok(Diagnosis {
         verdict,

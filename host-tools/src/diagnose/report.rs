@@ -47,6 +47,18 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
          noise floor measured on the recordings' opening rests.\n",
         v.gain_percent
     );
+    let _ = writeln!(
+        s,
+        "Opening rests (currents, load cell): {} of {} fail a Ljung–Box test at 99 %{}.\n",
+        v.rest.failing,
+        v.rest.tested,
+        if v.rest.structured {
+            ": the channels carry structure before any drive, which no \
+             voltage-driven candidate can explain"
+        } else {
+            " (white noise fails one in a hundred)"
+        }
+    );
     let _ = writeln!(s, "## Candidates\n");
     let _ = writeln!(
         s,

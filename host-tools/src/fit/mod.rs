@@ -32,6 +32,8 @@ use crate::session::Session;
 /// not depend on it, and the first modes differ from a finer mesh's by
 /// 0.01 %, far below what the data resolve.
 pub const FIT_ELEMENTS: usize = 4;
+/// Restarts of the optimiser after its first stop, at most.
+const MAX_RESTARTS: usize = 3;
 
 /// The fit's worker threads: the model's work arrays for the largest
 /// meshes take about 2 MiB of stack, rayon's default.
@@ -210,9 +212,32 @@ impl<'a> Fitter<'a> {
             m: n_data,
         };
         problem.set_params(&theta0);
-        let (problem, report) = LevenbergMarquardt::new()
+        let (mut problem, mut report) = LevenbergMarquardt::new()
             .with_patience(40)
             .minimize(problem);
+        // Levenberg–Marquardt stops on a small step as readily as on a
+        // minimum: restart from where it stopped, with a fresh trust region,
+        // until a restart no longer lowers the cost by a millionth. Without
+        // this, a later model with one more term "gains" only by finishing
+        // this one's descent.
+        let mut evaluations = report.number_of_evaluations;
+        for _ in 0..MAX_RESTARTS {
+            let before = report.objective_function;
+            // Back onto the edge of any floor a term sank below: there the
+            // optimiser sees its gradient again.
+            let edge = DVector::from_vec(space.theta(&space.spec(problem.theta.as_slice())));
+            problem.set_params(&edge);
+            let (p, r) = LevenbergMarquardt::new()
+                .with_patience(40)
+                .minimize(problem);
+            evaluations += r.number_of_evaluations;
+            problem = p;
+            let gained = before - r.objective_function;
+            report = r;
+            if gained.is_nan() || gained <= 1e-6 * before.abs() {
+                break;
+            }
+        }
         // One simulation at the optimiser's final point serves the score,
         // the information criteria and the Jacobian's base.
         let theta = problem.theta.clone();
@@ -236,7 +261,7 @@ impl<'a> Fitter<'a> {
             parameters: k,
             aic,
             bic,
-            evaluations: report.number_of_evaluations,
+            evaluations,
             termination: format!("{:?}", report.termination),
         })
     }

@@ -40,6 +40,8 @@ pub enum Knob {
     Crosstalk,
     /// Dehydration rate, 1/s.
     Dehydration,
+    /// Dehydration curvature (0: constant rate).
+    DryingCurvature,
 }
 
 impl Knob {
@@ -75,6 +77,7 @@ impl Knob {
             Knob::LeakCubic => "leak_cubic_per_v2",
             Knob::Crosstalk => "crosstalk",
             Knob::Dehydration => "dehydration_per_s",
+            Knob::DryingCurvature => "dehydration_curvature",
         }
     }
 }
@@ -136,7 +139,7 @@ impl Space {
                 Effect::Damping => &[Knob::Alpha, Knob::Beta],
                 Effect::HydrodynamicLoading => &[Knob::AddedMass, Knob::Drag],
                 Effect::ElectrochemicalNonlinearity => &[Knob::ChargeCubic, Knob::LeakCubic],
-                Effect::Dehydration => &[Knob::Dehydration],
+                Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
                 Effect::SegmentCrosstalk => &[Knob::Crosstalk],
             });
         }
@@ -167,6 +170,7 @@ impl Space {
             ..Extensions::NONE
         };
         spec.dehydration_per_s = 0.0;
+        spec.dehydration_curvature = 0.0;
         let p = &mut spec.params;
         // p first: z is relative to it.
         let mut z_theta = None;
@@ -191,6 +195,7 @@ impl Space {
                 }
                 Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
                 Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
+                Knob::DryingCurvature => spec.dehydration_curvature = ramp(t, 1.0),
             }
         }
         if let Some(t) = z_theta {
@@ -235,6 +240,7 @@ impl Space {
                 Knob::LeakCubic => spec.ext.leak_cubic_per_v2 / CUBIC_SCALE,
                 Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
                 Knob::Dehydration => spec.dehydration_per_s / DEHYDRATION_SCALE,
+                Knob::DryingCurvature => spec.dehydration_curvature,
             })
             .collect()
     }
@@ -258,6 +264,7 @@ impl Space {
             Knob::LeakCubic => spec.ext.leak_cubic_per_v2,
             Knob::Crosstalk => spec.ext.crosstalk,
             Knob::Dehydration => spec.dehydration_per_s,
+            Knob::DryingCurvature => spec.dehydration_curvature,
         }
     }
 }

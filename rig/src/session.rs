@@ -1,0 +1,329 @@
+//! A whole bench session from the rig: the example session's protocol
+//! kinds, measured by the rig's sensors, written in `ipmc-bench/1`.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use finrs::recording::{Channel, Fixture, Medium, Recording};
+use finrs::synth::{drive_recording, Drive};
+use finrs::wave::Wave;
+use rand::Rng;
+use rand_distr::{Distribution, Normal};
+
+use crate::sample::{Hidden, Sample};
+use crate::strip::{run, Truth, BLOCKED_MESH, MESH};
+
+/// One recording of a protocol.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// File name without `.csv`.
+    pub name: &'static str,
+    /// Wave as `finrs simulate --wave` takes it.
+    pub wave: &'static str,
+    /// How the tip is held.
+    pub fixture: Fixture,
+    /// Rest before, s.
+    pub rest_s: f64,
+    /// Drive, s.
+    pub hold_s: f64,
+    /// Rest after, s.
+    pub off_s: f64,
+    /// What the notes say.
+    pub description: &'static str,
+}
+
+/// The example session's ten kinds (`shared/bench/examples`), with holds
+/// shortened so that a session is about 80 s of data.
+pub fn protocol() -> Vec<Run> {
+    protocol_scaled(1.0)
+}
+
+/// The same kinds with every hold scaled by `hold_scale` and shorter rests
+/// (1.2 s before, 2 s after): the tests' sessions, about 55 s at 0.6.
+pub fn short_protocol(hold_scale: f64) -> Vec<Run> {
+    protocol_scaled(hold_scale)
+        .into_iter()
+        .map(|r| Run {
+            rest_s: 1.2,
+            off_s: 2.0,
+            ..r
+        })
+        .collect()
+}
+
+fn protocol_scaled(scale: f64) -> Vec<Run> {
+    let run = |name, wave, fixture, hold_s: f64, description| Run {
+        name,
+        wave,
+        fixture,
+        rest_s: 1.5,
+        hold_s: hold_s * scale,
+        off_s: 2.5,
+        description,
+    };
+    use Fixture::{Blocked, Free};
+    vec![
+        run(
+            "01_free_step_1.0V",
+            "step:1",
+            Free,
+            4.0,
+            "free step 1.0 V on all segments",
+        ),
+        run(
+            "02_free_step_2.5V",
+            "step:2.5",
+            Free,
+            4.0,
+            "free step 2.5 V on all segments",
+        ),
+        run(
+            "03_free_step_4.0V",
+            "step:4",
+            Free,
+            4.0,
+            "free step 4.0 V on all segments",
+        ),
+        run(
+            "04_free_chirp",
+            "chirp:2,0.1,20",
+            Free,
+            8.0,
+            "free logarithmic chirp 0.1 to 20 Hz, 2.0 V, all segments in phase",
+        ),
+        run(
+            "05_free_sine_travel",
+            "sine:2.5,1,120",
+            Free,
+            6.0,
+            "free travelling sine 1 Hz, 2.5 V, 120 deg lag per segment",
+        ),
+        run(
+            "06_free_single_seg1",
+            "step:2.5,0,0",
+            Free,
+            3.0,
+            "free step 2.5 V on segment 1 only",
+        ),
+        run(
+            "07_free_single_seg2",
+            "step:0,2.5,0",
+            Free,
+            3.0,
+            "free step 2.5 V on segment 2 only",
+        ),
+        run(
+            "08_free_single_seg3",
+            "step:0,0,2.5",
+            Free,
+            3.0,
+            "free step 2.5 V on segment 3 only",
+        ),
+        run(
+            "09_blocked_step_2.0V",
+            "step:2",
+            Blocked,
+            4.0,
+            "blocked step 2.0 V on all segments",
+        ),
+        run(
+            "10_blocked_step_4.0V",
+            "step:4",
+            Blocked,
+            4.0,
+            "blocked step 4.0 V on all segments",
+        ),
+    ]
+}
+
+/// Sensor noise, as in the example session's README, times a factor
+/// drawn per session.
+#[derive(Clone, Copy, Debug)]
+pub struct Sensors {
+    /// Current noise, A rms.
+    pub current_a: f64,
+    /// Camera noise before the pixels, m rms.
+    pub camera_m: f64,
+    /// Camera pixel, m.
+    pub pixel_m: f64,
+    /// Load-cell noise, N rms.
+    pub force_n: f64,
+}
+
+impl Sensors {
+    /// The example's sensors, their noise scaled by a factor in 0.7..1.5.
+    pub fn draw(rng: &mut impl Rng) -> Sensors {
+        let f = rng.gen_range(0.7..1.5);
+        Sensors {
+            current_a: 1e-4 * f,
+            camera_m: 5e-5 * f,
+            pixel_m: 1.09e-4,
+            force_n: 2e-5 * f,
+        }
+    }
+}
+
+/// Dots tracked by the camera, m from the clamp (the tip is the last).
+pub const DOTS_S_M: [f64; 5] = [0.01, 0.02, 0.03, 0.04, 0.05];
+/// DAQ rate, Hz, and camera rate, frames/s.
+pub const DAQ_HZ: f64 = 1000.0;
+/// Camera frames per second.
+pub const CAMERA_HZ: f64 = 30.0;
+/// Pause between recordings, s.
+pub const PAUSE_S: f64 = 10.0;
+
+/// Writes the session of `runs` from `sample` with `hidden` into `dir`;
+/// `label` goes into each file's notes.
+pub fn write(
+    dir: &Path,
+    sample: &Sample,
+    hidden: &Hidden,
+    sensors: &Sensors,
+    runs: &[Run],
+    label: &str,
+    rng: &mut impl Rng,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let mut t_session = 0.0;
+    for (index, r) in runs.iter().enumerate() {
+        let wave = Wave::parse(r.wave).map_err(anyhow::Error::msg)?;
+        let drive = Drive {
+            segments: 3,
+            fixture: r.fixture,
+            rest_s: r.rest_s,
+            duration_s: r.hold_s,
+            off_s: r.off_s,
+            rate_hz: DAQ_HZ,
+        };
+        let mut rec = drive_recording(&wave, &drive)?;
+        rec.meta.sample = Some(label.to_string());
+        rec.meta.thickness_m = sample.thickness_m();
+        rec.meta.length_m = sample.length_m;
+        rec.meta.width_m = sample.width_m;
+        rec.meta.medium = if hidden.water.is_some() {
+            Medium::Water
+        } else {
+            Medium::Air
+        };
+        rec.meta.dots_s_m = Some(DOTS_S_M.to_vec());
+        rec.meta.notes = Some(format!(
+            "t_session_start_s = {t_session:.3}; run {} of {}; {} ({} s rest, {} s drive, {} s off); finrs-rig",
+            index + 1,
+            runs.len(),
+            r.description,
+            r.rest_s,
+            r.hold_s,
+            r.off_s
+        ));
+        let rows = rec.t_s.len();
+        let camera: Vec<bool> = camera_rows(rows);
+        let truth = run(
+            sample,
+            hidden,
+            if r.fixture == Fixture::Blocked {
+                BLOCKED_MESH
+            } else {
+                MESH
+            },
+            r.fixture == Fixture::Blocked,
+            &rec.v_v,
+            1.0 / DAQ_HZ,
+            t_session,
+            &camera,
+            &DOTS_S_M,
+        );
+        measure(&mut rec, &truth, &camera, hidden, sensors, rng);
+        rec.write(&dir.join(format!("{}.csv", r.name)))?;
+        t_session += rec.t_s.last().copied().unwrap_or(0.0) + PAUSE_S;
+    }
+    Ok(())
+}
+
+/// Camera frames at 30/s, each on the nearest DAQ row.
+fn camera_rows(rows: usize) -> Vec<bool> {
+    let mut frame = vec![false; rows];
+    for f in 0.. {
+        let row = (f as f64 / CAMERA_HZ * DAQ_HZ).round() as usize;
+        if row >= rows {
+            break;
+        }
+        frame[row] = true;
+    }
+    frame
+}
+
+fn measure(
+    rec: &mut Recording,
+    truth: &Truth,
+    camera: &[bool],
+    hidden: &Hidden,
+    sensors: &Sensors,
+    rng: &mut impl Rng,
+) {
+    let rows = rec.t_s.len();
+    // Mains pickup: 50 Hz and a third of it at 150 Hz, phase unknown.
+    let hum = |sigma: f64, rng: &mut dyn rand::RngCore| -> Vec<f64> {
+        let Some(a) = hidden.mains_pickup else {
+            return vec![0.0; rows];
+        };
+        let (p1, p3) = (rng.gen_range(0.0..2.0 * PI), rng.gen_range(0.0..2.0 * PI));
+        rec.t_s
+            .iter()
+            .map(|t| {
+                a * sigma
+                    * ((2.0 * PI * 50.0 * t + p1).sin() + (2.0 * PI * 150.0 * t + p3).sin() / 3.0)
+            })
+            .collect()
+    };
+    let mut channels = Vec::new();
+    for (k, c) in truth.currents_a.iter().enumerate() {
+        let n = Normal::new(0.0, sensors.current_a).expect("positive noise");
+        let pickup = hum(sensors.current_a, rng);
+        let v = c
+            .iter()
+            .zip(&pickup)
+            .map(|(x, p)| Some(round(x + p + n.sample(rng), 1e-6)))
+            .collect();
+        channels.push((Channel::Current(k), v));
+    }
+    if truth.force_n.is_empty() {
+        let n = Normal::new(0.0, sensors.camera_m).expect("positive noise");
+        let camera_channel = |series: &[(f64, f64)], along: bool, rng: &mut dyn rand::RngCore| {
+            // The rest shape is found to a fraction of a millimetre.
+            let offset = rng.gen_range(-2e-4..2e-4);
+            (0..rows)
+                .map(|r| {
+                    camera[r].then(|| {
+                        let (x, y) = series[r];
+                        round(
+                            if along { x } else { y } + offset + n.sample(rng),
+                            sensors.pixel_m,
+                        )
+                    })
+                })
+                .collect::<Vec<_>>()
+        };
+        let tip = truth.points_m.last().expect("the tip is tracked");
+        channels.push((Channel::TipY, camera_channel(tip, false, rng)));
+        channels.push((Channel::TipX, camera_channel(tip, true, rng)));
+        for (j, p) in truth.points_m.iter().enumerate() {
+            channels.push((Channel::DotY(j), camera_channel(p, false, rng)));
+            channels.push((Channel::DotX(j), camera_channel(p, true, rng)));
+        }
+    } else {
+        let n = Normal::new(0.0, sensors.force_n).expect("positive noise");
+        let pickup = hum(sensors.force_n, rng);
+        let v = truth
+            .force_n
+            .iter()
+            .zip(&pickup)
+            .map(|(x, p)| Some(round(x + p + n.sample(rng), 1e-6)))
+            .collect();
+        channels.push((Channel::Force, v));
+    }
+    rec.channels = channels;
+}
+
+fn round(x: f64, q: f64) -> f64 {
+    (x / q).round() * q
+}

@@ -1,0 +1,138 @@
+//! With nothing hidden, the rig and the fitted model (two implementations:
+//! different mesh, integrator, load cell) must tell the same story; with an
+//! effect hidden, the rig must depart from the model the way the effect
+//! says.
+
+use finrs::predict::{predict, ModelSpec};
+use finrs::recording::Fixture;
+use finrs::synth::{drive_recording, Drive};
+use finrs::wave::Wave;
+use finrs_rig::strip::{run, Mesh, Truth, BLOCKED_MESH, MESH};
+use finrs_rig::{Hidden, Sample};
+use model_core::Params;
+use rand::SeedableRng;
+
+fn sample() -> Sample {
+    Sample::draw(&mut rand::rngs::StdRng::seed_from_u64(5))
+}
+
+fn spec(s: &Sample) -> ModelSpec {
+    ModelSpec::baseline(Params {
+        r1_ohm: s.r1_ohm,
+        r2_ohm: s.r2_ohm,
+        c_f: s.c_f,
+        k_nm_per_c: s.k_nm_per_c,
+        z_per_s: s.z_per_s,
+        p_per_s: s.p_per_s,
+        length_m: s.length_m,
+        ei_nm2: s.laminate_ei_nm2(),
+        mass_per_length_kg_per_m: s.mass_kg_per_m(),
+    })
+}
+
+fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::predict::Traces) {
+    let s = sample();
+    let drive = Drive {
+        segments: 3,
+        fixture,
+        rest_s: 0.5,
+        duration_s: 3.0,
+        off_s: 1.0,
+        rate_hz: 1000.0,
+    };
+    let rec = drive_recording(&Wave::parse(wave).unwrap(), &drive).unwrap();
+    let rows = rec.t_s.len();
+    let camera = vec![true; rows];
+    let truth = run(
+        &s,
+        hidden,
+        if fixture == Fixture::Blocked {
+            BLOCKED_MESH
+        } else {
+            MESH
+        },
+        fixture == Fixture::Blocked,
+        &rec.v_v,
+        1e-3,
+        0.0,
+        &camera,
+        &[0.05],
+    );
+    let mut rec = rec;
+    rec.meta.dots_s_m = None;
+    let model = predict(&rec, &spec(&s), 4, 1e-3, 0.0, None, &mut |_| {}).unwrap();
+    (truth, model)
+}
+
+fn max_abs(a: impl Iterator<Item = f64>) -> f64 {
+    a.fold(0.0, |m, x| m.max(x.abs()))
+}
+
+#[test]
+fn nothing_hidden_agrees_with_the_model_free() {
+    let (truth, model) = both("step:2.5,1,-1", Fixture::Free, &Hidden::default());
+    for (r, m) in truth.currents_a.iter().zip(&model.currents_a) {
+        let scale = max_abs(m.iter().copied());
+        let err = max_abs(r.iter().zip(m).map(|(a, b)| a - b));
+        assert!(err < 1e-3 * scale, "current {err} of {scale}");
+    }
+    let tip: Vec<f64> = truth.points_m[0].iter().map(|p| p.1).collect();
+    let scale = max_abs(model.tip_y_m.iter().copied());
+    let err = max_abs(tip.iter().zip(&model.tip_y_m).map(|(a, b)| a - b));
+    assert!(err < 5e-3 * scale, "tip {err} of {scale}");
+}
+
+#[test]
+fn nothing_hidden_agrees_with_the_model_blocked() {
+    let (truth, model) = both("step:2", Fixture::Blocked, &Hidden::default());
+    let scale = max_abs(model.force_n.iter().copied());
+    let err = max_abs(truth.force_n.iter().zip(&model.force_n).map(|(a, b)| a - b));
+    assert!(err < 5e-3 * scale, "force {err} of {scale}");
+}
+
+/// Why the blocked fixture keeps the fitted mesh: the undamped pinned
+/// beam's force is not converged in the mesh. Refining from 8 to 16
+/// elements a segment still moves it by many times the load cell's noise
+/// (20 µN), while the free tip does not move by a pixel's tenth.
+#[test]
+fn the_undamped_blocked_force_has_no_converged_mesh() {
+    let s = sample();
+    let go = |fixture: Fixture, per_segment: usize| {
+        let drive = Drive {
+            segments: 3,
+            fixture,
+            rest_s: 0.5,
+            duration_s: 6.0,
+            off_s: 0.5,
+            rate_hz: 1000.0,
+        };
+        let rec = drive_recording(&Wave::parse("step:2").unwrap(), &drive).unwrap();
+        let camera = vec![true; rec.t_s.len()];
+        let mesh = Mesh {
+            per_segment,
+            dynamic_limit_hz: f64::INFINITY,
+        };
+        let t = run(
+            &s,
+            &Hidden::default(),
+            mesh,
+            fixture == Fixture::Blocked,
+            &rec.v_v,
+            1e-3,
+            0.0,
+            &camera,
+            &[0.05],
+        );
+        match fixture {
+            Fixture::Blocked => t.force_n,
+            Fixture::Free => t.points_m[0].iter().map(|p| p.1).collect(),
+        }
+    };
+    let rms = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    let force = rms(&go(Fixture::Blocked, 8), &go(Fixture::Blocked, 16));
+    assert!(force > 10.0 * 2e-5, "blocked force moved {force} N");
+    let tip = rms(&go(Fixture::Free, 8), &go(Fixture::Free, 16));
+    assert!(tip < 1.09e-5, "free tip moved {tip} m");
+}
