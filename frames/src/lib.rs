@@ -1,0 +1,203 @@
+//! `finrs-frames`: the binary frame format of the blocking-force stream that
+//! the firmware sends to the host (over an RTT up channel on the board, over
+//! semihosting in QEMU), with a `no_std`, allocation-free encoder and a
+//! streaming decoder that never panics and never allocates.
+//!
+//! # Frame format
+//!
+//! Little-endian throughout; `f32` is IEEE 754 binary32.
+//!
+//! | offset    | bytes | field |
+//! |-----------|-------|-------|
+//! | 0         | 2     | sync: `0xF1 0x5E` |
+//! | 2         | 1     | kind: 1 Sample, 2 Dropped, 3 Fault |
+//! | 3         | 1     | `len`: payload length in bytes |
+//! | 4         | `len` | payload |
+//! | 4 + `len` | 2     | CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection, no final xor) over kind, `len` and payload |
+//!
+//! Payloads:
+//!
+//! - **Sample**, `len` = 12 + 8 N for N = 1..=8 segments ([`frame_len`]):
+//!   `seq` u32, `t_us` u32 (µs since start), `force_n` f32 (blocking force,
+//!   N), then N segment voltages f32 (V, as commanded), then N segment
+//!   currents f32 (A).
+//! - **Dropped**, `len` = 8: `first_seq` u32, `count` u32. The firmware
+//!   could not send the Samples numbered `first_seq .. first_seq + count`.
+//! - **Fault**, `len` = 10: `seq` u32, `t_us` u32, `code` u8 (1 overcurrent,
+//!   2 ADC saturation, 3 missed deadline, 4 watchdog or other), `segment` u8
+//!   (0-based segment index, below 8; 0xFF if no segment is concerned).
+//!
+//! # Sequence numbers
+//!
+//! Every Sample takes the next sequence number (wrapping at 2³²), whether it
+//! is sent or not: a Sample the firmware has to drop still consumes its
+//! number, so that the host sees the hole. The firmware reports dropped
+//! Samples in one Dropped frame sent before the next Sample it does send; a
+//! hole that no Dropped frame covers is reported by the decoder as
+//! [`Event::Gap`]. A Fault carries the number of the Sample being produced
+//! when it happened and consumes none.
+//!
+//! # Resynchronisation
+//!
+//! The decoder looks for the sync pair, checks kind and `len`, then the CRC.
+//! When a check fails it discards only the first sync byte and searches on
+//! from the next byte, so a corrupted frame never hides a good one that
+//! follows it, not even one within the length a corrupted `len` claims.
+//! Discarded bytes are reported as one [`Event::Corrupt`] just before the
+//! next good frame (or by [`Decoder::finish`]), so the events do not depend
+//! on how the stream was split into chunks.
+//!
+//! ```
+//! use finrs_frames::{encode_sample, Decoder, Event, Sample, MAX_FRAME_LEN};
+//!
+//! let s = Sample::<3> {
+//!     seq: 7,
+//!     t_us: 7_000,
+//!     force_n: 0.029,
+//!     voltages_v: [2.0, 1.0, -2.0],
+//!     currents_a: [0.019, 0.010, -0.019],
+//! };
+//! let mut buf = [0u8; MAX_FRAME_LEN];
+//! let len = encode_sample(&s, &mut buf).unwrap();
+//!
+//! let mut decoder = Decoder::new();
+//! let mut got = None;
+//! decoder.push(&buf[..len], &mut |e| {
+//!     if let Event::Sample(d) = e {
+//!         got = Some(d);
+//!     }
+//! });
+//! let d = got.unwrap();
+//! assert_eq!((d.seq, d.n, d.voltages()), (7, 3, &[2.0, 1.0, -2.0][..]));
+//! assert_eq!(decoder.stats().samples, 1);
+//! ```
+#![no_std]
+#![deny(missing_docs, unsafe_code)]
+
+mod crc;
+mod decode;
+mod encode;
+
+pub use crc::crc16;
+pub use decode::{DecodedSample, Decoder, Event, Stats};
+pub use encode::{encode_dropped, encode_fault, encode_sample, EncodeError};
+
+/// The two bytes that start every frame.
+pub const SYNC: [u8; 2] = [0xF1, 0x5E];
+
+/// Most segments a Sample carries.
+pub const MAX_SEGMENTS: usize = 8;
+
+/// Sync, kind and `len`.
+pub const HEADER_LEN: usize = 4;
+
+/// The CRC after the payload.
+pub const CRC_LEN: usize = 2;
+
+/// Length of a whole Sample frame with `n` segments (`n` = 1..=8 in a valid
+/// frame).
+pub const fn frame_len(n: usize) -> usize {
+    // Saturating so that no argument can make this panic.
+    sample_payload_len(n).saturating_add(HEADER_LEN + CRC_LEN)
+}
+
+/// Longest frame: a Sample with [`MAX_SEGMENTS`] segments.
+pub const MAX_FRAME_LEN: usize = frame_len(MAX_SEGMENTS);
+
+/// Length of a whole Dropped frame.
+pub const DROPPED_FRAME_LEN: usize = HEADER_LEN + DROPPED_PAYLOAD_LEN + CRC_LEN;
+
+/// Length of a whole Fault frame.
+pub const FAULT_FRAME_LEN: usize = HEADER_LEN + FAULT_PAYLOAD_LEN + CRC_LEN;
+
+const KIND_SAMPLE: u8 = 1;
+const KIND_DROPPED: u8 = 2;
+const KIND_FAULT: u8 = 3;
+
+const SAMPLE_FIXED_LEN: usize = 12;
+const DROPPED_PAYLOAD_LEN: usize = 8;
+const FAULT_PAYLOAD_LEN: usize = 10;
+const NO_SEGMENT: u8 = 0xFF;
+
+const fn sample_payload_len(n: usize) -> usize {
+    SAMPLE_FIXED_LEN.saturating_add(n.saturating_mul(8))
+}
+
+/// Whether `len` is a valid payload length for `kind` (false for an unknown
+/// kind).
+const fn payload_len_ok(kind: u8, len: usize) -> bool {
+    match kind {
+        KIND_SAMPLE => {
+            len >= sample_payload_len(1)
+                && len <= sample_payload_len(MAX_SEGMENTS)
+                && (len - SAMPLE_FIXED_LEN) % 8 == 0
+        }
+        KIND_DROPPED => len == DROPPED_PAYLOAD_LEN,
+        KIND_FAULT => len == FAULT_PAYLOAD_LEN,
+        _ => false,
+    }
+}
+
+/// One sample period of the blocking-force experiment, `N` = 1..=8 segments.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample<const N: usize> {
+    /// Sequence number.
+    pub seq: u32,
+    /// Time since start, µs.
+    pub t_us: u32,
+    /// Blocking force on the load cell, N.
+    pub force_n: f32,
+    /// Segment voltages as commanded, V.
+    pub voltages_v: [f32; N],
+    /// Segment currents, A.
+    pub currents_a: [f32; N],
+}
+
+/// In-band report of Samples the firmware could not send.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Dropped {
+    /// Sequence number of the first dropped Sample.
+    pub first_seq: u32,
+    /// How many consecutive Samples were dropped, from `first_seq` on.
+    pub count: u32,
+}
+
+/// A fault the firmware detected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Fault {
+    /// Sequence number of the Sample being produced when it happened.
+    pub seq: u32,
+    /// Time since start, µs.
+    pub t_us: u32,
+    /// What happened.
+    pub code: FaultCode,
+    /// The 0-based segment concerned (below [`MAX_SEGMENTS`]), if any.
+    pub segment: Option<u8>,
+}
+
+/// What a [`Fault`] reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum FaultCode {
+    /// A segment drew more current than allowed.
+    Overcurrent = 1,
+    /// The ADC read its full-scale value.
+    AdcSaturation = 2,
+    /// A sample period's work did not finish in time.
+    MissedDeadline = 3,
+    /// The watchdog fired, or another fault.
+    Other = 4,
+}
+
+impl FaultCode {
+    /// The code for its wire value, `None` if unknown.
+    pub const fn from_u8(code: u8) -> Option<Self> {
+        match code {
+            1 => Some(Self::Overcurrent),
+            2 => Some(Self::AdcSaturation),
+            3 => Some(Self::MissedDeadline),
+            4 => Some(Self::Other),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,294 @@
+//! The wire format: CRC, lengths, byte layout, round trips of every kind,
+//! and what the encoder and decoder refuse.
+
+mod common;
+
+use common::*;
+use finrs_frames::{
+    crc16, encode_dropped, encode_fault, encode_sample, frame_len, Dropped, EncodeError, Fault,
+    FaultCode, Sample, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
+};
+
+#[test]
+fn crc_is_ccitt_false() {
+    assert_eq!(crc16(b"123456789"), 0x29B1);
+    assert_eq!(crc16(b""), 0xFFFF);
+}
+
+#[test]
+fn frame_lengths() {
+    assert_eq!(frame_len(1), 4 + 20 + 2);
+    assert_eq!(frame_len(3), 4 + 36 + 2);
+    assert_eq!(frame_len(8), 4 + 76 + 2);
+    assert_eq!(MAX_FRAME_LEN, frame_len(8));
+    assert_eq!(DROPPED_FRAME_LEN, 4 + 8 + 2);
+    assert_eq!(FAULT_FRAME_LEN, 4 + 10 + 2);
+    assert_eq!(frame_len(usize::MAX), usize::MAX);
+}
+
+#[test]
+fn sample_layout_is_as_documented() {
+    let s = Sample::<1> {
+        seq: 0x0403_0201,
+        t_us: 0x0807_0605,
+        force_n: 1.0,
+        voltages_v: [-2.0],
+        currents_a: [0.5],
+    };
+    let f = sample_frame(&s);
+    let body = [
+        0x01, 0x14, // kind, len = 20
+        0x01, 0x02, 0x03, 0x04, // seq
+        0x05, 0x06, 0x07, 0x08, // t_us
+        0x00, 0x00, 0x80, 0x3F, // 1.0
+        0x00, 0x00, 0x00, 0xC0, // -2.0
+        0x00, 0x00, 0x00, 0x3F, // 0.5
+    ];
+    assert_eq!(f.len(), frame_len(1));
+    assert_eq!(f[..2], [0xF1, 0x5E]);
+    assert_eq!(f[2..24], body);
+    assert_eq!(f[24..], crc16(&body).to_le_bytes());
+}
+
+#[test]
+fn dropped_and_fault_layout_is_as_documented() {
+    let d = dropped_frame(&Dropped {
+        first_seq: 0x0403_0201,
+        count: 0x0807_0605,
+    });
+    assert_eq!(d[..12], [0xF1, 0x5E, 2, 8, 1, 2, 3, 4, 5, 6, 7, 8]);
+    assert_eq!(d[12..], crc16(&d[2..12]).to_le_bytes());
+
+    let f = fault_frame(&Fault {
+        seq: 9,
+        t_us: 10,
+        code: FaultCode::MissedDeadline,
+        segment: None,
+    });
+    assert_eq!(
+        f[..14],
+        [0xF1, 0x5E, 3, 10, 9, 0, 0, 0, 10, 0, 0, 0, 3, 0xFF]
+    );
+    assert_eq!(f[14..], crc16(&f[2..14]).to_le_bytes());
+}
+
+/// Values that a lossy conversion would change: NaN payloads, signed zero,
+/// infinities, subnormals.
+const AWKWARD: [f32; 8] = [
+    f32::from_bits(0x7FC0_1234),
+    -0.0,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    f32::from_bits(1),
+    f32::from_bits(0xFFBF_FFFF),
+    f32::MAX,
+    -1.5e-3,
+];
+
+fn sample_round_trip<const N: usize>() {
+    let awkward = Sample::<N> {
+        seq: u32::MAX,
+        t_us: 0xDEAD_BEEF,
+        force_n: f32::from_bits(0x7F80_0001),
+        voltages_v: core::array::from_fn(|k| AWKWARD[k]),
+        currents_a: core::array::from_fn(|k| AWKWARD[7 - k]),
+    };
+    for s in [sample::<N>(0), sample::<N>(123_456), awkward] {
+        let f = sample_frame(&s);
+        assert_eq!(f.len(), frame_len(N));
+        let (keys, stats) = decode(&f);
+        assert_eq!(keys, [sample_key(&s)]);
+        assert_eq!(stats.samples, 1);
+        assert_eq!(stats.corrupt_bytes, 0);
+    }
+}
+
+#[test]
+fn samples_round_trip() {
+    sample_round_trip::<1>();
+    sample_round_trip::<3>();
+    sample_round_trip::<8>();
+}
+
+#[test]
+fn decoded_sample_exposes_n_segments() {
+    let s = sample::<3>(5);
+    let mut got = Vec::new();
+    finrs_frames::Decoder::new().push(&sample_frame(&s), &mut |e| {
+        if let finrs_frames::Event::Sample(d) = e {
+            got.push(d);
+        }
+    });
+    assert_eq!(got.len(), 1);
+    let d = got[0];
+    assert_eq!(d.n, 3);
+    assert_eq!(d.voltages(), s.voltages_v);
+    assert_eq!(d.currents(), s.currents_a);
+    assert_eq!(d.voltages_v[3..], [0.0; 5]);
+    assert_eq!(d.currents_a[3..], [0.0; 5]);
+}
+
+#[test]
+fn dropped_round_trips() {
+    for d in [
+        Dropped {
+            first_seq: 0,
+            count: 1,
+        },
+        Dropped {
+            first_seq: u32::MAX,
+            count: u32::MAX,
+        },
+    ] {
+        let f = dropped_frame(&d);
+        assert_eq!(f.len(), DROPPED_FRAME_LEN);
+        let (keys, stats) = decode(&f);
+        assert_eq!(keys, [Key::Dropped(d)]);
+        assert_eq!(stats.dropped_reported, u64::from(d.count));
+    }
+}
+
+#[test]
+fn faults_round_trip() {
+    let codes = [
+        FaultCode::Overcurrent,
+        FaultCode::AdcSaturation,
+        FaultCode::MissedDeadline,
+        FaultCode::Other,
+    ];
+    for (i, code) in codes.into_iter().enumerate() {
+        assert_eq!(FaultCode::from_u8(code as u8), Some(code));
+        assert_eq!(code as u8, i as u8 + 1);
+        for segment in [None, Some(0), Some(7)] {
+            let fault = Fault {
+                seq: 42,
+                t_us: u32::MAX,
+                code,
+                segment,
+            };
+            let f = fault_frame(&fault);
+            assert_eq!(f.len(), FAULT_FRAME_LEN);
+            let (keys, stats) = decode(&f);
+            assert_eq!(keys, [Key::Fault(fault)]);
+            assert_eq!(stats.faults, 1);
+        }
+    }
+    assert_eq!(FaultCode::from_u8(0), None);
+    assert_eq!(FaultCode::from_u8(5), None);
+}
+
+#[test]
+fn encoders_refuse_short_buffers_and_stay_in_bounds() {
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for len in 0..frame_len(8) {
+        let needed = frame_len(8);
+        assert_eq!(
+            encode_sample(&sample::<8>(1), &mut buf[..len]),
+            Err(EncodeError::BufferTooSmall { needed })
+        );
+    }
+    for len in 0..DROPPED_FRAME_LEN {
+        let d = Dropped {
+            first_seq: 1,
+            count: 2,
+        };
+        assert_eq!(
+            encode_dropped(&d, &mut buf[..len]),
+            Err(EncodeError::BufferTooSmall {
+                needed: DROPPED_FRAME_LEN
+            })
+        );
+    }
+    let fault = Fault {
+        seq: 1,
+        t_us: 2,
+        code: FaultCode::Other,
+        segment: Some(1),
+    };
+    for len in 0..FAULT_FRAME_LEN {
+        assert_eq!(
+            encode_fault(&fault, &mut buf[..len]),
+            Err(EncodeError::BufferTooSmall {
+                needed: FAULT_FRAME_LEN
+            })
+        );
+    }
+    assert_eq!(buf, [0u8; MAX_FRAME_LEN], "a refused frame writes nothing");
+    // A longer buffer is fine; the frame takes its start.
+    let mut long = [0xAAu8; 200];
+    assert_eq!(encode_sample(&sample::<3>(1), &mut long), Ok(frame_len(3)));
+    assert_eq!(long[..frame_len(3)], sample_frame(&sample::<3>(1))[..]);
+    assert!(long[frame_len(3)..].iter().all(|&b| b == 0xAA));
+}
+
+#[test]
+fn encoder_refuses_segments_out_of_range() {
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for s in [8, 0xFE, 0xFF] {
+        let fault = Fault {
+            seq: 1,
+            t_us: 2,
+            code: FaultCode::Overcurrent,
+            segment: Some(s),
+        };
+        assert_eq!(
+            encode_fault(&fault, &mut buf),
+            Err(EncodeError::BadSegment(s))
+        );
+    }
+}
+
+/// A frame with a good CRC around `body` (kind, len and payload).
+fn framed(body: &[u8]) -> Vec<u8> {
+    let mut f = vec![0xF1, 0x5E];
+    f.extend_from_slice(body);
+    f.extend_from_slice(&crc16(body).to_le_bytes());
+    f
+}
+
+#[test]
+fn decoder_refuses_invalid_content_despite_good_crc() {
+    let fault = |code: u8, segment: u8| framed(&[3, 10, 1, 0, 0, 0, 2, 0, 0, 0, code, segment]);
+    let bad = [
+        fault(0, 0xFF),
+        fault(5, 0xFF),
+        fault(1, 8),
+        fault(1, 0xFE),
+        framed(&[4, 8, 0, 0, 0, 0, 0, 0, 0, 0]), // unknown kind
+        framed(&[0, 8, 0, 0, 0, 0, 0, 0, 0, 0]),
+        framed(&[2, 9, 0, 0, 0, 0, 0, 0, 0, 0, 0]), // Dropped, wrong length
+        framed(&[1, 12, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]), // Sample, N = 0
+        framed(&[
+            1, 21, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        ]),
+    ];
+    let good = sample::<1>(3);
+    for b in bad {
+        let mut stream = b.clone();
+        stream.extend(sample_frame(&good));
+        let (keys, stats) = decode(&stream);
+        assert_eq!(
+            keys,
+            [
+                Key::Corrupt {
+                    skipped_bytes: b.len()
+                },
+                sample_key(&good)
+            ],
+            "{b:02X?}"
+        );
+        assert_eq!(stats.corrupt_bytes, b.len() as u64);
+        assert_eq!(stats.faults, 0);
+    }
+    // And a good fault built the same way decodes.
+    let (keys, _) = decode(&fault(2, 7));
+    assert_eq!(
+        keys,
+        [Key::Fault(Fault {
+            seq: 1,
+            t_us: 2,
+            code: FaultCode::AdcSaturation,
+            segment: Some(7)
+        })]
+    );
+}
