@@ -10,6 +10,7 @@ pub mod params;
 pub mod plot;
 pub mod predict;
 pub mod recording;
+pub mod seed_check;
 pub mod session;
 pub mod simulate;
 pub mod synth;

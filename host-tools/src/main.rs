@@ -32,6 +32,12 @@ enum Command {
     Fit(FitArgs),
     /// Find what the baseline gets wrong in a session and name the cause.
     Diagnose(DiagnoseArgs),
+    /// Set the seed's own measurements beside the baseline and the extended model.
+    SeedCheck {
+        /// Also write the check as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
 }
 
 #[derive(clap::Args)]
@@ -120,6 +126,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Simulate(args) => run_simulate(args),
         Command::Fit(args) => run_fit(args),
         Command::Diagnose(args) => run_diagnose(args),
+        Command::SeedCheck { json } => run_seed_check(json),
         Command::Params => {
             print!("{}", ModelFile::thesis_2006().to_toml());
             Ok(())
@@ -281,6 +288,29 @@ fn run_diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
         finrs::diagnose::report::write(dir, &session, &d)
             .with_context(|| dir.display().to_string())?;
         eprintln!("wrote {}", dir.join("REPORT.md").display());
+    }
+    Ok(())
+}
+
+fn run_seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
+    let c = finrs::seed_check::seed_check()?;
+    println!(
+        "{:<44} {:>12} {:>12} {:>12}  extension",
+        "the seed's fact", "measured", "baseline", "extended"
+    );
+    for r in &c.rows {
+        println!(
+            "{:<44} {:>12.4e} {:>12.4e} {:>12.4e}  {} ({})",
+            r.quantity, r.measured, r.baseline, r.extended, r.effect, r.unit
+        );
+    }
+    for e in &c.explanations {
+        println!("\n{e}");
+    }
+    if let Some(path) = json {
+        std::fs::write(&path, serde_json::to_string_pretty(&c)? + "\n")
+            .with_context(|| path.display().to_string())?;
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }
