@@ -60,11 +60,12 @@ fn hide(names: &[&str], default_seed: u64) -> Verdict {
 }
 
 /// The effect is named, alone, and the extended model gains on held-out data.
-fn named(effect: &str, seed: u64) {
+fn named(effect: &str, seed: u64) -> Verdict {
     let v = hide(&[effect], seed);
     assert_eq!(v.causes, [effect], "{v:#?}");
     assert_ne!(v.verdict, "none");
     assert!(v.gain_percent > 0.0, "{v:#?}");
+    v
 }
 
 #[test]
@@ -72,11 +73,22 @@ fn nothing_hidden_is_none() {
     let v = hide(&[], 101);
     assert_eq!(v.verdict, "none", "{v:#?}");
     assert!(v.causes.is_empty());
+    assert!(
+        v.analyses.immovable.is_empty(),
+        "{:?}",
+        v.analyses.immovable
+    );
 }
 
 #[test]
 fn large_deflection() {
-    named("large-deflection", 102);
+    let v = named("large-deflection", 102);
+    // The baseline cannot move the camera's along-the-strip channels.
+    assert!(
+        v.analyses.immovable.iter().any(|c| c.ends_with("tip_x_m")),
+        "{:?}",
+        v.analyses.immovable
+    );
 }
 
 #[test]
@@ -106,7 +118,14 @@ fn back_relaxation() {
 
 #[test]
 fn dehydration() {
-    named("dehydration", 108);
+    let v = named("dehydration", 108);
+    // The strip answers the baseline less and less over the session.
+    let trend = v
+        .analyses
+        .trend
+        .as_ref()
+        .expect("start times are in the notes");
+    assert!(trend.spearman < -0.5, "{trend:?}");
 }
 
 #[test]
@@ -143,7 +162,9 @@ fn a_random_draw_is_named() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed ^ 0x5eed);
     let pick = rng.gen_range(0..=CATALOGUE.len());
     match CATALOGUE.get(pick) {
-        Some(effect) => named(effect, seed),
+        Some(effect) => {
+            named(effect, seed);
+        }
         None => {
             let v = hide(&[], seed);
             assert_eq!(v.verdict, "none", "{v:#?}");

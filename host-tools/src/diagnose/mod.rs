@@ -24,6 +24,7 @@
 //!   rests fail a Ljung–Box test): every candidate is driven by the
 //!   voltage, so nothing in the catalogue can account for that.
 
+pub mod analyses;
 pub mod report;
 pub mod whiteness;
 
@@ -123,6 +124,8 @@ pub struct Verdict {
     pub residual_tests: Vec<ResidualTest>,
     /// Whiteness of the DAQ's channels during the opening rests.
     pub rest: RestStructure,
+    /// Where the baseline's misfit lives across the session.
+    pub analyses: analyses::Analyses,
 }
 
 /// Whether the measured channels carry structure before any drive.
@@ -205,6 +208,7 @@ pub fn diagnose(
 ) -> Result<Diagnosis, FitError> {
     let fitter = Fitter::new(session);
     let (train, hold) = split(session);
+    let all: Vec<usize> = (0..session.recordings.len()).collect();
     if hold.is_empty() {
         return Err(FitError::TooFewToHoldOut(session.recordings.len()));
     }
@@ -326,6 +330,7 @@ pub fn diagnose(
         holdout: hold.iter().map(name).collect(),
         residual_tests,
         rest,
+        analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
     };
     Ok(Diagnosis {
         verdict,

@@ -59,6 +59,72 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             " (white noise fails one in a hundred)"
         }
     );
+    let a = &v.analyses;
+    let _ = writeln!(s, "## Where the baseline misses\n");
+    let _ = writeln!(
+        s,
+        "The baseline's weighted RSS per residual in every recording (1 is the noise floor) \
+         and its gain, the scale from its motion to the measured one (median over the \
+         mechanical channels; 1 is right). A gain falling over the session suggests drying, \
+         one changing with the amplitude a nonlinearity or large deflection, one differing \
+         between segments driven alone crosstalk.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| recording | session time, s | max V | driven | fixture | RSS/m | gain |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for m in &a.recordings {
+        let t = m.t_session_s.map_or("-".to_string(), |t| format!("{t:.0}"));
+        let driven: Vec<String> = m.driven.iter().map(|d| d.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {t} | {:.2} | {} | {} | {:.2} | {} |",
+            m.recording,
+            m.max_abs_v,
+            driven.join(","),
+            m.fixture,
+            m.rss_per_residual,
+            m.gain.map_or("-".to_string(), |g| format!("{g:.3}"))
+        );
+    }
+    let dep = |d: &Option<super::analyses::Dependence>| {
+        d.as_ref().map_or("not enough recordings".to_string(), |d| {
+            format!(
+                "Spearman ρ = {:.2} over {} recordings",
+                d.spearman, d.recordings
+            )
+        })
+    };
+    let _ = writeln!(s, "\n- Against session time: {}.", dep(&a.trend));
+    let _ = writeln!(
+        s,
+        "- Against amplitude (free steps of all segments): {}.",
+        dep(&a.amplitude)
+    );
+    if !a.single_segments.is_empty() {
+        let segs: Vec<String> = a
+            .single_segments
+            .iter()
+            .map(|(k, r, g)| {
+                let g = g.map_or("-".to_string(), |g| format!("{g:.3}"));
+                format!("segment {k}: RSS/m {r:.2}, gain {g}")
+            })
+            .collect();
+        let _ = writeln!(s, "- Each segment alone: {}.", segs.join(", "));
+    }
+    if a.immovable.is_empty() {
+        let _ = writeln!(
+            s,
+            "- Every channel with signal is one the baseline can move.\n"
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "- Channels with signal that the baseline cannot move at all: {}.\n",
+            a.immovable.join(", ")
+        );
+    }
     let _ = writeln!(s, "## Candidates\n");
     let _ = writeln!(
         s,

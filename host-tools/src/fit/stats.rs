@@ -52,13 +52,28 @@ pub struct ChannelFit {
     pub has_signal: bool,
     /// Weighted residuals, in sample order (for whiteness tests and plots).
     pub residuals: Vec<f64>,
+    /// Whether the model predicts zero throughout (it cannot move this
+    /// channel: motion along the strip, without arcs).
+    pub model_is_zero: bool,
+    /// Least-squares scale from model to data, `Σ y ŷ / Σ ŷ²` (1: the
+    /// amplitude is right; NaN when the model is zero).
+    pub gain: f64,
 }
 
 impl ChannelFit {
     /// From a target and its weighted residuals `r = (ŷ − y)/σ`.
     pub fn new(recording: &str, t: &Target, r: &[f64]) -> ChannelFit {
         let model = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
-        let e = nrmse(&t.values, model);
+        let e = nrmse(&t.values, model.clone());
+        // ŷ is rebuilt from y and the residual, so "zero" is up to rounding.
+        let scale = t.values.iter().fold(0.0f64, |m, y| m.max(y.abs()));
+        let model_is_zero = model.clone().fold(0.0f64, |m, y| m.max(y.abs())) <= 1e-9 * scale;
+        let (yy, mm) = t
+            .values
+            .iter()
+            .zip(model)
+            .fold((0.0, 0.0), |(a, b), (y, m)| (a + y * m, b + m * m));
+        let gain = if model_is_zero { f64::NAN } else { yy / mm };
         let n = t.values.len().max(1) as f64;
         let mean = t.values.iter().sum::<f64>() / n;
         let spread = (t
@@ -76,6 +91,8 @@ impl ChannelFit {
             rms_in_noise: (r.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
             has_signal: spread > 3.0 * t.sigma,
             residuals: r.to_vec(),
+            model_is_zero,
+            gain,
         }
     }
 }
