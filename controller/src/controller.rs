@@ -1,0 +1,433 @@
+//! The [`Controller`]: one call per sample tick, plus host commands and
+//! faults from outside. See the crate's docs for the order of a tick, the
+//! drop accounting and the fault latch.
+
+use core::fmt;
+
+use finrs_drive::{default_program, Generator, LimitError, Limiter, Limits, WaveError};
+use finrs_frames::{
+    encode_dropped, encode_fault, encode_sample, Command, Dropped, Fault, FaultCode, Sample,
+    DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
+};
+
+use crate::config::{Config, ConfigError, ConfigRule};
+
+/// The readings of one sample tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TickInput<const N: usize> {
+    /// Tick count since boot, one per `1/sample_hz` (the firmware's
+    /// monotonic count; it should rise by one each call).
+    pub tick: u64,
+    /// Time since start, µs (carried into the frames as is).
+    pub t_us: u32,
+    /// Load-cell ADC reading, counts.
+    pub load_cell_counts: u16,
+    /// Each segment's current-sense ADC reading, counts.
+    pub current_counts: [u16; N],
+}
+
+/// What to write to the segments' drivers now.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TickOutput<const N: usize> {
+    /// The limited voltages, V: exactly 0 on every segment while a fault is
+    /// latched. The same values go into the tick's Sample frame.
+    pub voltages_v: [f32; N],
+}
+
+/// The up channel as the controller sees it.
+pub trait FrameSink {
+    /// Writes the whole frame and returns true, or writes nothing and
+    /// returns false (channel full). Must never block.
+    fn try_write(&mut self, frame: &[u8]) -> bool;
+}
+
+/// Why a command was refused. A refused command changes nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandRefused {
+    /// SetWave: the program or envelope breaks a rule (field and rule).
+    Wave(WaveError),
+    /// SetLimit: the new limit breaks a rule (or would raise the limit).
+    Limit(LimitError),
+    /// SetWave while a fault is latched: ClearFault first.
+    Faulted,
+    /// ClearFault while the fault's report has not been sent yet: a fault
+    /// must be reported before it can be cleared.
+    FaultNotReported,
+}
+
+impl fmt::Display for CommandRefused {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Wave(e) => write!(f, "SetWave refused: {e}"),
+            Self::Limit(e) => write!(f, "SetLimit refused: {e}"),
+            Self::Faulted => f.write_str("SetWave refused: a fault is latched (ClearFault first)"),
+            Self::FaultNotReported => {
+                f.write_str("ClearFault refused: the fault has not been reported yet")
+            }
+        }
+    }
+}
+
+impl core::error::Error for CommandRefused {}
+
+/// What drives the outputs when no fault is latched.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// Power-up: outputs held at 0 V until the first tare is done, then the
+    /// program starts.
+    PowerUpTare,
+    /// The program drives the outputs; it started at `start_tick` (set by
+    /// the first tick after a SetWave, so that it starts at its time 0).
+    Running { start_tick: Option<u64> },
+    /// Outputs slew to 0 V and stay there until a SetWave.
+    Stopped,
+}
+
+/// A tare in progress.
+#[derive(Clone, Copy, Debug)]
+struct Tare {
+    sum_counts: u32,
+    taken: u16,
+}
+
+/// The firmware's hardware-independent logic for `N` segments (1..=8).
+#[derive(Clone, Debug)]
+pub struct Controller<const N: usize> {
+    config: Config,
+    dt_s: f32,
+    generator: Generator<N>,
+    limiter: Limiter<N>,
+    mode: Mode,
+    fault: Option<(FaultCode, Option<u8>)>,
+    /// The latched fault's report, until the sink takes it.
+    pending_fault: Option<Fault>,
+    faults_while_latched: u32,
+    tare_offset_counts: f32,
+    /// Whether any unsaturated load-cell reading has been seen yet.
+    offset_known: bool,
+    tare: Option<Tare>,
+    next_seq: u32,
+    /// Samples dropped and not yet reported.
+    dropped: Option<Dropped>,
+    last_t_us: u32,
+}
+
+impl<const N: usize> Controller<N> {
+    /// Checks `config` and starts: the power-up program
+    /// ([`finrs_drive::default_program`]) with outputs held at 0 V until a
+    /// first tare of `tare_samples` readings is done.
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        const { assert!(N >= 1 && N <= finrs_frames::MAX_SEGMENTS, "1..=8 segments") };
+        config.validate()?;
+        let (program, envelope) = default_program();
+        // Valid for every N (the tests build it for N = 1..=8); refusing
+        // it here beats a panic should finrs-drive ever change it.
+        let generator = Generator::new(program, envelope).map_err(|_| ConfigError {
+            field: "default_program",
+            rule: ConfigRule::RefusedByGenerator,
+        })?;
+        Ok(Self {
+            config,
+            dt_s: config.dt_s(),
+            generator,
+            limiter: Limiter::new(config.limits),
+            mode: Mode::PowerUpTare,
+            fault: None,
+            pending_fault: None,
+            faults_while_latched: 0,
+            tare_offset_counts: 0.0,
+            offset_known: false,
+            tare: Some(Tare {
+                sum_counts: 0,
+                taken: 0,
+            }),
+            next_seq: 0,
+            dropped: None,
+            last_t_us: 0,
+        })
+    }
+
+    /// One sample tick: checks the readings, updates the tare, computes the
+    /// limited voltages and sends the frames (see the crate's docs).
+    /// Returns the voltages to write now.
+    pub fn tick(&mut self, input: &TickInput<N>, sink: &mut impl FrameSink) -> TickOutput<N> {
+        self.last_t_us = input.t_us;
+        let currents_a = input.current_counts.map(|c| self.config.current_a(c));
+        let counts = input.load_cell_counts;
+        let saturated = self.config.load_cell_saturated(counts);
+        if !saturated {
+            if !self.offset_known {
+                // Until the first tare is done, force is relative to the
+                // first good reading.
+                self.tare_offset_counts = f32::from(counts);
+                self.offset_known = true;
+            }
+            self.feed_tare(counts);
+        }
+        if let Some((code, segment)) = self.check(input, &currents_a, saturated) {
+            if self.fault.is_none() {
+                self.latch(code, segment, input.t_us);
+                self.send_pending_fault(sink);
+                // No Sample on the faulting tick: the Fault frame stands in
+                // for it (it carries the sequence number, consuming none).
+                return TickOutput {
+                    voltages_v: self.limiter.stop(),
+                };
+            }
+        }
+        let voltages_v = self.next_voltages(input.tick);
+        let force_n = (f32::from(counts) - self.tare_offset_counts) * self.config.newtons_per_count;
+        self.send_sample(
+            &Sample {
+                seq: self.next_seq,
+                t_us: input.t_us,
+                force_n,
+                voltages_v,
+                currents_a,
+            },
+            sink,
+        );
+        TickOutput { voltages_v }
+    }
+
+    /// Applies a host command; a refused command changes nothing.
+    ///
+    /// - SetWave: refused while a fault is latched, or with the field and
+    ///   rule [`Generator::new`] names; else the program starts at its time
+    ///   0 on the next tick, the slew limit carrying the outputs over.
+    /// - Tare: (re)starts a tare of `tare_samples` readings.
+    /// - Stop: outputs slew to 0 V and stay there until a SetWave.
+    /// - SetLimit: lowers the voltage limit (a raise or an invalid value is
+    ///   refused with the [`LimitError`]).
+    /// - ClearFault: clears the latch once its Fault frame has been sent
+    ///   (refused before); outputs stay at 0 V until a SetWave. Without a
+    ///   latched fault it does nothing.
+    pub fn command(&mut self, command: Command) -> Result<(), CommandRefused> {
+        match command {
+            Command::SetWave { program, envelope } => {
+                if self.fault.is_some() {
+                    return Err(CommandRefused::Faulted);
+                }
+                self.generator = Generator::new(program, envelope).map_err(CommandRefused::Wave)?;
+                self.mode = Mode::Running { start_tick: None };
+            }
+            Command::Tare => {
+                self.tare = Some(Tare {
+                    sum_counts: 0,
+                    taken: 0,
+                })
+            }
+            Command::Stop => self.mode = Mode::Stopped,
+            Command::SetLimit { max_abs_v } => self
+                .limiter
+                .limits_mut()
+                .set_max_abs_v_lower(max_abs_v)
+                .map_err(CommandRefused::Limit)?,
+            Command::ClearFault => {
+                if self.pending_fault.is_some() {
+                    return Err(CommandRefused::FaultNotReported);
+                }
+                self.fault = None;
+            }
+        }
+        Ok(())
+    }
+
+    /// A fault detected outside (missed deadline, watchdog): latches it,
+    /// zeroes the limiter's outputs and sends (or queues) its Fault frame.
+    /// The caller must write zeros to the drivers at once ([`outputs_v`]
+    /// returns them). A `segment` not below N is reported as no segment.
+    /// While a fault is latched a new one only counts
+    /// ([`faults_while_latched`]): the first fault stays latched.
+    ///
+    /// [`outputs_v`]: Self::outputs_v
+    /// [`faults_while_latched`]: Self::faults_while_latched
+    pub fn fault(&mut self, code: FaultCode, segment: Option<u8>, sink: &mut impl FrameSink) {
+        if self.fault.is_some() {
+            self.faults_while_latched = self.faults_while_latched.saturating_add(1);
+            return;
+        }
+        let segment = segment.filter(|&s| usize::from(s) < N);
+        self.latch(code, segment, self.last_t_us);
+        self.send_pending_fault(sink);
+    }
+
+    /// The latched fault and its segment, if any.
+    pub fn fault_state(&self) -> Option<(FaultCode, Option<u8>)> {
+        self.fault
+    }
+
+    /// The load cell's zero, counts: the average of the last tare, or the
+    /// first good reading until the first tare is done.
+    pub fn tare_offset_counts(&self) -> f32 {
+        self.tare_offset_counts
+    }
+
+    /// The generator of the current (or last) program.
+    pub fn generator(&self) -> &Generator<N> {
+        &self.generator
+    }
+
+    /// The limits in force.
+    pub fn limits(&self) -> Limits {
+        self.limiter.limits()
+    }
+
+    /// The last voltages returned, V (zeros once a fault is latched).
+    pub fn outputs_v(&self) -> [f32; N] {
+        self.limiter.last_v()
+    }
+
+    /// The sequence number the next Sample will take.
+    pub fn next_seq(&self) -> u32 {
+        self.next_seq
+    }
+
+    /// Samples dropped and not yet reported by a Dropped frame.
+    pub fn pending_dropped(&self) -> Option<Dropped> {
+        self.dropped
+    }
+
+    /// Whether the latched fault's Fault frame still waits for the sink.
+    pub fn fault_report_pending(&self) -> bool {
+        self.pending_fault.is_some()
+    }
+
+    /// Faults raised through [`fault`](Self::fault) while another was
+    /// latched (not reported in-band: the first fault stays latched).
+    pub fn faults_while_latched(&self) -> u32 {
+        self.faults_while_latched
+    }
+
+    /// Whether a tare is in progress.
+    pub fn taring(&self) -> bool {
+        self.tare.is_some()
+    }
+
+    /// Whether a program drives the outputs (no fault, not stopped, not
+    /// holding for the power-up tare).
+    pub fn running(&self) -> bool {
+        self.fault.is_none() && matches!(self.mode, Mode::Running { .. })
+    }
+
+    fn feed_tare(&mut self, counts: u16) {
+        let Some(t) = &mut self.tare else { return };
+        // At most 65535 readings of at most 65535 counts: no overflow.
+        t.sum_counts += u32::from(counts);
+        t.taken += 1;
+        if t.taken >= self.config.tare_samples {
+            let n = u32::from(t.taken);
+            // Quotient and remainder apart: exact where a sum in f32 is not.
+            self.tare_offset_counts =
+                (t.sum_counts / n) as f32 + (t.sum_counts % n) as f32 / n as f32;
+            self.tare = None;
+            if self.mode == Mode::PowerUpTare {
+                self.mode = Mode::Running { start_tick: None };
+            }
+        }
+    }
+
+    /// The first fault the readings show: overcurrent (lowest segment
+    /// first), then a saturated current channel, then a saturated load cell.
+    fn check(
+        &self,
+        input: &TickInput<N>,
+        currents_a: &[f32; N],
+        load_cell_saturated: bool,
+    ) -> Option<(FaultCode, Option<u8>)> {
+        let limit = self.config.overcurrent_a;
+        if let Some(k) = currents_a.iter().position(|&i| i > limit || i < -limit) {
+            return Some((FaultCode::Overcurrent, Some(k as u8)));
+        }
+        if let Some(k) = input
+            .current_counts
+            .iter()
+            .position(|&c| self.config.current_saturated(c))
+        {
+            return Some((FaultCode::AdcSaturation, Some(k as u8)));
+        }
+        load_cell_saturated.then_some((FaultCode::AdcSaturation, None))
+    }
+
+    fn latch(&mut self, code: FaultCode, segment: Option<u8>, t_us: u32) {
+        self.fault = Some((code, segment));
+        self.limiter.stop();
+        // After ClearFault the outputs stay at 0 until a SetWave.
+        self.mode = Mode::Stopped;
+        self.pending_fault = Some(Fault {
+            seq: self.next_seq,
+            t_us,
+            code,
+            segment,
+        });
+    }
+
+    fn next_voltages(&mut self, tick: u64) -> [f32; N] {
+        if self.fault.is_some() {
+            return self.limiter.stop();
+        }
+        let wanted = match &mut self.mode {
+            Mode::PowerUpTare | Mode::Stopped => [0.0; N],
+            Mode::Running { start_tick } => {
+                let start = *start_tick.get_or_insert(tick);
+                // A tick behind the start (a caller's bug) asks for time 0.
+                self.generator
+                    .voltages_at_tick_v(tick.saturating_sub(start), self.config.sample_hz)
+            }
+        };
+        self.limiter.apply(wanted, self.dt_s)
+    }
+
+    /// Sends the pending Fault frame; true if none is pending afterwards.
+    fn send_pending_fault(&mut self, sink: &mut impl FrameSink) -> bool {
+        if let Some(f) = self.pending_fault {
+            let mut buf = [0u8; FAULT_FRAME_LEN];
+            // Cannot fail: the buffer fits and segments are below N ≤ 8.
+            if let Ok(n) = encode_fault(&f, &mut buf) {
+                if sink.try_write(&buf[..n]) {
+                    self.pending_fault = None;
+                }
+            }
+        }
+        self.pending_fault.is_none()
+    }
+
+    /// Sends the pending Dropped frame; true if none is pending afterwards.
+    fn send_pending_dropped(&mut self, sink: &mut impl FrameSink) -> bool {
+        if let Some(d) = self.dropped {
+            let mut buf = [0u8; DROPPED_FRAME_LEN];
+            if let Ok(n) = encode_dropped(&d, &mut buf) {
+                if sink.try_write(&buf[..n]) {
+                    self.dropped = None;
+                }
+            }
+        }
+        self.dropped.is_none()
+    }
+
+    /// Sends `s` after any pending Fault and Dropped frames, or counts it
+    /// dropped; either way it consumes its sequence number.
+    fn send_sample(&mut self, s: &Sample<N>, sink: &mut impl FrameSink) {
+        self.next_seq = self.next_seq.wrapping_add(1);
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        let sent = self.send_pending_fault(sink)
+            && self.send_pending_dropped(sink)
+            && match encode_sample(s, &mut buf) {
+                Ok(n) => sink.try_write(&buf[..n]),
+                Err(_) => false,
+            };
+        if !sent {
+            match &mut self.dropped {
+                // Consecutive: a pending report always ends at the sample
+                // before this one, since nothing was sent in between.
+                Some(d) => d.count = d.count.saturating_add(1),
+                None => {
+                    self.dropped = Some(Dropped {
+                        first_seq: s.seq,
+                        count: 1,
+                    })
+                }
+            }
+        }
+    }
+}

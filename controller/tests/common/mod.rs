@@ -1,0 +1,69 @@
+//! Helpers shared by the tests: a configurable sink that keeps what it
+//! accepts, decoding it with the frames crate, and a typical config.
+#![allow(dead_code)] // each test binary uses a different subset
+
+use finrs_controller::{Config, FrameSink};
+use finrs_drive::Limits;
+use finrs_frames::{Decoder, Event, Stats};
+
+/// A sink that accepts or refuses each frame as told, and keeps the bytes
+/// of those it accepts.
+#[derive(Default)]
+pub struct Channel {
+    pub bytes: Vec<u8>,
+    /// Refuse every frame while set.
+    pub full: bool,
+    /// Frames offered so far (accepted or not).
+    pub offered: usize,
+    /// Accept only the frames whose length is at most this, if set.
+    pub max_len: Option<usize>,
+    /// Refuse this many frames before accepting again.
+    pub refuse_next: usize,
+}
+
+impl FrameSink for Channel {
+    fn try_write(&mut self, frame: &[u8]) -> bool {
+        self.offered += 1;
+        if self.refuse_next > 0 {
+            self.refuse_next -= 1;
+            return false;
+        }
+        if self.full || self.max_len.is_some_and(|m| frame.len() > m) {
+            return false;
+        }
+        self.bytes.extend_from_slice(frame);
+        true
+    }
+}
+
+impl Channel {
+    /// Decodes everything accepted so far.
+    pub fn events(&self) -> (Vec<Event>, Stats) {
+        let mut d = Decoder::new();
+        let mut events = Vec::new();
+        d.push(&self.bytes, &mut |e| events.push(e));
+        d.finish(&mut |e| events.push(e));
+        (events, d.stats())
+    }
+
+    /// Takes the accepted bytes' events and clears the buffer.
+    pub fn take_events(&mut self) -> Vec<Event> {
+        let (e, _) = self.events();
+        self.bytes.clear();
+        e
+    }
+}
+
+pub fn config() -> Config {
+    Config {
+        sample_hz: 1000,
+        limits: Limits::new(2.0, 100.0).unwrap(),
+        newtons_per_count: 1e-3,
+        adc_full_scale: 4095,
+        saturation_margin_counts: 2,
+        amps_per_count: 1e-3,
+        current_zero_counts: 2048,
+        overcurrent_a: 0.5,
+        tare_samples: 10,
+    }
+}
