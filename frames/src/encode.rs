@@ -74,13 +74,17 @@ pub fn encode_fault(f: &Fault, out: &mut [u8]) -> Result<usize, EncodeError> {
 
 /// A frame being written. `start` checks the length once; the callers then
 /// put exactly `payload_len` bytes, so the indexing below stays in bounds.
-struct Writer<'a> {
+pub(crate) struct Writer<'a> {
     frame: &'a mut [u8],
     at: usize,
 }
 
 impl<'a> Writer<'a> {
-    fn start(out: &'a mut [u8], kind: u8, payload_len: usize) -> Result<Self, EncodeError> {
+    pub(crate) fn start(
+        out: &'a mut [u8],
+        kind: u8,
+        payload_len: usize,
+    ) -> Result<Self, EncodeError> {
         let needed = HEADER_LEN + payload_len + CRC_LEN;
         let frame = out
             .get_mut(..needed)
@@ -94,12 +98,12 @@ impl<'a> Writer<'a> {
         })
     }
 
-    fn put(&mut self, bytes: &[u8]) {
+    pub(crate) fn put(&mut self, bytes: &[u8]) {
         self.frame[self.at..self.at + bytes.len()].copy_from_slice(bytes);
         self.at += bytes.len();
     }
 
-    fn finish(self) -> usize {
+    pub(crate) fn finish(self) -> usize {
         debug_assert_eq!(self.at + CRC_LEN, self.frame.len());
         let crc = crc16(&self.frame[2..self.at]);
         self.frame[self.at..].copy_from_slice(&crc.to_le_bytes());

@@ -1,7 +1,9 @@
 //! `finrs-frames`: the binary frame format of the blocking-force stream that
 //! the firmware sends to the host (over an RTT up channel on the board, over
 //! semihosting in QEMU), with a `no_std`, allocation-free encoder and a
-//! streaming decoder that never panics and never allocates.
+//! streaming decoder that never panics and never allocates; and the host's
+//! commands to the firmware on the down channel, in the same framing
+//! ([`Command`], [`encode_command`], [`CommandDecoder`]).
 //!
 //! # Frame format
 //!
@@ -26,6 +28,28 @@
 //! - **Fault**, `len` = 10: `seq` u32, `t_us` u32, `code` u8 (1 overcurrent,
 //!   2 ADC saturation, 3 missed deadline, 4 watchdog or other), `segment` u8
 //!   (0-based segment index, below 8; 0xFF if no segment is concerned).
+//!
+//! # Commands (down channel)
+//!
+//! Host commands to the firmware use the same framing (sync, kind, `len`,
+//! payload, CRC-16 over kind, `len` and payload) with kinds from 0x81, so
+//! that a command can never be mistaken for an up-channel frame:
+//!
+//! | kind | command | `len` | payload |
+//! |------|---------|-------|---------|
+//! | 0x81 | SetWave | 25, 29 or 45 | program kind u8 (1 Travelling, 2 Standing, 3 Steps, 4 Pulses, 5 Chirp), the program's f32 fields in declaration order, then the envelope's `ramp_in_s`, `hold_s` (may be +inf), `ramp_out_s` f32 |
+//! | 0x82 | Tare | 0 | |
+//! | 0x83 | Stop | 0 | |
+//! | 0x84 | SetLimit | 4 | `max_abs_v` f32 (may only lower the limit) |
+//! | 0x85 | ClearFault | 0 | |
+//!
+//! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,
+//! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
+//! (`amplitude_v`, `start_hz`, `end_hz`, `duration_s`) 29; Standing
+//! (`amplitude_v`, `frequency_hz`, `offset_v`) and Pulses (`amplitude_v`,
+//! `on_s`, `off_s`) 25; Steps (8 levels, V) 45. [`CommandDecoder`] checks
+//! the framing only and reports what it refuses ([`CommandError`]); the
+//! firmware's controller checks the values.
 //!
 //! # Sequence numbers
 //!
@@ -74,10 +98,14 @@
 #![no_std]
 #![deny(missing_docs, unsafe_code)]
 
+mod command;
 mod crc;
 mod decode;
 mod encode;
 
+pub use command::{
+    encode_command, Command, CommandDecoder, CommandError, CommandEvent, MAX_COMMAND_LEN,
+};
 pub use crc::crc16;
 pub use decode::{DecodedSample, Decoder, Event, Stats};
 pub use encode::{encode_dropped, encode_fault, encode_sample, EncodeError};

@@ -1,0 +1,468 @@
+//! Host commands on the down channel: encoder and streaming decoder.
+//!
+//! Same framing as the up-channel frames (see the crate's docs for the
+//! layout of each command). Decoding checks the framing only (sync, kind,
+//! length, CRC, program kind); whether the values make sense is for the
+//! firmware's controller to check (`Generator::new`,
+//! `Limits::set_max_abs_v_lower`), so that it can refuse a command with the
+//! field and the rule it breaks.
+//!
+//! ```
+//! use finrs_frames::{encode_command, Command, CommandDecoder, CommandEvent, MAX_COMMAND_LEN};
+//!
+//! let mut buf = [0u8; MAX_COMMAND_LEN];
+//! let len = encode_command(&Command::SetLimit { max_abs_v: 1.5 }, &mut buf).unwrap();
+//!
+//! let mut decoder = CommandDecoder::new();
+//! let mut got = None;
+//! decoder.push(&buf[..len], &mut |e| {
+//!     if let CommandEvent::Command(c) = e {
+//!         got = Some(c);
+//!     }
+//! });
+//! assert_eq!(got, Some(Command::SetLimit { max_abs_v: 1.5 }));
+//! ```
+
+use core::fmt;
+
+use finrs_drive::{Envelope, Program};
+
+use crate::encode::Writer;
+use crate::{crc16, EncodeError, CRC_LEN, HEADER_LEN, SYNC};
+
+const KIND_SET_WAVE: u8 = 0x81;
+const KIND_TARE: u8 = 0x82;
+const KIND_STOP: u8 = 0x83;
+const KIND_SET_LIMIT: u8 = 0x84;
+const KIND_CLEAR_FAULT: u8 = 0x85;
+
+const PROGRAM_TRAVELLING: u8 = 1;
+const PROGRAM_STANDING: u8 = 2;
+const PROGRAM_STEPS: u8 = 3;
+const PROGRAM_PULSES: u8 = 4;
+const PROGRAM_CHIRP: u8 = 5;
+
+/// The envelope's three f32 after the program's fields.
+const ENVELOPE_LEN: usize = 12;
+const SET_LIMIT_PAYLOAD_LEN: usize = 4;
+
+/// Number of f32 fields of a program kind, `None` if the kind is unknown.
+const fn program_fields(program_kind: u8) -> Option<usize> {
+    match program_kind {
+        PROGRAM_TRAVELLING => Some(4),
+        PROGRAM_STANDING => Some(3),
+        PROGRAM_STEPS => Some(8),
+        PROGRAM_PULSES => Some(3),
+        PROGRAM_CHIRP => Some(4),
+        _ => None,
+    }
+}
+
+/// SetWave's payload length for a known program kind.
+const fn set_wave_payload_len(fields: usize) -> usize {
+    1 + 4 * fields + ENVELOPE_LEN
+}
+
+/// Longest SetWave payload: Steps, 8 levels.
+const SET_WAVE_MAX_PAYLOAD_LEN: usize = set_wave_payload_len(8);
+
+/// Longest command frame (a SetWave of Steps), bytes.
+pub const MAX_COMMAND_LEN: usize = HEADER_LEN + SET_WAVE_MAX_PAYLOAD_LEN + CRC_LEN;
+
+/// Whether `len` may be the payload length of a command of `kind`. For a
+/// SetWave only the set of lengths is checked here; the program kind in the
+/// payload must then match the length exactly.
+const fn command_len_ok(kind: u8, len: usize) -> bool {
+    match kind {
+        KIND_SET_WAVE => {
+            len == set_wave_payload_len(3)
+                || len == set_wave_payload_len(4)
+                || len == set_wave_payload_len(8)
+        }
+        KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT => len == 0,
+        KIND_SET_LIMIT => len == SET_LIMIT_PAYLOAD_LEN,
+        _ => false,
+    }
+}
+
+/// A host command. Values are carried as sent: the controller validates them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Command {
+    /// Replace the running wave; the new program starts at its own time 0.
+    SetWave {
+        /// What each segment does.
+        program: Program,
+        /// The gain over the program.
+        envelope: Envelope,
+    },
+    /// Measure the load cell's zero again.
+    Tare,
+    /// Bring every output to 0 V through the slew limit and stay there (not
+    /// a fault).
+    Stop,
+    /// Lower the voltage limit (a raise is refused by the controller).
+    SetLimit {
+        /// The new limit on |V|, V.
+        max_abs_v: f32,
+    },
+    /// Clear a latched fault; outputs stay at 0 V until the next SetWave.
+    ClearFault,
+}
+
+/// Why bytes on the down channel were not a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CommandError {
+    /// Bytes before the next sync pair (or before the end of the stream).
+    NoSync {
+        /// How many.
+        skipped_bytes: usize,
+    },
+    /// The header's kind is not a command kind (0x81..=0x85).
+    UnknownKind(u8),
+    /// The payload length does not fit the kind (or, for a SetWave, its
+    /// program kind).
+    BadLength {
+        /// The command kind.
+        kind: u8,
+        /// The length the frame claims.
+        len: u8,
+    },
+    /// The CRC does not match: the frame was damaged or cut short.
+    BadCrc {
+        /// The command kind in the (possibly damaged) header.
+        kind: u8,
+    },
+    /// A SetWave's program kind is not 1..=5.
+    BadProgramKind(u8),
+    /// The stream ended ([`CommandDecoder::finish`]) inside a frame.
+    Truncated {
+        /// The command kind in the header.
+        kind: u8,
+    },
+}
+
+impl fmt::Display for CommandError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NoSync { skipped_bytes } => {
+                write!(f, "{skipped_bytes} bytes without a sync pair skipped")
+            }
+            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x85)"),
+            Self::BadLength { kind, len } => {
+                write!(f, "length {len} does not fit command kind {kind:#04x}")
+            }
+            Self::BadCrc { kind } => write!(f, "CRC mismatch in command kind {kind:#04x}"),
+            Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=5"),
+            Self::Truncated { kind } => write!(f, "command kind {kind:#04x} cut short"),
+        }
+    }
+}
+
+impl core::error::Error for CommandError {}
+
+/// What the command decoder found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CommandEvent {
+    /// A well-framed command.
+    Command(Command),
+    /// Bytes that were not a command, and why.
+    Refused(CommandError),
+}
+
+/// Writes `c` as a command frame at the start of `out`; returns its length
+/// (at most [`MAX_COMMAND_LEN`]).
+pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError> {
+    match *c {
+        Command::SetWave { program, envelope } => {
+            let (program_kind, fields, n) = program_to_fields(&program);
+            let mut w = Writer::start(out, KIND_SET_WAVE, set_wave_payload_len(n))?;
+            w.put(&[program_kind]);
+            for v in &fields[..n] {
+                w.put(&v.to_le_bytes());
+            }
+            for v in [envelope.ramp_in_s, envelope.hold_s, envelope.ramp_out_s] {
+                w.put(&v.to_le_bytes());
+            }
+            Ok(w.finish())
+        }
+        Command::Tare => Ok(Writer::start(out, KIND_TARE, 0)?.finish()),
+        Command::Stop => Ok(Writer::start(out, KIND_STOP, 0)?.finish()),
+        Command::SetLimit { max_abs_v } => {
+            let mut w = Writer::start(out, KIND_SET_LIMIT, SET_LIMIT_PAYLOAD_LEN)?;
+            w.put(&max_abs_v.to_le_bytes());
+            Ok(w.finish())
+        }
+        Command::ClearFault => Ok(Writer::start(out, KIND_CLEAR_FAULT, 0)?.finish()),
+    }
+}
+
+/// The program's kind and its f32 fields in declaration order (the first
+/// `n` of the array).
+fn program_to_fields(p: &Program) -> (u8, [f32; 8], usize) {
+    let mut f = [0.0; 8];
+    match *p {
+        Program::Travelling {
+            amplitude_v,
+            frequency_hz,
+            lag_deg_per_segment,
+            offset_v,
+        } => {
+            f[..4].copy_from_slice(&[amplitude_v, frequency_hz, lag_deg_per_segment, offset_v]);
+            (PROGRAM_TRAVELLING, f, 4)
+        }
+        Program::Standing {
+            amplitude_v,
+            frequency_hz,
+            offset_v,
+        } => {
+            f[..3].copy_from_slice(&[amplitude_v, frequency_hz, offset_v]);
+            (PROGRAM_STANDING, f, 3)
+        }
+        Program::Steps { levels_v } => (PROGRAM_STEPS, levels_v, 8),
+        Program::Pulses {
+            amplitude_v,
+            on_s,
+            off_s,
+        } => {
+            f[..3].copy_from_slice(&[amplitude_v, on_s, off_s]);
+            (PROGRAM_PULSES, f, 3)
+        }
+        Program::Chirp {
+            amplitude_v,
+            start_hz,
+            end_hz,
+            duration_s,
+        } => {
+            f[..4].copy_from_slice(&[amplitude_v, start_hz, end_hz, duration_s]);
+            (PROGRAM_CHIRP, f, 4)
+        }
+    }
+}
+
+/// Streaming decoder of the down channel: [`push`](Self::push) bytes as
+/// they arrive, in chunks of any size. It holds at most one command's
+/// worth of bytes and never allocates or panics.
+///
+/// Resynchronisation follows the up-channel [`Decoder`](crate::Decoder):
+/// a bad header or CRC refuses the frame and drops only its first sync
+/// byte, so a good command inside or just after a damaged one is still
+/// found. Each refusal is reported where it is detected, and bytes without
+/// a sync pair as one [`CommandError::NoSync`] before the next event (or
+/// by [`finish`](Self::finish)): the events do not depend on how the
+/// stream was split. A frame cut short is refused once the bytes that
+/// follow it fill its claimed length, so a command sent after a truncated
+/// one may wait for up to [`MAX_COMMAND_LEN`] more bytes (or a `finish`).
+#[derive(Clone, Debug)]
+pub struct CommandDecoder {
+    buf: [u8; MAX_COMMAND_LEN],
+    len: usize,
+    /// Bytes without sync not yet reported.
+    skipped: usize,
+}
+
+impl Default for CommandDecoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// What the front of the buffer holds.
+enum Step {
+    NeedMore,
+    /// Bytes with no sync pair.
+    NoSync(usize),
+    /// A refused frame: drop this many bytes.
+    Refuse(usize, CommandError),
+    /// A command frame of this length.
+    Frame(usize, Command),
+}
+
+impl CommandDecoder {
+    /// A decoder at the start of a stream.
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; MAX_COMMAND_LEN],
+            len: 0,
+            skipped: 0,
+        }
+    }
+
+    /// Decodes `bytes`, the next part of the stream, calling `out` for each
+    /// event.
+    pub fn push(&mut self, mut bytes: &[u8], out: &mut impl FnMut(CommandEvent)) {
+        while !bytes.is_empty() {
+            let n = bytes.len().min(MAX_COMMAND_LEN - self.len);
+            self.buf[self.len..self.len + n].copy_from_slice(&bytes[..n]);
+            self.len += n;
+            bytes = &bytes[n..];
+            // A full buffer always yields a frame, a refusal or a skip.
+            self.process(out);
+        }
+    }
+
+    /// Ends the stream: bytes held back waiting for the rest of a command
+    /// are refused (a cut frame as [`CommandError::Truncated`]), good commands
+    /// among them still decoded. The decoder then accepts a new stream.
+    pub fn finish(&mut self, out: &mut impl FnMut(CommandEvent)) {
+        while self.len > 0 {
+            match self.step() {
+                // The frame waited for cannot complete: refuse it as cut
+                // short and search on past its first sync byte.
+                Step::NeedMore => {
+                    if self.len >= HEADER_LEN {
+                        let kind = self.buf[2];
+                        self.report_skipped(out);
+                        self.drop_front(1);
+                        out(CommandEvent::Refused(CommandError::Truncated { kind }));
+                    } else {
+                        self.skipped = self.skipped.saturating_add(self.len);
+                        self.len = 0;
+                    }
+                }
+                step => self.apply(step, out),
+            }
+        }
+        self.report_skipped(out);
+    }
+
+    fn process(&mut self, out: &mut impl FnMut(CommandEvent)) {
+        loop {
+            match self.step() {
+                Step::NeedMore => return,
+                step => self.apply(step, out),
+            }
+        }
+    }
+
+    fn apply(&mut self, step: Step, out: &mut impl FnMut(CommandEvent)) {
+        match step {
+            Step::NeedMore => {}
+            Step::NoSync(n) => {
+                self.drop_front(n);
+                self.skipped = self.skipped.saturating_add(n);
+            }
+            Step::Refuse(n, e) => {
+                self.report_skipped(out);
+                self.drop_front(n);
+                out(CommandEvent::Refused(e));
+            }
+            Step::Frame(n, c) => {
+                self.report_skipped(out);
+                self.drop_front(n);
+                out(CommandEvent::Command(c));
+            }
+        }
+    }
+
+    fn step(&self) -> Step {
+        let b = &self.buf[..self.len];
+        if b.is_empty() {
+            return Step::NeedMore;
+        }
+        // A lone first sync byte at the end may be completed by the next push.
+        let sync_at =
+            (0..b.len()).find(|&i| b[i] == SYNC[0] && b.get(i + 1).is_none_or(|&x| x == SYNC[1]));
+        match sync_at {
+            None => return Step::NoSync(b.len()),
+            Some(0) => {}
+            Some(i) => return Step::NoSync(i),
+        }
+        if b.len() < HEADER_LEN {
+            return Step::NeedMore;
+        }
+        let (kind, len) = (b[2], b[3]);
+        if !(KIND_SET_WAVE..=KIND_CLEAR_FAULT).contains(&kind) {
+            return Step::Refuse(1, CommandError::UnknownKind(kind));
+        }
+        if !command_len_ok(kind, usize::from(len)) {
+            return Step::Refuse(1, CommandError::BadLength { kind, len });
+        }
+        let crc_at = HEADER_LEN + usize::from(len);
+        let frame_len = crc_at + CRC_LEN;
+        if b.len() < frame_len {
+            return Step::NeedMore;
+        }
+        if u16::from_le_bytes([b[crc_at], b[crc_at + 1]]) != crc16(&b[2..crc_at]) {
+            return Step::Refuse(1, CommandError::BadCrc { kind });
+        }
+        // The CRC vouches for the frame's bounds: a refusal now skips it all.
+        match parse(kind, &b[HEADER_LEN..crc_at]) {
+            Ok(c) => Step::Frame(frame_len, c),
+            Err(e) => Step::Refuse(frame_len, e),
+        }
+    }
+
+    fn drop_front(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.len -= n;
+    }
+
+    fn report_skipped(&mut self, out: &mut impl FnMut(CommandEvent)) {
+        if self.skipped > 0 {
+            let skipped_bytes = core::mem::take(&mut self.skipped);
+            out(CommandEvent::Refused(CommandError::NoSync {
+                skipped_bytes,
+            }));
+        }
+    }
+}
+
+/// The command in a payload whose kind, length and CRC have checked.
+fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
+    let f32_at = |i: usize| f32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]]);
+    match kind {
+        KIND_SET_WAVE => {
+            let program_kind = p[0];
+            let n =
+                program_fields(program_kind).ok_or(CommandError::BadProgramKind(program_kind))?;
+            if p.len() != set_wave_payload_len(n) {
+                return Err(CommandError::BadLength {
+                    kind,
+                    len: p.len() as u8,
+                });
+            }
+            let field = |k: usize| f32_at(1 + 4 * k);
+            let program = match program_kind {
+                PROGRAM_TRAVELLING => Program::Travelling {
+                    amplitude_v: field(0),
+                    frequency_hz: field(1),
+                    lag_deg_per_segment: field(2),
+                    offset_v: field(3),
+                },
+                PROGRAM_STANDING => Program::Standing {
+                    amplitude_v: field(0),
+                    frequency_hz: field(1),
+                    offset_v: field(2),
+                },
+                PROGRAM_STEPS => Program::Steps {
+                    levels_v: core::array::from_fn(field),
+                },
+                PROGRAM_PULSES => Program::Pulses {
+                    amplitude_v: field(0),
+                    on_s: field(1),
+                    off_s: field(2),
+                },
+                _ => Program::Chirp {
+                    amplitude_v: field(0),
+                    start_hz: field(1),
+                    end_hz: field(2),
+                    duration_s: field(3),
+                },
+            };
+            let envelope = Envelope {
+                ramp_in_s: field(n),
+                hold_s: field(n + 1),
+                ramp_out_s: field(n + 2),
+            };
+            Ok(Command::SetWave { program, envelope })
+        }
+        KIND_TARE => Ok(Command::Tare),
+        KIND_STOP => Ok(Command::Stop),
+        KIND_SET_LIMIT => Ok(Command::SetLimit {
+            max_abs_v: f32_at(0),
+        }),
+        KIND_CLEAR_FAULT => Ok(Command::ClearFault),
+        _ => Err(CommandError::UnknownKind(kind)),
+    }
+}
