@@ -5,6 +5,7 @@
 #![deny(missing_docs)]
 
 pub mod capture;
+pub mod command;
 pub mod diagnose;
 pub mod fit;
 pub mod params;

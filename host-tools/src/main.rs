@@ -44,6 +44,57 @@ enum Command {
     /// Flash an ELF, reset and run it, print its defmt log and record its
     /// force stream.
     Run(RunArgs),
+    /// Send a new wave to the running firmware (RTT down channel 0).
+    Wave(WaveArgs),
+    /// Ask the firmware to measure the load cell's zero again.
+    Tare(SendArgs),
+    /// Bring every output to 0 V through the slew limit.
+    Stop(SendArgs),
+    /// Lower the firmware's voltage limit to V volts (a raise is refused).
+    Limit {
+        /// The new limit on |V|, V (above 0, at most 4).
+        max_abs_v: f64,
+        #[command(flatten)]
+        send: SendArgs,
+    },
+    /// Clear a latched fault (outputs stay at 0 V until the next wave).
+    ClearFault(SendArgs),
+}
+
+#[derive(clap::Args)]
+struct SendArgs {
+    /// The running firmware's ELF, for its `_SEGGER_RTT` (default: scan RAM).
+    #[arg(long)]
+    elf: Option<PathBuf>,
+    #[command(flatten)]
+    probe: ProbeArgs,
+}
+
+#[derive(clap::Args)]
+struct WaveArgs {
+    /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
+    /// pulses:AMP,ON_S,OFF_S or standing:AMP,HZ.
+    wave: String,
+    /// Segments of the fin (the firmware's N).
+    #[arg(long, default_value_t = 3)]
+    segments: usize,
+    /// Constant added to a sine: or standing: wave, V.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    offset_v: f64,
+    /// Time to full amplitude, s.
+    #[arg(long, default_value_t = 1.0)]
+    ramp_in_s: f64,
+    /// Time at full amplitude, s (default: for ever).
+    #[arg(long, default_value_t = f64::INFINITY)]
+    hold_s: f64,
+    /// Time from full amplitude to zero, s.
+    #[arg(long, default_value_t = 0.0)]
+    ramp_out_s: f64,
+    /// Length of one chirp: sweep, s.
+    #[arg(long, default_value_t = 10.0)]
+    sweep_s: f64,
+    #[command(flatten)]
+    send: SendArgs,
 }
 
 #[derive(clap::Args)]
@@ -252,6 +303,30 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::SeedCheck { json } => run_seed_check(json),
         Command::Log(args) => run_log(args),
         Command::Run(args) => run_run(args),
+        Command::Wave(args) => {
+            let req = finrs::command::WaveRequest {
+                spec: args.wave.clone(),
+                segments: args.segments,
+                offset_v: args.offset_v,
+                ramp_in_s: args.ramp_in_s,
+                hold_s: args.hold_s,
+                ramp_out_s: args.ramp_out_s,
+                sweep_s: args.sweep_s,
+            };
+            // Refused here, before any probe is looked for.
+            let command = finrs::command::wave_command(&req).map_err(anyhow::Error::msg)?;
+            send(&args.send, &command)
+        }
+        Command::Tare(args) => send(&args, &finrs_frames::Command::Tare),
+        Command::Stop(args) => send(&args, &finrs_frames::Command::Stop),
+        Command::ClearFault(args) => send(&args, &finrs_frames::Command::ClearFault),
+        Command::Limit {
+            max_abs_v,
+            send: args,
+        } => {
+            let command = finrs::command::limit_command(max_abs_v).map_err(anyhow::Error::msg)?;
+            send(&args, &command)
+        }
         Command::Params => {
             print!("{}", ModelFile::thesis_2006().to_toml());
             Ok(())
@@ -473,5 +548,13 @@ fn run_run(args: RunArgs) -> anyhow::Result<()> {
     ))?;
     let firmware = finrs::capture::Firmware::Flash(args.elf.clone());
     eprint!("{}", finrs::capture::from_probe(&probe, &firmware, &opts)?);
+    Ok(())
+}
+
+fn send(args: &SendArgs, command: &finrs_frames::Command) -> anyhow::Result<()> {
+    let probe = args.probe.options()?;
+    let bytes = finrs::command::encode(command);
+    finrs::probe::send(&probe, args.elf.as_deref(), &bytes)?;
+    eprintln!("sent {command:?}");
     Ok(())
 }

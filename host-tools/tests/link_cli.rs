@@ -200,3 +200,55 @@ fn log_from_bytes_without_samples_writes_nothing_and_says_why() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn commands_without_a_probe_fail_fast() {
+    for args in [
+        &["tare"][..],
+        &["stop"],
+        &["clear-fault"],
+        &["limit", "2.5"],
+        &["wave", "sine:2,1,120", "--segments", "4"],
+        &[
+            "wave",
+            "step:1,-1",
+            "--segments",
+            "2",
+            "--probe",
+            "0483:374b",
+        ],
+    ] {
+        fails_fast_without_probe(args, Duration::from_secs(10));
+    }
+}
+
+#[test]
+fn invalid_commands_are_refused_on_the_host_before_any_probe() {
+    for (args, says) in [
+        (
+            &["wave", "sine:2,300,0"][..],
+            "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz",
+        ),
+        (
+            &["wave", "sine:3,1,0", "--offset-v", "1.5"],
+            "peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V",
+        ),
+        (
+            &["wave", "chirp:2,1,5", "--sweep-s", "0"],
+            "Chirp.duration_s must be above 0",
+        ),
+        (
+            &["limit", "5"],
+            "limit 5 V: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
+        ),
+    ] {
+        let out = finrs().args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(stderr.contains(says), "{args:?} said: {stderr}");
+        assert!(
+            !stderr.contains("probe"),
+            "{args:?} looked for a probe: {stderr}"
+        );
+    }
+}

@@ -237,3 +237,26 @@ pub fn write_down(
     }
     Ok(())
 }
+
+/// Sends `bytes` (encoded commands) to the running firmware's command down
+/// channel: attach without reset, find RTT (at the ELF's `_SEGGER_RTT` if
+/// `elf` is given, else by scanning RAM), write.
+pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> anyhow::Result<()> {
+    // Read the file first so that a wrong path fails before any USB work.
+    let image = elf
+        .map(|p| std::fs::read(p).with_context(|| format!("reading {}", p.display())))
+        .transpose()?;
+    let mut session = attach(opts)?;
+    let address = match (elf, &image) {
+        (Some(p), Some(image)) => Some(rtt_address(&p.display().to_string(), image)?),
+        _ => None,
+    };
+    let mut rtt = attach_rtt(&mut session, address, opts.timeout)?;
+    write_down(
+        &mut session,
+        &mut rtt,
+        COMMAND_DOWN_CHANNEL,
+        bytes,
+        opts.timeout,
+    )
+}
