@@ -114,6 +114,31 @@ fn interrupted() -> anyhow::Result<Arc<AtomicBool>> {
     Ok(flag)
 }
 
+/// Where the bytes come from while recording: the probe's RTT up channels,
+/// or a stand-in in tests.
+pub trait Link {
+    /// Reads what the force stream's channel holds now, without waiting.
+    fn read_force(&mut self, buf: &mut [u8]) -> anyhow::Result<usize>;
+    /// Reads what the defmt log's channel holds now, without waiting.
+    fn read_log(&mut self, buf: &mut [u8]) -> anyhow::Result<usize>;
+}
+
+/// The probe's RTT up channels 1 (force) and 0 (defmt).
+struct ProbeLink {
+    session: probe_rs::Session,
+    rtt: probe_rs::rtt::Rtt,
+}
+
+impl Link for ProbeLink {
+    fn read_force(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+        probe::read_up(&mut self.session, &mut self.rtt, FORCE_UP_CHANNEL, buf)
+    }
+
+    fn read_log(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+        probe::read_up(&mut self.session, &mut self.rtt, DEFMT_UP_CHANNEL, buf)
+    }
+}
+
 /// The firmware to flash and whose symbols to use.
 #[derive(Clone, Debug)]
 pub enum Firmware {
@@ -147,23 +172,39 @@ pub fn from_probe(
             let at = probe::rtt_address(&name, bytes)?;
             let table = defmt_decoder::Table::parse(bytes)
                 .map_err(|e| anyhow::anyhow!("{name}: bad defmt table: {e}"))?;
+            if table.is_none() {
+                eprintln!("{name}: no defmt table; the log on channel 0 is not shown");
+            }
             (Some(at), table)
         }
-        _ => (None, None),
+        _ => {
+            eprintln!("no --elf: RTT block found by scanning RAM; the defmt log is not shown");
+            (None, None)
+        }
     };
     if let Firmware::Flash(p) = firmware {
         eprintln!("flashing {}", p.display());
         probe::flash_and_run(&mut session, p)?;
     }
-    let mut rtt = probe::attach_rtt(&mut session, rtt_at, Duration::from_secs(5))?;
+    let rtt = probe::attach_rtt(&mut session, rtt_at, Duration::from_secs(5))?;
     let stop = interrupted()?;
+    let mut link = ProbeLink { session, rtt };
+    capture(&mut link, table.as_ref(), &stop, opts)
+}
 
+/// The recording loop: reads the link until `stop` is set (Ctrl-C) or the
+/// duration has passed, shows the defmt log and a live status line, then
+/// writes what came (also when the link fails) and returns the report.
+pub fn capture(
+    link: &mut impl Link,
+    table: Option<&defmt_decoder::Table>,
+    stop: &AtomicBool,
+    opts: &CaptureOptions,
+) -> anyhow::Result<String> {
+    opts.check()?;
     let bar = ProgressBar::new_spinner();
     bar.set_style(ProgressStyle::with_template("{spinner} {msg}").expect("static template"));
-    let mut defmt = table.as_ref().map(|t| t.new_stream_decoder());
-    if table.is_none() && matches!(firmware, Firmware::Running(None)) {
-        bar.println("no --elf: defmt log not decoded, RTT block found by scanning RAM");
-    }
+    let mut defmt = table.map(|t| t.new_stream_decoder());
     let mut rec = Recorder::new(opts.setup.clone());
     let mut buf = vec![0u8; 16 * 1024];
     let started = Instant::now();
@@ -171,7 +212,7 @@ pub fn from_probe(
     let mut malformed_defmt = 0u64;
     let outcome: anyhow::Result<()> = loop {
         if stop.load(Ordering::SeqCst) {
-            bar.println("Ctrl-C: stopping");
+            bar.println("stopped (Ctrl-C)");
             break Ok(());
         }
         if opts
@@ -180,14 +221,14 @@ pub fn from_probe(
         {
             break Ok(());
         }
-        let n = match probe::read_up(&mut session, &mut rtt, FORCE_UP_CHANNEL, &mut buf) {
+        let n = match link.read_force(&mut buf) {
             Ok(n) => n,
             Err(e) => break Err(e),
         };
         rec.push_bytes(&buf[..n]);
         let mut m = 0;
         if let Some(decoder) = defmt.as_mut() {
-            m = match probe::read_up(&mut session, &mut rtt, DEFMT_UP_CHANNEL, &mut buf) {
+            m = match link.read_log(&mut buf) {
                 Ok(m) => m,
                 Err(e) => break Err(e),
             };
@@ -226,17 +267,26 @@ pub fn from_probe(
     };
     bar.finish_and_clear();
     // Whatever stopped the loop, what came so far is written.
-    let mut text = finish(rec, &opts.out)?;
+    let written = finish(rec, &opts.out);
+    let mut text = match (written, outcome) {
+        (Ok(text), Ok(())) => text,
+        (Ok(text), Err(e)) => {
+            eprint!("{text}");
+            return Err(e.context(format!(
+                "the link failed; the samples so far are in {}",
+                opts.out.display()
+            )));
+        }
+        (Err(w), Ok(())) => return Err(w),
+        (Err(w), Err(e)) => return Err(e.context(format!("the link failed, and {w:#}"))),
+    };
     if malformed_defmt > 0 {
         text.push_str(&format!(
             "  defmt: {malformed_defmt} malformed log frames\n"
         ));
     }
-    match outcome {
-        Ok(()) => Ok(text),
-        Err(e) => {
-            eprint!("{text}");
-            Err(e.context("the probe link failed; the samples so far are written"))
-        }
-    }
+    Ok(text)
 }
+
+#[cfg(test)]
+mod tests;

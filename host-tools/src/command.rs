@@ -162,7 +162,7 @@ pub fn wave_command(req: &WaveRequest) -> Result<Command, String> {
     };
     validate(req.segments, program, envelope).map_err(|e| format!("wave `{spec}`: {e}"))?;
     // The firmware's limiter would clip a larger wave out of shape.
-    if !(peak_v <= f64::from(HARD_LIMIT_V)) {
+    if peak_v.is_nan() || peak_v > f64::from(HARD_LIMIT_V) {
         return Err(format!(
             "wave `{spec}`: peak {peak_v} V (amplitude plus offset) exceeds the hard limit of ±{HARD_LIMIT_V} V"
         ));
