@@ -260,3 +260,37 @@ pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> anyhow::Re
         opts.timeout,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn probe_selectors_parse_or_are_refused_by_name() {
+        let s = parse_selector("0483:374b:066DFF").unwrap();
+        assert_eq!((s.vendor_id, s.product_id), (0x0483, 0x374b));
+        assert_eq!(s.serial_number.as_deref(), Some("066DFF"));
+        let e = parse_selector("stlink").unwrap_err().to_string();
+        assert!(
+            e.starts_with("--probe \"stlink\": expected VID:PID[:SERIAL]"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_rtt_block_address_comes_from_the_elf_or_a_clear_refusal() {
+        let e = rtt_address("junk.elf", b"not an elf at all").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("junk.elf: not a readable ELF file"),
+            "{e}"
+        );
+        // This test program is an ELF without RTT.
+        let me = std::env::current_exe().unwrap();
+        let e = rtt_address("host.elf", &std::fs::read(me).unwrap()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "host.elf: no symbol `_SEGGER_RTT` (is the firmware built with RTT?)"
+        );
+    }
+}
