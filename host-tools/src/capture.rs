@@ -95,11 +95,19 @@ pub fn finish(mut rec: Recorder, out: &Path) -> anyhow::Result<String> {
     Ok(format!("wrote {name}\n{report}"))
 }
 
-/// `finrs log --from-bytes FILE`: a raw dump of the up channel through the
-/// same recorder. Returns the report.
+/// `finrs log --from-bytes FILE`: a raw dump of the up channel (`-`: the
+/// standard input, e.g. piped from QEMU) through the same recorder.
+/// Returns the report.
 pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> anyhow::Result<String> {
     opts.check()?;
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let bytes = if path == Path::new("-") {
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::stdin(), &mut bytes)
+            .context("reading the standard input")?;
+        bytes
+    } else {
+        std::fs::read(path).with_context(|| format!("reading {}", path.display()))?
+    };
     let mut rec = Recorder::new(opts.setup.clone());
     rec.push_bytes(&bytes);
     finish(rec, &opts.out)

@@ -195,7 +195,7 @@ struct LogArgs {
     /// The running firmware's ELF: its `_SEGGER_RTT` symbol and defmt table.
     #[arg(long, conflicts_with = "from_bytes")]
     elf: Option<PathBuf>,
-    /// Read a raw byte dump of the up channel instead of a probe.
+    /// Read a raw byte dump of the up channel instead of a probe (`-`: stdin).
     #[arg(long)]
     from_bytes: Option<PathBuf>,
     #[command(flatten)]

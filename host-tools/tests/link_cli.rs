@@ -252,3 +252,36 @@ fn invalid_commands_are_refused_on_the_host_before_any_probe() {
         );
     }
 }
+
+#[test]
+fn log_from_bytes_reads_the_standard_input() {
+    use std::io::Write as _;
+    let dir = temp_dir("stdin");
+    let out = dir.join("log.csv");
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for seq in 0..5u32 {
+        let s = Sample::<3> {
+            seq,
+            t_us: 1000 * seq,
+            force_n: 0.0,
+            voltages_v: [0.0; 3],
+            currents_a: [0.0; 3],
+        };
+        let n = encode_sample(&s, &mut buf).unwrap();
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    let mut child = finrs()
+        .args(["log", "--from-bytes", "-", "--out", out.to_str().unwrap()])
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(&bytes).unwrap();
+    let res = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "{stderr}");
+    assert!(stderr.contains("5 samples; 0 lost in 0 gaps"), "{stderr}");
+    assert_eq!(Recording::read(&out).unwrap().meta.segments, 3);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
