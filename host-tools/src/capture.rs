@@ -114,11 +114,18 @@ pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> anyhow::Result<String> 
 }
 
 /// A flag that Ctrl-C sets (the handler is installed once per process).
+/// A second Ctrl-C exits at once, in case a probe call never returns and
+/// the loop cannot see the flag.
 fn interrupted() -> anyhow::Result<Arc<AtomicBool>> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
-    ctrlc::set_handler(move || f.store(true, Ordering::SeqCst))
-        .context("cannot install the Ctrl-C handler")?;
+    ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            eprintln!("second Ctrl-C: exiting without writing the recording");
+            std::process::exit(130);
+        }
+    })
+    .context("cannot install the Ctrl-C handler")?;
     Ok(flag)
 }
 
