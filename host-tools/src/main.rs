@@ -38,6 +38,180 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Record the firmware's force stream (RTT up channel 1) through a probe,
+    /// or from a raw byte dump with --from-bytes.
+    Log(LogArgs),
+    /// Flash an ELF, reset and run it, print its defmt log and record its
+    /// force stream.
+    Run(RunArgs),
+    /// Send a new wave to the running firmware (RTT down channel 0).
+    Wave(WaveArgs),
+    /// Ask the firmware to measure the load cell's zero again.
+    Tare(SendArgs),
+    /// Bring every output to 0 V through the slew limit.
+    Stop(SendArgs),
+    /// Lower the firmware's voltage limit to V volts (a raise is refused).
+    Limit {
+        /// The new limit on |V|, V (above 0, at most 4).
+        max_abs_v: f64,
+        #[command(flatten)]
+        send: SendArgs,
+    },
+    /// Clear a latched fault (outputs stay at 0 V until the next wave).
+    ClearFault(SendArgs),
+}
+
+#[derive(clap::Args)]
+struct SendArgs {
+    /// The running firmware's ELF, for its `_SEGGER_RTT` (default: scan RAM).
+    #[arg(long)]
+    elf: Option<PathBuf>,
+    #[command(flatten)]
+    probe: ProbeArgs,
+}
+
+#[derive(clap::Args)]
+struct WaveArgs {
+    /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
+    /// pulses:AMP,ON_S,OFF_S or standing:AMP,HZ.
+    wave: String,
+    /// Segments of the fin (the firmware's N).
+    #[arg(long, default_value_t = 3)]
+    segments: usize,
+    /// Constant added to a sine: or standing: wave, V.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    offset_v: f64,
+    /// Time to full amplitude, s.
+    #[arg(long, default_value_t = 1.0)]
+    ramp_in_s: f64,
+    /// Time at full amplitude, s (default: for ever).
+    #[arg(long, default_value_t = f64::INFINITY)]
+    hold_s: f64,
+    /// Time from full amplitude to zero, s.
+    #[arg(long, default_value_t = 0.0)]
+    ramp_out_s: f64,
+    /// Length of one chirp: sweep, s.
+    #[arg(long, default_value_t = 10.0)]
+    sweep_s: f64,
+    #[command(flatten)]
+    send: SendArgs,
+}
+
+#[derive(clap::Args)]
+struct ProbeArgs {
+    /// probe-rs chip name.
+    #[arg(long, default_value = finrs::probe::DEFAULT_CHIP)]
+    chip: String,
+    /// Debug probe as VID:PID[:SERIAL] (hex), when more than one is attached.
+    #[arg(long)]
+    probe: Option<String>,
+    /// Longest wait for the probe search and attach, s.
+    #[arg(long, default_value_t = 5.0)]
+    probe_timeout_s: f64,
+}
+
+impl ProbeArgs {
+    fn options(&self) -> anyhow::Result<finrs::probe::ProbeOptions> {
+        if !(self.probe_timeout_s.is_finite() && self.probe_timeout_s > 0.0) {
+            bail!(
+                "--probe-timeout-s must be a positive number of seconds, got {}",
+                self.probe_timeout_s
+            );
+        }
+        Ok(finrs::probe::ProbeOptions {
+            chip: self.chip.clone(),
+            probe: self.probe.clone(),
+            timeout: std::time::Duration::from_secs_f64(self.probe_timeout_s),
+        })
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MediumArg {
+    Air,
+    Water,
+}
+
+#[derive(clap::Args)]
+struct RecordArgs {
+    /// Where to write the recording (CSV, ipmc-bench/1, fixture "blocked").
+    #[arg(long)]
+    out: PathBuf,
+    /// Stop after this long, s (default: until Ctrl-C; the file is written either way).
+    #[arg(long = "duration-s", visible_alias = "duration")]
+    duration_s: Option<f64>,
+    /// Free length of the strip, m (default: the seed's 50 mm strip).
+    #[arg(long)]
+    length_m: Option<f64>,
+    /// Width of the strip, m.
+    #[arg(long)]
+    width_m: Option<f64>,
+    /// Thickness of the strip, m.
+    #[arg(long)]
+    thickness_m: Option<f64>,
+    /// What surrounds the strip.
+    #[arg(long, value_enum, default_value_t = MediumArg::Air)]
+    medium: MediumArg,
+    /// Sample id, for the metadata.
+    #[arg(long)]
+    sample: Option<String>,
+}
+
+impl RecordArgs {
+    fn options(&self, source: String) -> anyhow::Result<finrs::capture::CaptureOptions> {
+        let g = Geometry::THESIS_2006;
+        let geometry = Geometry {
+            length_m: self.length_m.unwrap_or(g.length_m),
+            width_m: self.width_m.unwrap_or(g.width_m),
+            thickness_m: self.thickness_m.unwrap_or(g.thickness_m),
+        };
+        for (name, v) in [
+            ("--length-m", geometry.length_m),
+            ("--width-m", geometry.width_m),
+            ("--thickness-m", geometry.thickness_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{name} must be a positive length in metres, got {v}");
+            }
+        }
+        Ok(finrs::capture::CaptureOptions {
+            out: self.out.clone(),
+            duration_s: self.duration_s,
+            setup: finrs::stream::Setup {
+                geometry,
+                medium: match self.medium {
+                    MediumArg::Air => finrs::recording::Medium::Air,
+                    MediumArg::Water => finrs::recording::Medium::Water,
+                },
+                sample: self.sample.clone(),
+                source,
+            },
+        })
+    }
+}
+
+#[derive(clap::Args)]
+struct LogArgs {
+    /// The running firmware's ELF: its `_SEGGER_RTT` symbol and defmt table.
+    #[arg(long, conflicts_with = "from_bytes")]
+    elf: Option<PathBuf>,
+    /// Read a raw byte dump of the up channel instead of a probe (`-`: stdin).
+    #[arg(long)]
+    from_bytes: Option<PathBuf>,
+    #[command(flatten)]
+    probe: ProbeArgs,
+    #[command(flatten)]
+    record: RecordArgs,
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    /// The firmware to flash (ELF with `_SEGGER_RTT` and a defmt table).
+    elf: PathBuf,
+    #[command(flatten)]
+    probe: ProbeArgs,
+    #[command(flatten)]
+    record: RecordArgs,
 }
 
 #[derive(clap::Args)]
@@ -127,6 +301,32 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Fit(args) => run_fit(args),
         Command::Diagnose(args) => run_diagnose(args),
         Command::SeedCheck { json } => run_seed_check(json),
+        Command::Log(args) => run_log(args),
+        Command::Run(args) => run_run(args),
+        Command::Wave(args) => {
+            let req = finrs::command::WaveRequest {
+                spec: args.wave.clone(),
+                segments: args.segments,
+                offset_v: args.offset_v,
+                ramp_in_s: args.ramp_in_s,
+                hold_s: args.hold_s,
+                ramp_out_s: args.ramp_out_s,
+                sweep_s: args.sweep_s,
+            };
+            // Refused here, before any probe is looked for.
+            let command = finrs::command::wave_command(&req).map_err(anyhow::Error::msg)?;
+            send(&args.send, &command)
+        }
+        Command::Tare(args) => send(&args, &finrs_frames::Command::Tare),
+        Command::Stop(args) => send(&args, &finrs_frames::Command::Stop),
+        Command::ClearFault(args) => send(&args, &finrs_frames::Command::ClearFault),
+        Command::Limit {
+            max_abs_v,
+            send: args,
+        } => {
+            let command = finrs::command::limit_command(max_abs_v).map_err(anyhow::Error::msg)?;
+            send(&args, &command)
+        }
         Command::Params => {
             print!("{}", ModelFile::thesis_2006().to_toml());
             Ok(())
@@ -312,5 +512,49 @@ fn run_seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
             .with_context(|| path.display().to_string())?;
         eprintln!("wrote {}", path.display());
     }
+    Ok(())
+}
+
+fn run_log(args: LogArgs) -> anyhow::Result<()> {
+    let report = match &args.from_bytes {
+        Some(path) => {
+            let opts = args
+                .record
+                .options(format!("the byte dump {}", path.display()))?;
+            finrs::capture::from_bytes(path, &opts)?
+        }
+        None => {
+            let probe = args.probe.options()?;
+            let opts = args.record.options(format!(
+                "RTT up channel {} on {}",
+                finrs::probe::FORCE_UP_CHANNEL,
+                probe.chip
+            ))?;
+            let firmware = finrs::capture::Firmware::Running(args.elf.clone());
+            finrs::capture::from_probe(&probe, &firmware, &opts)?
+        }
+    };
+    eprint!("{report}");
+    Ok(())
+}
+
+fn run_run(args: RunArgs) -> anyhow::Result<()> {
+    let probe = args.probe.options()?;
+    let opts = args.record.options(format!(
+        "RTT up channel {} on {} running {}",
+        finrs::probe::FORCE_UP_CHANNEL,
+        probe.chip,
+        args.elf.display()
+    ))?;
+    let firmware = finrs::capture::Firmware::Flash(args.elf.clone());
+    eprint!("{}", finrs::capture::from_probe(&probe, &firmware, &opts)?);
+    Ok(())
+}
+
+fn send(args: &SendArgs, command: &finrs_frames::Command) -> anyhow::Result<()> {
+    let probe = args.probe.options()?;
+    let bytes = finrs::command::encode(command);
+    finrs::probe::send(&probe, args.elf.as_deref(), &bytes)?;
+    eprintln!("sent {command:?}");
     Ok(())
 }

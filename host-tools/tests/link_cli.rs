@@ -1,0 +1,287 @@
+//! The firmware-link commands as users run them: without a probe (there is
+//! no USB here) they fail fast and say so; `log --from-bytes` records a
+//! byte dump.
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use finrs::recording::{Channel, Fixture, Recording};
+use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, MAX_FRAME_LEN};
+
+fn finrs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_finrs"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("finrs-link-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs the command, which must fail within `limit` and say no probe was found.
+fn fails_fast_without_probe(args: &[&str], limit: Duration) {
+    let started = Instant::now();
+    let mut child = finrs()
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Poll so that a hang fails the test instead of blocking it.
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > limit {
+            child.kill().unwrap();
+            panic!("finrs {args:?} still running after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!status.success(), "finrs {args:?} succeeded: {stderr}");
+    assert!(
+        stderr.contains("no debug probe found"),
+        "finrs {args:?} said: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn log_without_a_probe_fails_fast() {
+    let dir = temp_dir("log");
+    let out = dir.join("never.csv");
+    fails_fast_without_probe(
+        &["log", "--duration-s", "1", "--out", out.to_str().unwrap()],
+        Duration::from_secs(10),
+    );
+    assert!(!out.exists(), "no recording without a probe");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn run_without_a_probe_fails_fast() {
+    let dir = temp_dir("run");
+    let out = dir.join("never.csv");
+    // Any readable file passes the first check; the probe is looked for
+    // before the ELF is parsed.
+    let elf = env!("CARGO_BIN_EXE_finrs");
+    fails_fast_without_probe(
+        &["run", elf, "--out", out.to_str().unwrap()],
+        Duration::from_secs(10),
+    );
+    fails_fast_without_probe(
+        &[
+            "run",
+            elf,
+            "--probe",
+            "0483:374b",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        Duration::from_secs(10),
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_bad_probe_selector_is_refused_by_name() {
+    let out = finrs()
+        .args(["log", "--probe", "not-a-probe", "--out", "x.csv"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("--probe \"not-a-probe\": expected VID:PID[:SERIAL]"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn log_from_bytes_records_a_dump_and_reports_its_gaps() {
+    let dir = temp_dir("bytes");
+    let dump = dir.join("up1.bin");
+    let out = dir.join("rec").join("log.csv");
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for seq in 0..20u32 {
+        if seq == 10 {
+            let n = encode_dropped(
+                &Dropped {
+                    first_seq: 10,
+                    count: 2,
+                },
+                &mut buf,
+            )
+            .unwrap();
+            bytes.extend_from_slice(&buf[..n]);
+        }
+        if (10..12).contains(&seq) || seq == 15 {
+            continue;
+        }
+        let s = Sample::<2> {
+            seq,
+            t_us: 500 * seq,
+            force_n: 0.002 * seq as f32,
+            voltages_v: [1.5, -1.5],
+            currents_a: [0.01, -0.01],
+        };
+        let n = encode_sample(&s, &mut buf).unwrap();
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    bytes.extend_from_slice(b"\xF1\x5E\x01"); // a frame cut short at the end
+    std::fs::write(&dump, &bytes).unwrap();
+
+    let res = finrs()
+        .args([
+            "log",
+            "--from-bytes",
+            dump.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--sample",
+            "dump-1",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("17 samples; 3 lost in 2 gaps; 0 faults; 3 corrupt bytes; 0 refused"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("gap: seq 10..=11 (2 samples) dropped by the firmware (reported)"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("gap: seq 15..=15 (1 samples) lost on the way (detected)"),
+        "{stderr}"
+    );
+
+    let rec = Recording::read(&out).unwrap();
+    assert_eq!(rec.meta.segments, 2);
+    assert_eq!(rec.meta.fixture, Fixture::Blocked);
+    assert_eq!(rec.meta.sample.as_deref(), Some("dump-1"));
+    assert_eq!(rec.t_s.len(), 17);
+    assert!(!rec.t_s.contains(&0.0075), "no row for the lost seq 15");
+    assert_eq!(
+        rec.channel(Channel::Force).unwrap()[16],
+        Some(f64::from(0.002f32 * 19.0))
+    );
+    let notes = rec.meta.notes.unwrap();
+    assert!(notes.contains("10+2 reported, 15+1 detected"), "{notes}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn log_from_bytes_without_samples_writes_nothing_and_says_why() {
+    let dir = temp_dir("empty");
+    let dump = dir.join("empty.bin");
+    std::fs::write(&dump, b"hello from semihosting\n").unwrap();
+    let out = dir.join("log.csv");
+    let res = finrs()
+        .args([
+            "log",
+            "--from-bytes",
+            dump.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(!res.status.success());
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(stderr.contains("no valid Sample frame"), "{stderr}");
+    assert!(stderr.contains("23 corrupt bytes"), "{stderr}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn commands_without_a_probe_fail_fast() {
+    for args in [
+        &["tare"][..],
+        &["stop"],
+        &["clear-fault"],
+        &["limit", "2.5"],
+        &["wave", "sine:2,1,120", "--segments", "4"],
+        &[
+            "wave",
+            "step:1,-1",
+            "--segments",
+            "2",
+            "--probe",
+            "0483:374b",
+        ],
+    ] {
+        fails_fast_without_probe(args, Duration::from_secs(10));
+    }
+}
+
+#[test]
+fn invalid_commands_are_refused_on_the_host_before_any_probe() {
+    for (args, says) in [
+        (
+            &["wave", "sine:2,300,0"][..],
+            "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz",
+        ),
+        (
+            &["wave", "sine:3,1,0", "--offset-v", "1.5"],
+            "peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V",
+        ),
+        (
+            &["wave", "chirp:2,1,5", "--sweep-s", "0"],
+            "Chirp.duration_s must be above 0",
+        ),
+        (
+            &["limit", "5"],
+            "limit 5 V: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
+        ),
+    ] {
+        let out = finrs().args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(stderr.contains(says), "{args:?} said: {stderr}");
+        assert!(
+            !stderr.contains("probe"),
+            "{args:?} looked for a probe: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn log_from_bytes_reads_the_standard_input() {
+    use std::io::Write as _;
+    let dir = temp_dir("stdin");
+    let out = dir.join("log.csv");
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for seq in 0..5u32 {
+        let s = Sample::<3> {
+            seq,
+            t_us: 1000 * seq,
+            force_n: 0.0,
+            voltages_v: [0.0; 3],
+            currents_a: [0.0; 3],
+        };
+        let n = encode_sample(&s, &mut buf).unwrap();
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    let mut child = finrs()
+        .args(["log", "--from-bytes", "-", "--out", out.to_str().unwrap()])
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(&bytes).unwrap();
+    let res = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "{stderr}");
+    assert!(stderr.contains("5 samples; 0 lost in 0 gaps"), "{stderr}");
+    assert_eq!(Recording::read(&out).unwrap().meta.segments, 3);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
