@@ -31,6 +31,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use finrs_frames::{Decoder, Event, FaultCode};
@@ -54,6 +55,11 @@ fn workspace() -> PathBuf {
 /// `.cargo/config.toml` (linker, DEFMT_LOG) applies as for a user, into its
 /// own target directory (this `cargo test` holds the workspace's lock).
 fn build_elf() -> PathBuf {
+    static ELF: OnceLock<PathBuf> = OnceLock::new();
+    ELF.get_or_init(build_elf_once).clone()
+}
+
+fn build_elf_once() -> PathBuf {
     let ws = workspace();
     // Shared with qemu_vs_x86.rs (same target, most dependencies in common).
     let target_dir = ws.join("target/qemu");
@@ -78,12 +84,13 @@ fn build_elf() -> PathBuf {
     target_dir.join(TARGET).join("release/finrs-firmware")
 }
 
-/// Runs the firmware in a fresh directory; returns the frames file's bytes.
-fn run_qemu(elf: &Path) -> Vec<u8> {
-    let dir = std::env::temp_dir().join(format!("finrs-sil-{}", std::process::id()));
+/// Runs the firmware in a fresh directory with `-icount shift`; returns
+/// the frames file's bytes.
+fn run_qemu(elf: &Path, shift: u32) -> Vec<u8> {
+    let dir = std::env::temp_dir().join(format!("finrs-sil-{}-{shift}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let icount = format!("shift={ICOUNT_SHIFT},align=off,sleep=off");
+    let icount = format!("shift={shift},align=off,sleep=off");
     let start = Instant::now();
     let mut child = Command::new("qemu-system-arm")
         .current_dir(&dir)
@@ -130,7 +137,7 @@ fn run_qemu(elf: &Path) -> Vec<u8> {
 #[test]
 fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     let elf = build_elf();
-    let bytes = run_qemu(&elf);
+    let bytes = run_qemu(&elf, ICOUNT_SHIFT);
 
     let mut decoder = Decoder::new();
     let mut events = Vec::new();
@@ -263,4 +270,54 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
         samples.len(),
         (sum_sq / compared as f64).sqrt()
     );
+}
+
+/// The same firmware on a core made too slow for its work: at 2^9 ns per
+/// instruction (1953 instructions per 1 ms period) the sample task overruns
+/// within its first periods. (Measured: it keeps its deadline up to
+/// shift 7, 7812 instructions a period, and misses it from shift 8, 3906:
+/// a period's work, plant included, is between the two.) The overrun must
+/// be reported as a MissedDeadline fault, first, with every output at zero
+/// from then on, and no Sample lost before it.
+#[test]
+fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
+    let elf = build_elf();
+    let bytes = run_qemu(&elf, 9);
+    let mut decoder = Decoder::new();
+    let mut events = Vec::new();
+    decoder.push(&bytes, &mut |e| events.push(e));
+    decoder.finish(&mut |e| events.push(e));
+    let stats = decoder.stats();
+    assert_eq!(
+        (stats.corrupt_bytes, stats.gaps_unreported),
+        (0, 0),
+        "{stats:?}"
+    );
+    let first_fault = events
+        .iter()
+        .find_map(|e| match e {
+            Event::Fault(f) => Some(*f),
+            _ => None,
+        })
+        .expect("a Fault frame");
+    assert_eq!(first_fault.code, FaultCode::MissedDeadline);
+    assert_eq!(first_fault.segment, None);
+    let samples: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Sample(s) => Some(*s),
+            _ => None,
+        })
+        .collect();
+    assert!(samples.len() > 10, "samples after the fault keep flowing");
+    for s in &samples {
+        if s.seq >= first_fault.seq {
+            assert!(
+                s.voltages().iter().all(|&v| v == 0.0),
+                "sample {} after the missed deadline commands {:?}",
+                s.seq,
+                s.voltages()
+            );
+        }
+    }
 }
