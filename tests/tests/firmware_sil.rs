@@ -16,6 +16,9 @@
 //!   two `f32` plants do the same operations in the same order and were
 //!   measured bit-identical on x86 and the M4F (`qemu_vs_x86.rs`); 1e-6 of
 //!   the force's range covers a legitimate difference in instruction choice.
+//! - Currents: before the fault, each logged segment current is the host
+//!   plant's current under the voltage applied since the previous tick,
+//!   within half a count of the shunt's scale (the ADC's rounding).
 //! - Fault: the overcurrent injected on segment `INJECT_SEGMENT` from tick
 //!   `INJECT_TICK` on is reported in exactly one Fault frame naming it, no
 //!   fault comes before it, and every Sample from then on commands 0 V on
@@ -239,7 +242,24 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     let (mut worst_n, mut peak_n, mut sum_sq) = (0.0f32, 0.0f32, 0.0f64);
     let tare = usize::from(config::controller_config().unwrap().tare_samples);
     let mut compared = 0usize;
+    // The shunts read the plant's currents under the voltage still applied
+    // (the previous tick's), rounded to a count.
+    let current_bound_a = 0.5 * config::AMPS_PER_COUNT;
+    let mut applied = [0.0f32; 3];
+    let mut worst_a = 0.0f32;
     for s in &samples {
+        if (s.seq as usize) < fault_at {
+            let currents = plant.currents_a(&x, &applied);
+            for (i, (&got, want)) in s.currents().iter().zip(currents).enumerate() {
+                let err = (got - want).abs();
+                worst_a = worst_a.max(err);
+                assert!(
+                    err <= current_bound_a * (1.0 + 1e-4),
+                    "sample {}: segment {i} current {got} A, host plant {want} A",
+                    s.seq
+                );
+            }
+        }
         let expected = plant.blocking_force_n(&x);
         if s.seq as usize >= tare {
             let err = (s.force_n - expected).abs();
@@ -256,9 +276,11 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
         }
         let v: [f32; 3] = s.voltages().try_into().unwrap();
         plant.step(&mut x, &v);
+        applied = v;
         if s.seq as usize + 1 == fault_at {
             // The faulting tick stepped the plant at 0 V and logged no Sample.
             plant.step(&mut x, &[0.0; 3]);
+            applied = [0.0; 3];
         }
     }
     assert!(
@@ -266,7 +288,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
         "the force ({peak_n} N) is large beside the tolerance ({bound_n} N)"
     );
     eprintln!(
-        "{} samples, {compared} forces compared: worst {worst_n:e} N, rms {:e} N, bound {bound_n:e} N, peak force {peak_n:e} N, peak voltage {peak_v} V",
+        "{} samples, {compared} forces compared: worst {worst_n:e} N, rms {:e} N, bound {bound_n:e} N, peak force {peak_n:e} N, peak voltage {peak_v} V; currents: worst {worst_a:e} A, bound {current_bound_a:e} A",
         samples.len(),
         (sum_sq / compared as f64).sqrt()
     );
