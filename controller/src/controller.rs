@@ -191,6 +191,17 @@ impl<const N: usize> Controller<N> {
     }
 
     /// Applies a host command; a refused command changes nothing.
+    ///
+    /// - SetWave: refused while a fault is latched, or with the field and
+    ///   rule [`Generator::new`] names; else the program starts at its time
+    ///   0 on the next tick, the slew limit carrying the outputs over.
+    /// - Tare: (re)starts a tare of `tare_samples` readings.
+    /// - Stop: outputs slew to 0 V and stay there until a SetWave.
+    /// - SetLimit: lowers the voltage limit (a raise or an invalid value is
+    ///   refused with the [`LimitError`]).
+    /// - ClearFault: clears the latch once its Fault frame has been sent
+    ///   (refused before); outputs stay at 0 V until a SetWave. Without a
+    ///   latched fault it does nothing.
     pub fn command(&mut self, command: Command) -> Result<(), CommandRefused> {
         match command {
             Command::SetWave { program, envelope } => {

@@ -527,3 +527,39 @@ fn tare_keeps_the_old_offset_until_done() {
     let s = samples(&ch.take_events());
     assert!((s[0].force_n + 0.5e-3).abs() < 1e-6);
 }
+
+#[test]
+fn commands_from_the_down_channel_bytes() {
+    use finrs_frames::{encode_command, CommandDecoder, CommandEvent, MAX_COMMAND_LEN};
+    let (mut c, mut ch, t0) = tared();
+    let mut stream = Vec::new();
+    for cmd in [
+        steps(0.7),
+        Command::SetLimit { max_abs_v: 0.4 },
+        Command::SetLimit { max_abs_v: 9.0 }, // refused by the controller
+    ] {
+        let mut buf = [0u8; MAX_COMMAND_LEN];
+        let n = encode_command(&cmd, &mut buf).unwrap();
+        stream.extend_from_slice(&buf[..n]);
+    }
+    stream.extend_from_slice(&[0xF1, 0x5E, 0x01, 0x00]); // not a command
+    let mut results = Vec::new();
+    let mut refused_frames = 0;
+    CommandDecoder::new().push(&stream, &mut |e| match e {
+        CommandEvent::Command(cmd) => results.push(c.command(cmd)),
+        CommandEvent::Refused(_) => refused_frames += 1,
+    });
+    assert_eq!(
+        results,
+        [
+            Ok(()),
+            Ok(()),
+            Err(CommandRefused::Limit(LimitError::MaxAbsAboveHardLimit))
+        ]
+    );
+    assert_eq!(refused_frames, 1);
+    for t in t0..t0 + 10 {
+        c.tick(&input(t, 1000, IDLE), &mut ch);
+    }
+    assert_eq!(c.outputs_v(), [0.4; N]);
+}

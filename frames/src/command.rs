@@ -251,7 +251,10 @@ fn program_to_fields(p: &Program) -> (u8, [f32; 8], usize) {
 /// by [`finish`](Self::finish)): the events do not depend on how the
 /// stream was split. A frame cut short is refused once the bytes that
 /// follow it fill its claimed length, so a command sent after a truncated
-/// one may wait for up to [`MAX_COMMAND_LEN`] more bytes (or a `finish`).
+/// one may wait for up to [`MAX_COMMAND_LEN`] more bytes (or a `finish`):
+/// a host that may have cut a command short (killed mid-write, say) can
+/// send [`MAX_COMMAND_LEN`] zero bytes first, which flush it (and are
+/// reported as [`CommandError::NoSync`]).
 #[derive(Clone, Debug)]
 pub struct CommandDecoder {
     buf: [u8; MAX_COMMAND_LEN],

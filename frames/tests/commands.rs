@@ -560,3 +560,21 @@ proptest! {
         prop_assert_eq!(got, intact);
     }
 }
+
+#[test]
+fn zero_bytes_flush_a_cut_command() {
+    let mut d = CommandDecoder::new();
+    let mut events = Vec::new();
+    d.push(&frame(&travelling())[..10], &mut |e| events.push(e));
+    d.push(&frame(&Command::Stop), &mut |e| events.push(e));
+    assert!(
+        events.is_empty(),
+        "Stop waits inside the cut frame's length"
+    );
+    d.push(&[0; MAX_COMMAND_LEN], &mut |e| events.push(e));
+    assert_eq!(
+        events[0],
+        CommandEvent::Refused(CommandError::BadCrc { kind: 0x81 })
+    );
+    assert!(events.contains(&CommandEvent::Command(Command::Stop)));
+}
