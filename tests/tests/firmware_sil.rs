@@ -5,8 +5,10 @@
 //!
 //! - Lossless: every Sample arrives, numbered 0, 1, 2, … with no gap, no
 //!   Dropped report and no corrupt byte; it covers at least 10 s.
-//! - Limits: every commanded voltage is within the configured limit, and
-//!   successive voltages within the slew limit.
+//! - Commands: the down channel (a host file in QEMU) carries garbage, a
+//!   limit raise to 5 V (refused) and a limit of 1.5 V (taken): every
+//!   commanded voltage is within 1.5 V, the 2 V default program is clipped
+//!   at exactly 1.5 V, and successive voltages are within the slew limit.
 //! - Force: the logged force matches a host simulation of the same plant
 //!   (`model_core::Strip<f32>`, seed parameters, blocked, 1 ms) driven by the
 //!   logged voltages. Tolerance, in load-cell counts times the scale: the
@@ -37,7 +39,9 @@ use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use finrs_frames::{Decoder, Event, FaultCode};
+use finrs_frames::{
+    encode_command, Command as FinCommand, Decoder, Event, FaultCode, MAX_COMMAND_LEN,
+};
 use model_core::{Fixture, Params, Strip};
 
 #[allow(dead_code)]
@@ -87,12 +91,16 @@ fn build_elf_once() -> PathBuf {
     target_dir.join(TARGET).join("release/finrs-firmware")
 }
 
-/// Runs the firmware in a fresh directory with `-icount shift`; returns
-/// the frames file's bytes.
-fn run_qemu(elf: &Path, shift: u32) -> Vec<u8> {
+/// Runs the firmware in a fresh directory with `-icount shift` and the
+/// given command bytes on its down channel; returns the frames file's
+/// bytes.
+fn run_qemu(elf: &Path, shift: u32, commands: &[u8]) -> Vec<u8> {
     let dir = std::env::temp_dir().join(format!("finrs-sil-{}-{shift}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
+    if !commands.is_empty() {
+        std::fs::write(dir.join("finrs-commands.bin"), commands).unwrap();
+    }
     let icount = format!("shift={shift},align=off,sleep=off");
     let start = Instant::now();
     let mut child = Command::new("qemu-system-arm")
@@ -137,10 +145,30 @@ fn run_qemu(elf: &Path, shift: u32) -> Vec<u8> {
     bytes
 }
 
+/// The limit the down channel sets, V.
+const COMMANDED_LIMIT_V: f32 = 1.5;
+
+/// The down channel's bytes: garbage, a raise of the limit (refused: it
+/// must change nothing), then a lower limit (taken).
+fn commands() -> Vec<u8> {
+    let mut bytes = vec![0x00, 0x13, 0x37, 0x5E, 0xF1];
+    for c in [
+        FinCommand::SetLimit { max_abs_v: 5.0 },
+        FinCommand::SetLimit {
+            max_abs_v: COMMANDED_LIMIT_V,
+        },
+    ] {
+        let mut buf = [0u8; MAX_COMMAND_LEN];
+        let n = encode_command(&c, &mut buf).unwrap();
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    bytes
+}
+
 #[test]
 fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     let elf = build_elf();
-    let bytes = run_qemu(&elf, ICOUNT_SHIFT);
+    let bytes = run_qemu(&elf, ICOUNT_SHIFT, &commands());
 
     let mut decoder = Decoder::new();
     let mut events = Vec::new();
@@ -216,7 +244,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     let mut peak_v = 0.0f32;
     for s in &samples[..fault_at] {
         for (i, &v) in s.voltages().iter().enumerate() {
-            assert!(v.abs() <= config::MAX_ABS_V, "sample {}: {v} V", s.seq);
+            assert!(v.abs() <= COMMANDED_LIMIT_V, "sample {}: {v} V", s.seq);
             assert!(
                 (v - last[i]).abs() <= config::SLEW_V_PER_S * dt_s * (1.0 + 1e-5) + 1e-6,
                 "sample {}: segment {i} slews from {} to {v} V",
@@ -304,7 +332,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
 #[test]
 fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
     let elf = build_elf();
-    let bytes = run_qemu(&elf, 9);
+    let bytes = run_qemu(&elf, 9, &[]);
     let mut decoder = Decoder::new();
     let mut events = Vec::new();
     decoder.push(&bytes, &mut |e| events.push(e));

@@ -16,6 +16,8 @@
 //!   so the two streams never mix. Frames are queued by the sample task and
 //!   written in batches every [`FLUSH_MS`] ms by the low-priority
 //!   housekeeping task, so a semihosting call never sits in the 1 ms path.
+//! - Commands, if the host file [`COMMANDS_FILE`] exists, are read from it
+//!   as from the board's RTT down channel.
 //! - After [`sim::RUN_S`] simulated seconds the run flushes and exits
 //!   through semihosting; a panic or HardFault exits with a failure code
 //!   (panic-probe's `udf` would hang QEMU).
@@ -39,6 +41,9 @@ use crate::{sim, Mono, SYSCLK_HZ};
 
 /// The host file the frames go to, relative to QEMU's working directory.
 pub const FRAMES_FILE: &str = "finrs-frames.bin\0";
+
+/// The host file commands are read from, if it exists.
+pub const COMMANDS_FILE: &str = "finrs-commands.bin\0";
 
 /// Interval between flushes of the frame queue, ms.
 pub const FLUSH_MS: u32 = 20;
@@ -92,13 +97,31 @@ impl FrameSink for FrameOut {
     }
 }
 
-/// No down channel in QEMU: the run is driven by the default program.
-pub struct CommandIn;
+/// The down channel's stand-in: the host file [`COMMANDS_FILE`] in QEMU's
+/// working directory, read through semihosting as it goes (no file, no
+/// commands).
+pub struct CommandIn {
+    fd: Option<usize>,
+}
 
 impl CommandIn {
-    /// Reads pending command bytes into `buf`; always none here.
-    pub fn read(&mut self, _buf: &mut [u8]) -> usize {
-        0
+    /// Reads the next command bytes into `buf` (0 at the end of the file).
+    pub fn read(&mut self, buf: &mut [u8]) -> usize {
+        let Some(fd) = self.fd else {
+            return 0;
+        };
+        // SAFETY: READ writes at most `buf.len()` bytes into the slice we
+        // borrow mutably.
+        #[allow(unsafe_code)]
+        let not_read = unsafe { syscall!(READ, fd, buf.as_mut_ptr(), buf.len()) };
+        match buf.len().checked_sub(not_read) {
+            Some(n) => n,
+            None => {
+                defmt::error!("reading the commands file failed; no more commands");
+                self.fd = None;
+                0
+            }
+        }
     }
 }
 
@@ -126,7 +149,7 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
         defmt::panic!("board init ran twice");
     };
     let (producer, consumer) = queue.split();
-    let fd = match open_host_file(FRAMES_FILE) {
+    let fd = match open_host_file(FRAMES_FILE, nr::open::W_TRUNC_BINARY) {
         Some(fd) => fd,
         None => defmt::panic!("cannot open the frames file through semihosting"),
     };
@@ -140,7 +163,9 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
             noise: sim::NOISE_SEED,
         },
         frames: FrameOut { queue: producer },
-        commands: CommandIn,
+        commands: CommandIn {
+            fd: open_host_file(COMMANDS_FILE, nr::open::R_BINARY),
+        },
         housekeeping: Housekeeping {
             queue: consumer,
             fd,
@@ -279,20 +304,13 @@ impl Housekeeping {
     }
 }
 
-/// Opens (creates, truncates) a host file for binary writing.
-fn open_host_file(name_nul: &str) -> Option<usize> {
+/// Opens a host file in semihosting `mode` (`nr::open::*`).
+fn open_host_file(name_nul: &str, mode: usize) -> Option<usize> {
     let name = name_nul.as_bytes();
     // SAFETY: the semihosting OPEN call reads `name.len() - 1` bytes of a
     // NUL-terminated name we own; no Rust API opens a host file.
     #[allow(unsafe_code)]
-    let fd = unsafe {
-        syscall!(
-            OPEN,
-            name.as_ptr(),
-            nr::open::W_TRUNC_BINARY,
-            name.len() - 1
-        )
-    };
+    let fd = unsafe { syscall!(OPEN, name.as_ptr(), mode, name.len() - 1) };
     (fd as isize >= 0).then_some(fd)
 }
 
