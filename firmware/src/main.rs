@@ -46,7 +46,7 @@ mod app {
     use crate::board::{self, CommandIn, FrameOut, Housekeeping, Io};
     use crate::config::{self, N};
     use finrs_controller::{Controller, FaultCode};
-    use finrs_frames::{CommandDecoder, CommandEvent};
+    use finrs_frames::{Command, CommandDecoder, CommandEvent};
 
     #[shared]
     struct Shared {
@@ -142,14 +142,15 @@ mod app {
             let n = cx.local.commands.read(&mut buf);
             let controller = &mut cx.shared.controller;
             cx.local.decoder.push(&buf[..n], &mut |event| match event {
-                CommandEvent::Command(command) => match controller.lock(|c| c.command(command)) {
-                    Ok(()) => defmt::info!("command accepted: {}", defmt::Debug2Format(&command)),
-                    Err(e) => defmt::error!(
-                        "command refused: {}: {}",
-                        defmt::Debug2Format(&command),
-                        defmt::Debug2Format(&e)
-                    ),
-                },
+                CommandEvent::Command(command) => {
+                    let name = command_name(&command);
+                    match controller.lock(|c| c.command(command)) {
+                        Ok(()) => defmt::info!("command accepted: {}", name),
+                        Err(e) => {
+                            defmt::error!("{} refused: {}", name, defmt::Display2Format(&e))
+                        }
+                    }
+                }
                 CommandEvent::Refused(e) => {
                     defmt::error!("command refused: {}", defmt::Display2Format(&e))
                 }
@@ -168,6 +169,18 @@ mod app {
     #[task(priority = 1, local = [housekeeping])]
     async fn housekeeping(cx: housekeeping::Context) {
         board::housekeeping(cx.local.housekeeping).await
+    }
+
+    /// The command's name for the log (its values would pull in core's
+    /// float formatting, several KiB of flash).
+    fn command_name(command: &Command) -> &'static str {
+        match command {
+            Command::SetWave { .. } => "SetWave",
+            Command::Tare => "Tare",
+            Command::Stop => "Stop",
+            Command::SetLimit { .. } => "SetLimit",
+            Command::ClearFault => "ClearFault",
+        }
     }
 
     fn fault_name(code: FaultCode) -> &'static str {
