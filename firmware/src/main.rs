@@ -146,9 +146,8 @@ mod app {
                     let name = command_name(&command);
                     match controller.lock(|c| c.command(command)) {
                         Ok(()) => defmt::info!("command accepted: {}", name),
-                        Err(e) => {
-                            defmt::error!("{} refused: {}", name, defmt::Display2Format(&e))
-                        }
+                        // The message names the command, the field and the rule.
+                        Err(e) => defmt::error!("{}", defmt::Display2Format(&e)),
                     }
                 }
                 CommandEvent::Refused(e) => {

@@ -26,6 +26,10 @@
 //!   fault comes before it, and every Sample from then on commands 0 V on
 //!   every segment.
 //!
+//! - Log: the defmt log (semihosting stdout, decoded with defmt-decoder)
+//!   names each refused command with its reason, the accepted one, and the
+//!   latched fault.
+//!
 //! QEMU runs with `-icount shift=ICOUNT_SHIFT,sleep=off`: the guest's clock
 //! follows its instruction count, so the run is deterministic and does not
 //! depend on the host's load, and idle time is skipped (12 simulated
@@ -94,7 +98,7 @@ fn build_elf_once() -> PathBuf {
 /// Runs the firmware in a fresh directory with `-icount shift` and the
 /// given command bytes on its down channel; returns the frames file's
 /// bytes.
-fn run_qemu(elf: &Path, shift: u32, commands: &[u8]) -> Vec<u8> {
+fn run_qemu(elf: &Path, shift: u32, commands: &[u8]) -> (Vec<u8>, Vec<u8>) {
     let dir = std::env::temp_dir().join(format!("finrs-sil-{}-{shift}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -115,10 +119,17 @@ fn run_qemu(elf: &Path, shift: u32, commands: &[u8]) -> Vec<u8> {
         .args(["-semihosting-config", "enable=on,target=native"])
         .args(["-icount", &icount, "-kernel"])
         .arg(elf)
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("qemu-system-arm is installed (run scripts/setup)");
+    // defmt's bytes on stdout: read them as they come so the pipe never
+    // fills.
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut stdout, &mut bytes).map(|_| bytes)
+    });
     loop {
         if let Some(status) = child.try_wait().unwrap() {
             let out = child.wait_with_output().unwrap();
@@ -142,7 +153,27 @@ fn run_qemu(elf: &Path, shift: u32, commands: &[u8]) -> Vec<u8> {
     );
     let bytes = std::fs::read(dir.join("finrs-frames.bin")).expect("the firmware wrote frames");
     let _ = std::fs::remove_dir_all(&dir);
-    bytes
+    (bytes, reader.join().unwrap().unwrap())
+}
+
+/// The defmt log's messages, `LEVEL message` per line.
+fn defmt_lines(elf: &Path, bytes: &[u8]) -> Vec<String> {
+    let elf_bytes = std::fs::read(elf).unwrap();
+    let table = defmt_decoder::Table::parse(&elf_bytes)
+        .unwrap()
+        .expect("the firmware has a defmt table");
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut lines = Vec::new();
+    while let Ok(frame) = decoder.decode() {
+        let level = frame.level().map(|l| l.as_str()).unwrap_or("PRINT");
+        lines.push(format!(
+            "{} {}",
+            level.to_uppercase(),
+            frame.display_message()
+        ));
+    }
+    lines
 }
 
 /// The limit the down channel sets, V.
@@ -168,7 +199,21 @@ fn commands() -> Vec<u8> {
 #[test]
 fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     let elf = build_elf();
-    let bytes = run_qemu(&elf, ICOUNT_SHIFT, &commands());
+    let (bytes, log) = run_qemu(&elf, ICOUNT_SHIFT, &commands());
+    let log = defmt_lines(&elf, &log);
+    eprintln!("defmt log:\n{}", log.join("\n"));
+    // Each refusal logged as an error with its reason, the good command
+    // taken, the fault latched and logged, in this order.
+    let expected = [
+        "INFO fin driver up: 3 segments at 1000 Hz, limit 4.0 V",
+        "ERROR command refused: 5 bytes without a sync pair skipped",
+        "ERROR SetLimit refused: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
+        "INFO command accepted: SetLimit",
+        "ERROR fault latched at tick 10500: overcurrent (segment Some(1))",
+        "INFO run over after 12 s",
+    ];
+    let got: Vec<&str> = log.iter().map(String::as_str).collect();
+    assert_eq!(got, expected, "the defmt log");
 
     let mut decoder = Decoder::new();
     let mut events = Vec::new();
@@ -332,7 +377,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
 #[test]
 fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
     let elf = build_elf();
-    let bytes = run_qemu(&elf, 9, &[]);
+    let (bytes, _) = run_qemu(&elf, 9, &[]);
     let mut decoder = Decoder::new();
     let mut events = Vec::new();
     decoder.push(&bytes, &mut |e| events.push(e));
