@@ -33,6 +33,9 @@ use rtic_monotonics::systick::prelude::*;
 // trigger timer and uses the monotonic only for the command poll.
 systick_monotonic!(Mono, 1_000);
 
+// Log lines carry the monotonic's time, ms since start.
+defmt::timestamp!("{=u64:ms}", u64::from(Mono::now().as_ticks()));
+
 /// Core clock, Hz: the board's PLL setting, and the fixed rate at which
 /// QEMU's SysTick counts whatever RCC says.
 pub const SYSCLK_HZ: u32 = 168_000_000;
