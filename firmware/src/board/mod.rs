@@ -1,0 +1,35 @@
+//! The one interface between the app and a board. Each board module
+//! provides the same items:
+//!
+//! - `init(core, device) -> Parts`: clocks, pins, peripherals, the SysTick
+//!   monotonic and the log channel;
+//! - `Io`: `read(tick) -> Option<TickInput<N>>` (the sample period's ADC
+//!   counts; `None` when the run is over), `write_v(&[f32; N])` through the
+//!   `SegmentOutput`s, `off()`, `feed_watchdog()`, `deadline_missed()`;
+//! - `FrameOut`: the controller's non-blocking `FrameSink`;
+//! - `CommandIn`: `read(&mut [u8]) -> usize`, never blocking;
+//! - `pace()` and `housekeeping(&mut Housekeeping)`: the board's async
+//!   chores (pacing the sample interrupt where no hardware does, flushing);
+//! - outputs at zero on panic and HardFault.
+
+#[cfg(feature = "qemu")]
+mod qemu;
+#[cfg(feature = "qemu")]
+pub use qemu::*;
+
+#[cfg(not(feature = "qemu"))]
+mod stm32f407;
+#[cfg(not(feature = "qemu"))]
+pub use stm32f407::*;
+
+/// What `init` hands to the app.
+pub struct Parts {
+    /// Sampling and outputs.
+    pub io: Io,
+    /// The binary frame channel.
+    pub frames: FrameOut,
+    /// The command channel.
+    pub commands: CommandIn,
+    /// State of the low-priority chores.
+    pub housekeeping: Housekeeping,
+}

@@ -1,0 +1,354 @@
+//! The simulated board: QEMU's netduinoplus2 (STM32F405, the same Cortex-M4F
+//! and memory map as the STM32F407) with the model core as plant.
+//!
+//! - The segment outputs feed `model_core::Strip` (the seed's parameters,
+//!   blocked fixture, stepped once per sample with the voltages the
+//!   controller commanded); the load-cell ADC reads the plant's blocking
+//!   force in counts ([`NEWTONS_PER_COUNT`], zero at
+//!   [`sim::LOAD_CELL_ZERO_COUNTS`]) plus deterministic xorshift noise of at
+//!   most [`sim::LOAD_CELL_NOISE_COUNTS`]; the shunts read the plant's
+//!   segment currents.
+//! - QEMU emulates neither the clock tree nor reliable TIM timing, but its
+//!   SysTick counts at 168 MHz: [`pace`] pends the ADC interrupt (the sample
+//!   task) every millisecond from the SysTick monotonic.
+//! - There is no RTT: frames go to the host file [`FRAMES_FILE`] (in QEMU's
+//!   working directory) through semihosting, defmt to semihosting stdout,
+//!   so the two streams never mix. Frames are queued by the sample task and
+//!   written in batches every [`FLUSH_MS`] ms by the low-priority
+//!   housekeeping task, so a semihosting call never sits in the 1 ms path.
+//! - Commands, if the host file [`COMMANDS_FILE`] exists, are read from it
+//!   as from the board's RTT down channel.
+//! - After [`sim::RUN_S`] simulated seconds the run flushes and exits
+//!   through semihosting; a panic or HardFault exits with a failure code
+//!   (panic-probe's `udf` would hang QEMU).
+
+use core::sync::atomic::{AtomicBool, Ordering};
+
+use cortex_m::peripheral::NVIC;
+use cortex_m_semihosting::{debug, nr, syscall};
+use defmt_semihosting as _;
+use finrs_controller::{FrameSink, SegmentOutput, TickInput};
+use heapless::spsc::{Consumer, Producer, Queue};
+use model_core::{state_len, Fixture, Params, Strip};
+use rtic_monotonics::systick::prelude::*;
+use stm32f4xx_hal::pac::{self, Interrupt};
+
+use super::Parts;
+use crate::config::{
+    AMPS_PER_COUNT, CURRENT_ZERO_COUNTS, N, NEWTONS_PER_COUNT, OVERCURRENT_A, SAMPLE_HZ,
+};
+use crate::{sim, Mono, SYSCLK_HZ};
+
+/// The host file the frames go to, relative to QEMU's working directory.
+pub const FRAMES_FILE: &str = "finrs-frames.bin\0";
+
+/// The host file commands are read from, if it exists.
+pub const COMMANDS_FILE: &str = "finrs-commands.bin\0";
+
+/// Interval between flushes of the frame queue, ms.
+pub const FLUSH_MS: u32 = 20;
+
+/// Frame queue, bytes: 42-byte frames (N = 3) at 1 kHz fill 840 bytes per
+/// flush interval; 4096 leaves a margin of almost five intervals.
+const QUEUE_LEN: usize = 4096;
+
+const S: usize = state_len(N, 1);
+const RUN_TICKS: u64 = sim::RUN_S as u64 * SAMPLE_HZ as u64;
+
+/// Set when the run's time is up; the housekeeping task then exits.
+static DONE: AtomicBool = AtomicBool::new(false);
+
+/// A segment output that holds the voltage the plant sees.
+#[derive(Clone, Copy, Default)]
+struct PlantSegment {
+    v: f32,
+}
+
+impl SegmentOutput for PlantSegment {
+    fn set_v(&mut self, v: f32) {
+        self.v = v;
+    }
+    fn off(&mut self) {
+        self.v = 0.0;
+    }
+}
+
+/// The simulated ADC inputs and segment outputs.
+pub struct Io {
+    plant: Strip<f32, N, 1, S>,
+    x: [f32; S],
+    segments: [PlantSegment; N],
+    currents_a: [f32; N],
+    noise: u32,
+}
+
+/// Frames into the queue that housekeeping flushes.
+pub struct FrameOut {
+    queue: Producer<'static, u8>,
+}
+
+impl FrameSink for FrameOut {
+    fn try_write(&mut self, frame: &[u8]) -> bool {
+        // All or nothing: only start if the whole frame fits.
+        if self.queue.capacity() - self.queue.len() < frame.len() {
+            return false;
+        }
+        frame.iter().all(|&b| self.queue.enqueue(b).is_ok())
+    }
+}
+
+/// The down channel's stand-in: the host file [`COMMANDS_FILE`] in QEMU's
+/// working directory, read through semihosting as it goes (no file, no
+/// commands).
+pub struct CommandIn {
+    fd: Option<usize>,
+}
+
+impl CommandIn {
+    /// Reads the next command bytes into `buf` (0 at the end of the file).
+    pub fn read(&mut self, buf: &mut [u8]) -> usize {
+        let Some(fd) = self.fd else {
+            return 0;
+        };
+        // SAFETY: READ writes at most `buf.len()` bytes into the slice we
+        // borrow mutably.
+        #[allow(unsafe_code)]
+        let not_read = unsafe { syscall!(READ, fd, buf.as_mut_ptr(), buf.len()) };
+        match buf.len().checked_sub(not_read) {
+            Some(n) => n,
+            None => {
+                defmt::error!("reading the commands file failed; no more commands");
+                self.fd = None;
+                0
+            }
+        }
+    }
+}
+
+/// The flushing side of the frame queue and the semihosting file.
+pub struct Housekeeping {
+    queue: Consumer<'static, u8>,
+    fd: usize,
+    batch: [u8; 1024],
+}
+
+/// Sets up the simulated board.
+pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
+    // No clock setup: QEMU does not emulate RCC (waiting for the PLL would
+    // hang); SysTick runs at 168 MHz regardless.
+    Mono::start(core.SYST, SYSCLK_HZ);
+    let plant = match Strip::new(
+        &Params::thesis_2006(),
+        Fixture::Blocked,
+        1.0 / f64::from(SAMPLE_HZ),
+    ) {
+        Ok(p) => p,
+        Err(_) => defmt::panic!("the seed's parameters do not make a plant"),
+    };
+    let Some(queue) = cortex_m::singleton!(: Queue<u8, QUEUE_LEN> = Queue::new()) else {
+        defmt::panic!("board init ran twice");
+    };
+    let (producer, consumer) = queue.split();
+    let fd = match open_host_file(FRAMES_FILE, nr::open::W_TRUNC_BINARY) {
+        Some(fd) => fd,
+        None => defmt::panic!("cannot open the frames file through semihosting"),
+    };
+    let x = plant.rest();
+    Parts {
+        io: Io {
+            plant,
+            x,
+            segments: [PlantSegment::default(); N],
+            currents_a: [0.0; N],
+            noise: sim::NOISE_SEED,
+        },
+        frames: FrameOut { queue: producer },
+        commands: CommandIn {
+            fd: open_host_file(COMMANDS_FILE, nr::open::R_BINARY),
+        },
+        housekeeping: Housekeeping {
+            queue: consumer,
+            fd,
+            batch: [0; 1024],
+        },
+    }
+}
+
+impl Io {
+    /// The ADC counts of sample `tick`, `None` once the run is over.
+    pub fn read(&mut self, tick: u64) -> Option<TickInput<N>> {
+        if tick >= RUN_TICKS {
+            DONE.store(true, Ordering::Release);
+            return None;
+        }
+        let noise = self.next_noise();
+        let force_counts = self.plant.blocking_force_n(&self.x) / NEWTONS_PER_COUNT;
+        let load_cell_counts =
+            to_counts(f32::from(sim::LOAD_CELL_ZERO_COUNTS) + force_counts + noise as f32);
+        let mut current_counts = [0u16; N];
+        for (c, i) in current_counts.iter_mut().zip(self.currents_a) {
+            *c = to_counts(f32::from(CURRENT_ZERO_COUNTS) + i / AMPS_PER_COUNT);
+        }
+        if cfg!(feature = "inject-overcurrent") && tick >= sim::INJECT_TICK {
+            // 1.1 × the threshold: an overcurrent, below ADC saturation.
+            current_counts[sim::INJECT_SEGMENT] =
+                to_counts(f32::from(CURRENT_ZERO_COUNTS) + 1.1 * OVERCURRENT_A / AMPS_PER_COUNT);
+        }
+        Some(TickInput {
+            tick,
+            t_us: (tick * 1_000_000 / u64::from(SAMPLE_HZ)) as u32,
+            load_cell_counts,
+            current_counts,
+        })
+    }
+
+    /// Applies the commanded voltages and steps the plant one sample.
+    pub fn write_v(&mut self, v: &[f32; N]) {
+        for (s, &v) in self.segments.iter_mut().zip(v) {
+            s.set_v(v);
+        }
+        let applied = self.segments.map(|s| s.v);
+        self.plant.step(&mut self.x, &applied);
+        // What the shunts read at the next sample: the new state under the
+        // voltage still applied.
+        self.currents_a = self.plant.currents_a(&self.x, &applied);
+    }
+
+    /// Every output to zero (the plant sees 0 V from its next step).
+    pub fn off(&mut self) {
+        for s in &mut self.segments {
+            s.off();
+        }
+    }
+
+    /// QEMU does not emulate the IWDG: nothing to feed.
+    pub fn feed_watchdog(&mut self) {}
+
+    /// Whether the pacer pended the next sample before this one finished.
+    pub fn deadline_missed(&mut self) -> bool {
+        NVIC::is_pending(Interrupt::ADC)
+    }
+
+    /// Uniform integer noise in ±`LOAD_CELL_NOISE_COUNTS` (xorshift32).
+    fn next_noise(&mut self) -> i32 {
+        let mut x = self.noise;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.noise = x;
+        let span = (2 * sim::LOAD_CELL_NOISE_COUNTS + 1) as u32;
+        (x % span) as i32 - sim::LOAD_CELL_NOISE_COUNTS
+    }
+}
+
+/// Rounds to the 12-bit ADC's range.
+fn to_counts(c: f32) -> u16 {
+    let r = c + 0.5;
+    if r <= 0.0 {
+        0
+    } else if r >= 4095.0 {
+        4095
+    } else {
+        r as u16
+    }
+}
+
+/// Pends the sample interrupt every millisecond of SysTick time.
+pub async fn pace() -> ! {
+    let mut next = Mono::now();
+    loop {
+        next += 1.millis();
+        Mono::delay_until(next).await;
+        NVIC::pend(Interrupt::ADC);
+    }
+}
+
+/// Flushes the frame queue to the host file in batches; at the end of the
+/// run, flushes the rest and exits QEMU with success.
+pub async fn housekeeping(h: &mut Housekeeping) -> ! {
+    loop {
+        Mono::delay(FLUSH_MS.millis()).await;
+        let done = DONE.load(Ordering::Acquire);
+        let ok = h.flush();
+        if !ok {
+            defmt::error!("writing frames to the host failed");
+            exit(false);
+        }
+        if done {
+            defmt::info!("run over after {} s", sim::RUN_S);
+            exit(true);
+        }
+    }
+}
+
+impl Housekeeping {
+    fn flush(&mut self) -> bool {
+        loop {
+            let mut n = 0;
+            while n < self.batch.len() {
+                match self.queue.dequeue() {
+                    Some(b) => {
+                        self.batch[n] = b;
+                        n += 1;
+                    }
+                    None => break,
+                }
+            }
+            if n == 0 {
+                return true;
+            }
+            if !write_host(self.fd, &self.batch[..n]) {
+                return false;
+            }
+        }
+    }
+}
+
+/// Opens a host file in semihosting `mode` (`nr::open::*`).
+fn open_host_file(name_nul: &str, mode: usize) -> Option<usize> {
+    let name = name_nul.as_bytes();
+    // SAFETY: the semihosting OPEN call reads `name.len() - 1` bytes of a
+    // NUL-terminated name we own; no Rust API opens a host file.
+    #[allow(unsafe_code)]
+    let fd = unsafe { syscall!(OPEN, name.as_ptr(), mode, name.len() - 1) };
+    (fd as isize >= 0).then_some(fd)
+}
+
+/// Writes all of `bytes` to a host file.
+fn write_host(fd: usize, mut bytes: &[u8]) -> bool {
+    while !bytes.is_empty() {
+        // SAFETY: WRITE reads `bytes.len()` bytes from a slice we borrow.
+        #[allow(unsafe_code)]
+        let left = unsafe { syscall!(WRITE, fd, bytes.as_ptr(), bytes.len()) };
+        // It returns the count not written: no progress is an error.
+        if left >= bytes.len() {
+            return false;
+        }
+        bytes = &bytes[bytes.len() - left..];
+    }
+    true
+}
+
+fn exit(ok: bool) -> ! {
+    debug::exit(if ok {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// A fault ends QEMU with a failure code instead of hanging it.
+#[cortex_m_rt::exception]
+#[allow(unsafe_code)] // cortex-m-rt requires the HardFault handler to be `unsafe fn`
+unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    exit(false)
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    defmt::error!("panic: {}", defmt::Display2Format(info));
+    exit(false)
+}

@@ -1,0 +1,196 @@
+//! The fin driver firmware: RTIC 2 glue between the board and
+//! `finrs_controller`, which holds all the logic (fault checks, waves through
+//! the one limiter, tare and scale, frames, commands).
+//!
+//! One app, two boards, chosen by cargo feature (see `board`):
+//! - `board` (default): the STM32F407 fin driver. ADC1 is triggered by a
+//!   timer at the sample rate; its end-of-conversion interrupt runs
+//!   [`app::sample`]. Frames leave on RTT up channel 1, defmt on channel 0,
+//!   commands arrive on down channel 0. `cd firmware && cargo run --release`
+//!   flashes it through probe-rs.
+//! - `qemu` (`--no-default-features --features qemu`): QEMU's netduinoplus2
+//!   with the model core as plant; SysTick paces the sample interrupt, frames
+//!   go to a host file through semihosting, defmt to semihosting stdout.
+#![no_std]
+#![no_main]
+#![deny(unsafe_code, missing_docs)]
+
+#[cfg(all(feature = "board", feature = "qemu"))]
+compile_error!(
+    "one board at a time: build the QEMU board with `--no-default-features --features qemu`"
+);
+#[cfg(not(any(feature = "board", feature = "qemu")))]
+compile_error!("no board chosen: use the default feature `board` or `--features qemu`");
+
+mod board;
+mod config;
+#[cfg(feature = "qemu")]
+mod sim;
+
+use rtic_monotonics::systick::prelude::*;
+
+// 1 kHz: the QEMU pacer's period is one tick; the board paces from its ADC
+// trigger timer and uses the monotonic only for the command poll.
+systick_monotonic!(Mono, 1_000);
+
+// Log lines carry the monotonic's time, ms since start.
+defmt::timestamp!("{=u64:ms}", u64::from(Mono::now().as_ticks()));
+
+/// Core clock, Hz: the board's PLL setting, and the fixed rate at which
+/// QEMU's SysTick counts whatever RCC says.
+pub const SYSCLK_HZ: u32 = 168_000_000;
+
+/// Interval between polls of the command channel, ms.
+const COMMAND_POLL_MS: u32 = 10;
+
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI1, EXTI2])]
+mod app {
+    use super::*;
+    use crate::board::{self, CommandIn, FrameOut, Housekeeping, Io};
+    use crate::config::{self, N};
+    use finrs_controller::{Controller, FaultCode};
+    use finrs_frames::{Command, CommandDecoder, CommandEvent};
+
+    #[shared]
+    struct Shared {
+        controller: Controller<N>,
+    }
+
+    #[local]
+    struct Local {
+        io: Io,
+        frames: FrameOut,
+        commands: CommandIn,
+        housekeeping: Housekeeping,
+    }
+
+    #[init]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let parts = board::init(cx.core, cx.device);
+        let controller = match config::controller_config()
+            .map_err(|_| "limits")
+            .and_then(|c| Controller::<N>::new(c).map_err(|_| "controller"))
+        {
+            Ok(c) => c,
+            // The configuration is compiled in: this is a build error that
+            // only a run can show. The panic handler zeroes the outputs.
+            Err(what) => defmt::panic!("invalid compiled-in configuration: {}", what),
+        };
+        defmt::info!(
+            "fin driver up: {} segments at {} Hz, limit {} V",
+            N,
+            config::SAMPLE_HZ,
+            config::MAX_ABS_V
+        );
+        if commands::spawn().is_err() || pace::spawn().is_err() || housekeeping::spawn().is_err() {
+            defmt::panic!("a task was spawned twice");
+        }
+        (
+            Shared { controller },
+            Local {
+                io: parts.io,
+                frames: parts.frames,
+                commands: parts.commands,
+                housekeeping: parts.housekeeping,
+            },
+        )
+    }
+
+    /// One sample period: read the load cell and shunts, run the
+    /// controller's tick, write the outputs, feed the watchdog. Bound to the
+    /// ADC interrupt on both boards (QEMU's pacer pends it).
+    #[task(binds = ADC, priority = 3, shared = [controller], local = [io, frames, tick: u64 = 0, latched: bool = false])]
+    fn sample(mut cx: sample::Context) {
+        let io = cx.local.io;
+        let frames = cx.local.frames;
+        let Some(input) = io.read(*cx.local.tick) else {
+            return;
+        };
+        let out = cx.shared.controller.lock(|c| c.tick(&input, frames));
+        io.write_v(&out.voltages_v);
+        io.feed_watchdog();
+        *cx.local.tick += 1;
+        // The next period's conversion already finished: this one overran.
+        if io.deadline_missed() {
+            cx.shared
+                .controller
+                .lock(|c| c.fault(FaultCode::MissedDeadline, None, frames));
+        }
+        let fault = cx.shared.controller.lock(|c| c.fault_state());
+        if let Some((code, segment)) = fault {
+            // The controller commands zero from now on; turn the outputs
+            // off at once rather than at the next tick.
+            io.off();
+            if !*cx.local.latched {
+                *cx.local.latched = true;
+                defmt::error!(
+                    "fault latched at tick {}: {} (segment {})",
+                    input.tick,
+                    fault_name(code),
+                    segment
+                );
+            }
+        } else {
+            *cx.local.latched = false;
+        }
+    }
+
+    /// Reads the command channel, decodes, and hands commands to the
+    /// controller; refusals (framing or value) are logged and change
+    /// nothing.
+    #[task(priority = 1, shared = [controller], local = [commands, decoder: CommandDecoder = CommandDecoder::new()])]
+    async fn commands(mut cx: commands::Context) {
+        let mut buf = [0u8; 64];
+        loop {
+            let n = cx.local.commands.read(&mut buf);
+            let controller = &mut cx.shared.controller;
+            cx.local.decoder.push(&buf[..n], &mut |event| match event {
+                CommandEvent::Command(command) => {
+                    let name = command_name(&command);
+                    match controller.lock(|c| c.command(command)) {
+                        Ok(()) => defmt::info!("command accepted: {}", name),
+                        // The message names the command, the field and the rule.
+                        Err(e) => defmt::error!("{}", defmt::Display2Format(&e)),
+                    }
+                }
+                CommandEvent::Refused(e) => {
+                    defmt::error!("command refused: {}", defmt::Display2Format(&e))
+                }
+            });
+            Mono::delay(COMMAND_POLL_MS.millis()).await;
+        }
+    }
+
+    /// Paces the sample task where no hardware does (QEMU).
+    #[task(priority = 4)]
+    async fn pace(_: pace::Context) {
+        board::pace().await
+    }
+
+    /// Board chores at low priority (QEMU: flush frames, end the run).
+    #[task(priority = 1, local = [housekeeping])]
+    async fn housekeeping(cx: housekeeping::Context) {
+        board::housekeeping(cx.local.housekeeping).await
+    }
+
+    /// The command's name for the log (its values would pull in core's
+    /// float formatting, several KiB of flash).
+    fn command_name(command: &Command) -> &'static str {
+        match command {
+            Command::SetWave { .. } => "SetWave",
+            Command::Tare => "Tare",
+            Command::Stop => "Stop",
+            Command::SetLimit { .. } => "SetLimit",
+            Command::ClearFault => "ClearFault",
+        }
+    }
+
+    fn fault_name(code: FaultCode) -> &'static str {
+        match code {
+            FaultCode::Overcurrent => "overcurrent",
+            FaultCode::AdcSaturation => "ADC saturation",
+            FaultCode::MissedDeadline => "missed deadline",
+            FaultCode::Other => "other",
+        }
+    }
+}
