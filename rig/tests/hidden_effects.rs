@@ -78,6 +78,22 @@ fn nothing_hidden_is_none() {
         "{:?}",
         v.analyses.immovable
     );
+    // The baseline's tip residual follows the drive (far beyond the white
+    // band); the arc kinematics take most of that dependence away.
+    let tip = v
+        .residual_tests
+        .iter()
+        .filter(|t| t.channel == "tip_y_m")
+        .max_by(|a, b| {
+            a.baseline_input_correlation
+                .total_cmp(&b.baseline_input_correlation)
+        })
+        .expect("a held-out tip channel");
+    assert!(
+        tip.baseline_input_correlation > 2.0 * tip.input_band
+            && tip.final_input_correlation < 0.5 * tip.baseline_input_correlation,
+        "{tip:?}"
+    );
 }
 
 #[test]

@@ -45,6 +45,8 @@ pub const DELTA_BIC: f64 = -10.0;
 pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
 /// Effects accepted at most (rounds of the forward search).
 pub const MAX_CAUSES: usize = 3;
+/// Lags of the residual–input correlation, as MATLAB's `resid` default.
+pub const INPUT_LAGS: usize = 25;
 /// Share of the opening rests (DAQ channels) that may fail the whiteness
 /// test before the rest itself is called structured: white noise fails
 /// one in a hundred.
@@ -97,6 +99,14 @@ pub struct ResidualTest {
     pub final_ljung_box: f64,
     /// 99 % threshold of `χ²(20)`.
     pub threshold: f64,
+    /// Largest normalised cross-correlation of the baseline's residual
+    /// with the input over lags 0..=25 (input leading), as MATLAB's
+    /// `resid`: above the band, the residual still depends on the drive.
+    pub baseline_input_correlation: f64,
+    /// The same for the final model.
+    pub final_input_correlation: f64,
+    /// 99 % band of that correlation for a white residual, `2.58/√n`.
+    pub input_band: f64,
 }
 
 /// The diagnosis, as written to `VERDICT.json`.
@@ -312,6 +322,19 @@ pub fn diagnose(
             baseline_ljung_box: whiteness::ljung_box(&b.residuals, 20),
             final_ljung_box: whiteness::ljung_box(&f.residuals, 20),
             threshold: whiteness::chi2_99(20),
+            baseline_input_correlation: whiteness::input_correlation(
+                &b.residuals,
+                &b.input_v,
+                INPUT_LAGS,
+            )
+            .0,
+            final_input_correlation: whiteness::input_correlation(
+                &f.residuals,
+                &f.input_v,
+                INPUT_LAGS,
+            )
+            .0,
+            input_band: whiteness::input_correlation(&f.residuals, &f.input_v, INPUT_LAGS).1,
         })
         .collect();
     let verdict = Verdict {

@@ -167,8 +167,8 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
         );
     }
     let _ = writeln!(s, "\n## Held-out channels\n");
-    let _ = writeln!(s, "| recording | channel | baseline fit % | final fit % | Ljung–Box Q baseline | final | 99 % threshold |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "| recording | channel | baseline fit % | final fit % | Ljung–Box Q baseline | final | 99 % threshold | input correlation baseline | final | 99 % band |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
     let (b, f) = &d.holdout_scores;
     let tested: Vec<_> = super::tested_channels(b, f)
         .zip(&v.residual_tests)
@@ -176,14 +176,17 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
     for &((cb, cf), t) in &tested {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1} |",
+            "| {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} |",
             cb.recording,
             cb.channel.name(),
             cb.fit_percent,
             cf.fit_percent,
             t.baseline_ljung_box,
             t.final_ljung_box,
-            t.threshold
+            t.threshold,
+            t.baseline_input_correlation,
+            t.final_input_correlation,
+            t.input_band
         );
     }
     let _ = writeln!(s, "\n## Plots\n");

@@ -159,7 +159,8 @@ impl<'a> Fitter<'a> {
         for &i in recordings {
             let res = self.residuals_of(i, spec)?;
             for (t, r) in self.targets.recordings[i].targets.iter().zip(res) {
-                channels.push(ChannelFit::new(&self.session.recordings[i].name, t, &r));
+                let rec = &self.session.recordings[i];
+                channels.push(ChannelFit::new(&rec.name, t, &r, &rec.rec.v_v));
             }
         }
         Ok(Score::new(channels))

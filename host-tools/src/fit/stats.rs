@@ -58,11 +58,16 @@ pub struct ChannelFit {
     /// Least-squares scale from model to data, `Σ y ŷ / Σ ŷ²` (1: the
     /// amplitude is right; NaN when the model is zero).
     pub gain: f64,
+    /// The input at the residuals' rows, V: the channel's own segment
+    /// voltage for a current, the mean over segments for the beam's
+    /// channels (for the residual-input correlation test).
+    pub input_v: Vec<f64>,
 }
 
 impl ChannelFit {
-    /// From a target and its weighted residuals `r = (ŷ − y)/σ`.
-    pub fn new(recording: &str, t: &Target, r: &[f64]) -> ChannelFit {
+    /// From a target, its weighted residuals `r = (ŷ − y)/σ` and the
+    /// recording's voltages per row and segment.
+    pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &[Vec<f64>]) -> ChannelFit {
         let model = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
         let e = nrmse(&t.values, model.clone());
         // ŷ is rebuilt from y and the residual, so "zero" is up to rounding.
@@ -93,6 +98,17 @@ impl ChannelFit {
             residuals: r.to_vec(),
             model_is_zero,
             gain,
+            input_v: t
+                .rows
+                .iter()
+                .map(|&row| {
+                    let v = &v_v[row];
+                    match t.channel {
+                        Channel::Current(k) => v[k],
+                        _ => v.iter().sum::<f64>() / v.len().max(1) as f64,
+                    }
+                })
+                .collect(),
         }
     }
 }
