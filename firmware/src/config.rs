@@ -4,8 +4,22 @@
 use finrs_controller::Config;
 use finrs_drive::{LimitError, Limits};
 
-/// Segments driven (3 by default; the board's pin map has room for 8).
-pub const N: usize = 3;
+// `N` (1..=8) and `DAC_SEGMENTS`, from the build-time variables
+// `FINRS_SEGMENTS` and `FINRS_DAC_SEGMENTS` (see `build.rs`).
+include!(concat!(env!("OUT_DIR"), "/segments.rs"));
+
+/// DAC segments: the bipolar amplifier's output volts per DAC volt (3.0 V
+/// reference, mid-scale = 0 V: ±4.2 V at the rails, above the 4 V limit).
+#[allow(dead_code)] // the QEMU board drives the plant, not DACs
+pub const DAC_GAIN: f32 = 2.8;
+
+/// DAC reference (VDDA/VREF+ of the board), V.
+#[allow(dead_code)] // the QEMU board drives the plant, not DACs
+pub const DAC_VREF_V: f32 = 3.0;
+
+/// DAC code of 0 V at the segment (the amplifier's mid-scale).
+#[allow(dead_code)] // the QEMU board drives the plant, not DACs
+pub const DAC_ZERO_CODE: u16 = 2048;
 
 /// Sample rate of the load cell and of the control tick, Hz.
 pub const SAMPLE_HZ: u32 = 1_000;
