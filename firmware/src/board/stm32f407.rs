@@ -2,30 +2,43 @@
 //! STM32F4-Discovery used for bring-up). `BOARD.md` describes the same
 //! pin map in words; [`pins`] is the one place in code.
 //!
-//! - Segments: H-bridges (sign-magnitude, one PWM input per bridge leg,
-//!   [`PWM_HZ`]) from TIM1 and TIM8; the bridge driver (e.g. a DRV8871-class
+//! - Segments: `N` of them (1..=8, `config::N`, set at build time by
+//!   `FINRS_SEGMENTS`). Each is an H-bridge (sign-magnitude, one PWM input
+//!   per bridge leg, [`PWM_HZ`]) from TIM1, TIM8, TIM2 or TIM4 through
+//!   `finrs_controller::HBridge`; the bridge driver (e.g. a DRV8871-class
 //!   IN1/IN2 driver) inserts its own dead time, so plain PWM outputs with no
-//!   complementary channels are enough. Each goes through
-//!   `finrs_controller::HBridge`.
+//!   complementary channels are enough. Up to two segments
+//!   (`config::DAC_SEGMENTS`, `FINRS_DAC_SEGMENTS`) use DAC1 (PA4) and DAC2
+//!   (PA5) into a bipolar amplifier through `finrs_controller::DacOutput`
+//!   instead; their bridge pins and timer channels stay unused. Only the
+//!   timers and pins the configuration needs are set up.
 //! - Sampling: TIM5's update event (TRGO) at the sample rate starts ADC1's
-//!   injected group: load cell, then the shunts of segments 0..=2, one
-//!   conversion each, into JDR1..JDR4. The end of the group (JEOC) raises
-//!   the ADC interrupt, which runs the sample task. A group that ends again
-//!   before the task has finished is a missed deadline.
+//!   injected group (load cell, then the shunts of segments 0..=2), ADC2's
+//!   (shunts 3..=6) and ADC3's (shunt 7), each ADC only if used. ADC1 has
+//!   the most conversions of the three, so its end of group (JEOC) comes
+//!   last; it alone raises the ADC interrupt, which runs the sample task
+//!   and reads all results. A group that ends again before the task has
+//!   finished is a missed deadline.
 //! - RTT: up channel 0 carries defmt, up channel 1 the binary frames
 //!   ([`FRAME_RTT_BYTES`]), down channel 0 the commands; all never block.
 //! - IWDG: [`WATCHDOG_MS`], fed by the sample task; frozen while a debugger
 //!   halts the core.
-//! - Panic and HardFault: every PWM output is forced low and its compare
-//!   register zeroed by register writes (no driver can be trusted then)
+//! - Panic and HardFault: every used timer's PWM outputs are forced low and
+//!   its compare registers zeroed, and every used DAC set to its 0 V code,
+//!   by register writes (no driver can be trusted then)
 //!   before the message is logged; then `udf` stops the core for probe-rs
 //!   as panic-probe would (which we therefore do not link: its handler
 //!   would log before it could zero anything), and the watchdog resets it.
 
-use embedded_hal::pwm::SetDutyCycle;
-use finrs_controller::{FrameSink, HBridge, SegmentOutput, TickInput};
+// The ADC and timer counts are constants that vary with the build's
+// segment count: a comparison always true in one build is not in another.
+#![allow(clippy::absurd_extreme_comparisons)]
+
+use embedded_hal::pwm::{ErrorType, SetDutyCycle};
+use finrs_controller::{DacOutput, DacWrite, FrameSink, HBridge, SegmentOutput, TickInput};
 use rtt_target::{rtt_init, ChannelMode, DownChannel, UpChannel};
 use stm32f4xx_hal::{
+    dac::{DacOut, DacPin, C1, C2},
     pac,
     prelude::*,
     rcc::{Config as RccConfig, Enable, Reset},
@@ -34,75 +47,182 @@ use stm32f4xx_hal::{
 };
 
 use super::Parts;
-use crate::config::{BRIDGE_SUPPLY_V, N, SAMPLE_HZ};
+use crate::config::{
+    BRIDGE_SUPPLY_V, DAC_GAIN, DAC_SEGMENTS, DAC_VREF_V, DAC_ZERO_CODE, N, SAMPLE_HZ,
+};
 use crate::{Mono, SYSCLK_HZ};
 
 /// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
-/// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits).
+/// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
+/// TIM2/TIM4 at 84 MHz 3360 (11.7 bits).
 pub const PWM_HZ: u32 = 25_000;
 
 /// Watchdog period, ms: 20 sample periods, far beyond any normal jitter,
 /// short enough that a hung firmware stops driving within a blink.
 pub const WATCHDOG_MS: u32 = 20;
 
-/// Frame up channel, bytes. A 3-segment Sample is 42 bytes, 42 kB/s at
-/// 1 kHz. probe-rs polls RTT every few ms but a busy host or USB can stall
-/// it for 100 ms: 4.2 kB; twice that for margin.
-pub const FRAME_RTT_BYTES: usize = 8192;
+/// Frame up channel, bytes. A Sample is 18 + 8 N bytes: 42 at N = 3 (42
+/// kB/s at 1 kHz), 82 at N = 8. probe-rs polls RTT every few ms but a busy
+/// host or USB can stall it for 100 ms: 4.2 kB at N = 3, 8.2 kB at N = 8;
+/// about twice that for margin.
+pub const FRAME_RTT_BYTES: usize = if N <= 3 { 8192 } else { 16384 };
 
-/// Where every signal is: the one place in code (`BOARD.md` has the same
-/// table, with segments 3..=7 and the DAC segments this build does not
-/// wire).
+/// Polls of ADC2/ADC3's end-of-group flag after ADC1's before their results
+/// count as late (they have no more conversions than ADC1 and the same
+/// trigger, so they are normally done already).
+const SECONDARY_ADC_POLLS: u32 = 200;
+
+/// The ADC channels of the pin map (`BOARD.md` has the whole table; the
+/// bridge and DAC pins are taken in `init`, segment by segment). Which of
+/// them a build uses follows `config::N` and `config::DAC_SEGMENTS`.
 pub mod pins {
-    use stm32f4xx_hal::gpio::{gpioa, gpioc, gpioe, Analog, PA1, PA2, PA3, PC1};
-    use stm32f4xx_hal::gpio::{PC6, PC7, PE11, PE13, PE14, PE9};
-
-    /// ADC1 channel of the load cell (PA1).
+    /// ADC channel of the load cell (PA1, ADC1).
     pub const LOAD_CELL_CHANNEL: u8 = 1;
-    /// ADC1 channels of the shunts of segments 0..=2 (PA2, PA3, PC1).
-    pub const SHUNT_CHANNELS: [u8; 3] = [2, 3, 11];
+    /// ADC channels of the shunts of segments 0..=7: PA2, PA3, PC1 (ADC1),
+    /// PC2, PC4, PC5, PB0 (ADC2), PB1 (ADC3).
+    pub const SHUNT_CHANNELS: [u8; 8] = [2, 3, 11, 12, 14, 15, 8, 9];
+}
 
-    /// The pins this build uses.
-    pub struct Pins {
-        /// Segment 0, bridge legs A/B: TIM1_CH1, TIM1_CH2.
-        pub seg0: (PE9, PE11),
-        /// Segment 1: TIM1_CH3, TIM1_CH4.
-        pub seg1: (PE13, PE14),
-        /// Segment 2: TIM8_CH1, TIM8_CH2.
-        pub seg2: (PC6, PC7),
-        /// Load cell, instrumentation amplifier output.
-        pub load_cell: PA1<Analog>,
-        /// Shunt amplifiers of segments 0..=2.
-        pub shunts: (PA2<Analog>, PA3<Analog>, PC1<Analog>),
+/// Whether segment `i` is wired in this build and driven by DAC1 (0) or
+/// DAC2 (1).
+const fn dac_of(i: usize) -> Option<usize> {
+    match DAC_SEGMENTS {
+        [Some(d), _] if d == i => Some(0),
+        [_, Some(d)] if d == i => Some(1),
+        _ => None,
     }
+}
 
-    /// Takes the pins from the GPIO ports.
-    pub fn take(a: gpioa::Parts, c: gpioc::Parts, e: gpioe::Parts) -> Pins {
-        Pins {
-            seg0: (e.pe9, e.pe11),
-            seg1: (e.pe13, e.pe14),
-            seg2: (c.pc6, c.pc7),
-            load_cell: a.pa1.into_analog(),
-            shunts: (
-                a.pa2.into_analog(),
-                a.pa3.into_analog(),
-                c.pc1.into_analog(),
-            ),
+/// Whether segment `i` is wired in this build as an H-bridge.
+const fn is_bridge(i: usize) -> bool {
+    i < N && dac_of(i).is_none()
+}
+
+/// Which timers this build drives (two segments each).
+const USES_TIM1: bool = is_bridge(0) || is_bridge(1);
+const USES_TIM8: bool = is_bridge(2) || is_bridge(3);
+const USES_TIM2: bool = is_bridge(4) || is_bridge(5);
+const USES_TIM4: bool = is_bridge(6) || is_bridge(7);
+/// Which DAC channels this build drives.
+const USES_DAC1: bool = DAC_SEGMENTS[0].is_some();
+const USES_DAC2: bool = DAC_SEGMENTS[1].is_some();
+
+/// Shunts per ADC: ADC1 takes segments 0..=2, ADC2 3..=6, ADC3 7.
+const ADC1_SHUNTS: usize = if N < 3 { N } else { 3 };
+const ADC2_SHUNTS: usize = if N <= 3 {
+    0
+} else if N < 7 {
+    N - 3
+} else {
+    4
+};
+const ADC3_SHUNTS: usize = N.saturating_sub(7);
+
+const _: () = {
+    assert!(N >= 1 && N <= 8, "the board's pin map has 1..=8 segments");
+    assert!(ADC1_SHUNTS + ADC2_SHUNTS + ADC3_SHUNTS == N);
+    // ADC1's group (with the load cell) is never shorter than the others:
+    // its end is the end of all.
+    assert!(ADC2_SHUNTS <= ADC1_SHUNTS + 1 && ADC3_SHUNTS <= ADC1_SHUNTS + 1);
+    assert!(USES_DAC1 || !USES_DAC2, "DAC2 is used only with DAC1");
+};
+
+/// One bridge leg: a PWM channel of one of the four timers.
+pub enum Leg {
+    /// TIM1 (segments 0, 1).
+    T1(ErasedChannel<pac::TIM1>),
+    /// TIM8 (segments 2, 3).
+    T8(ErasedChannel<pac::TIM8>),
+    /// TIM2 (segments 4, 5).
+    T2(ErasedChannel<pac::TIM2>),
+    /// TIM4 (segments 6, 7).
+    T4(ErasedChannel<pac::TIM4>),
+}
+
+impl Leg {
+    fn enable(&mut self) {
+        match self {
+            Leg::T1(c) => c.enable(),
+            Leg::T8(c) => c.enable(),
+            Leg::T2(c) => c.enable(),
+            Leg::T4(c) => c.enable(),
         }
     }
 }
 
-const _: () = assert!(
-    N == 3,
-    "the board module wires 3 segments (see BOARD.md for more)"
-);
+impl ErrorType for Leg {
+    type Error = core::convert::Infallible;
+}
 
-/// ADC1 as the sample task sees it.
+impl SetDutyCycle for Leg {
+    fn max_duty_cycle(&self) -> u16 {
+        match self {
+            Leg::T1(c) => c.max_duty_cycle(),
+            Leg::T8(c) => c.max_duty_cycle(),
+            Leg::T2(c) => c.max_duty_cycle(),
+            Leg::T4(c) => c.max_duty_cycle(),
+        }
+    }
+
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Self::Error> {
+        match self {
+            Leg::T1(c) => c.set_duty_cycle(duty),
+            Leg::T8(c) => c.set_duty_cycle(duty),
+            Leg::T2(c) => c.set_duty_cycle(duty),
+            Leg::T4(c) => c.set_duty_cycle(duty),
+        }
+    }
+}
+
+/// One DAC channel's 12-bit right-aligned data register.
+pub enum DacChannel {
+    /// DAC1, PA4.
+    One(C1),
+    /// DAC2, PA5.
+    Two(C2),
+}
+
+impl DacWrite for DacChannel {
+    fn write_code(&mut self, code: u16) {
+        match self {
+            DacChannel::One(c) => c.set_value(code),
+            DacChannel::Two(c) => c.set_value(code),
+        }
+    }
+}
+
+/// A segment's driver.
+pub enum Segment {
+    /// H-bridge from two PWM legs.
+    Bridge(HBridge<Leg, Leg>),
+    /// DAC into a bipolar amplifier.
+    Dac(DacOutput<DacChannel>),
+}
+
+impl SegmentOutput for Segment {
+    fn set_v(&mut self, v: f32) {
+        match self {
+            Segment::Bridge(b) => b.set_v(v),
+            Segment::Dac(d) => d.set_v(v),
+        }
+    }
+
+    fn off(&mut self) {
+        match self {
+            Segment::Bridge(b) => b.off(),
+            Segment::Dac(d) => d.off(),
+        }
+    }
+}
+
+/// The ADCs and outputs as the sample task sees them.
 pub struct Io {
-    adc: pac::ADC1,
-    seg0: HBridge<ErasedChannel<pac::TIM1>, ErasedChannel<pac::TIM1>>,
-    seg1: HBridge<ErasedChannel<pac::TIM1>, ErasedChannel<pac::TIM1>>,
-    seg2: HBridge<ErasedChannel<pac::TIM8>, ErasedChannel<pac::TIM8>>,
+    adc1: pac::ADC1,
+    adc2: pac::ADC2,
+    adc3: pac::ADC3,
+    segments: [Segment; N],
+    /// ADC2/ADC3's group was not done when ADC1's was.
+    secondary_late: bool,
     watchdog: IndependentWatchdog,
 }
 
@@ -132,6 +252,23 @@ impl CommandIn {
 /// Nothing to do at low priority on the board.
 pub struct Housekeeping;
 
+/// Both legs of a bridge, off, then enabled.
+fn legs(mut a: Leg, mut b: Leg) -> Option<(Leg, Leg)> {
+    let _ = a.set_duty_cycle_fully_off();
+    let _ = b.set_duty_cycle_fully_off();
+    a.enable();
+    b.enable();
+    Some((a, b))
+}
+
+/// A DAC channel at its 0 V code, then enabled (in that order: enabled at
+/// code 0 it would drive the amplifier to its negative rail).
+fn dac_channel<D: DacPin + DacOut<u16>>(mut d: D) -> D {
+    d.set_value(DAC_ZERO_CODE);
+    d.enable();
+    d
+}
+
 /// Clocks, RTT, outputs, ADC trigger, watchdog.
 pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     let (frames, commands) = init_rtt();
@@ -146,44 +283,124 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     // output timers stop while a debugger halts the core.
     dp.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
 
-    let pins = pins::take(
-        dp.GPIOA.split(&mut rcc),
-        dp.GPIOC.split(&mut rcc),
-        dp.GPIOE.split(&mut rcc),
-    );
+    let a = dp.GPIOA.split(&mut rcc);
+    let b = dp.GPIOB.split(&mut rcc);
+    let c = dp.GPIOC.split(&mut rcc);
+    let d = dp.GPIOD.split(&mut rcc);
+    let e = dp.GPIOE.split(&mut rcc);
 
-    // H-bridges.
-    let (_tim1, (c1, c2, c3, c4)) = dp.TIM1.pwm_hz(PWM_HZ.Hz(), &mut rcc);
-    let (_tim8, (c81, c82, ..)) = dp.TIM8.pwm_hz(PWM_HZ.Hz(), &mut rcc);
-    let mut legs1 = [
-        c1.with(pins.seg0.0).erase(),
-        c2.with(pins.seg0.1).erase(),
-        c3.with(pins.seg1.0).erase(),
-        c4.with(pins.seg1.1).erase(),
-    ];
-    let mut legs8 = [c81.with(pins.seg2.0).erase(), c82.with(pins.seg2.1).erase()];
-    for leg in legs1.iter_mut() {
-        let _ = leg.set_duty_cycle_fully_off();
-        leg.enable();
+    // H-bridges: only the timers and pins of bridge segments (the pins are
+    // `pins::BRIDGE_LEGS`).
+    let mut bridge_legs: [Option<(Leg, Leg)>; 8] = Default::default();
+    if USES_TIM1 {
+        let (_tim, (c1, c2, c3, c4)) = dp.TIM1.pwm_hz(PWM_HZ.Hz(), &mut rcc);
+        if is_bridge(0) {
+            let (la, lb) = (c1.with(e.pe9).erase(), c2.with(e.pe11).erase());
+            bridge_legs[0] = legs(Leg::T1(la), Leg::T1(lb));
+        }
+        if is_bridge(1) {
+            let (la, lb) = (c3.with(e.pe13).erase(), c4.with(e.pe14).erase());
+            bridge_legs[1] = legs(Leg::T1(la), Leg::T1(lb));
+        }
     }
-    for leg in legs8.iter_mut() {
-        let _ = leg.set_duty_cycle_fully_off();
-        leg.enable();
+    if USES_TIM8 {
+        let (_tim, (c1, c2, c3, c4)) = dp.TIM8.pwm_hz(PWM_HZ.Hz(), &mut rcc);
+        if is_bridge(2) {
+            let (la, lb) = (c1.with(c.pc6).erase(), c2.with(c.pc7).erase());
+            bridge_legs[2] = legs(Leg::T8(la), Leg::T8(lb));
+        }
+        if is_bridge(3) {
+            let (la, lb) = (c3.with(c.pc8).erase(), c4.with(c.pc9).erase());
+            bridge_legs[3] = legs(Leg::T8(la), Leg::T8(lb));
+        }
     }
-    let [l0, l1, l2, l3] = legs1;
-    let [l4, l5] = legs8;
-    let bridges = (
-        HBridge::new(l0, l1, BRIDGE_SUPPLY_V),
-        HBridge::new(l2, l3, BRIDGE_SUPPLY_V),
-        HBridge::new(l4, l5, BRIDGE_SUPPLY_V),
-    );
-    let (Ok(seg0), Ok(seg1), Ok(seg2)) = bridges else {
-        defmt::panic!("BRIDGE_SUPPLY_V is not a valid supply voltage");
-    };
+    if USES_TIM2 {
+        let (_tim, (c1, c2, c3, c4)) = dp.TIM2.pwm_hz(PWM_HZ.Hz(), &mut rcc);
+        if is_bridge(4) {
+            let (la, lb) = (
+                c1.with(a.pa15.into_floating_input()).erase(),
+                c2.with(b.pb3.into_floating_input()).erase(),
+            );
+            bridge_legs[4] = legs(Leg::T2(la), Leg::T2(lb));
+        }
+        if is_bridge(5) {
+            let (la, lb) = (c3.with(b.pb10).erase(), c4.with(b.pb11).erase());
+            bridge_legs[5] = legs(Leg::T2(la), Leg::T2(lb));
+        }
+    }
+    if USES_TIM4 {
+        let (_tim, (c1, c2, c3, c4)) = dp.TIM4.pwm_hz(PWM_HZ.Hz(), &mut rcc);
+        if is_bridge(6) {
+            let (la, lb) = (c1.with(d.pd12).erase(), c2.with(d.pd13).erase());
+            bridge_legs[6] = legs(Leg::T4(la), Leg::T4(lb));
+        }
+        if is_bridge(7) {
+            let (la, lb) = (c3.with(d.pd14).erase(), c4.with(d.pd15).erase());
+            bridge_legs[7] = legs(Leg::T4(la), Leg::T4(lb));
+        }
+    }
 
-    // The ADC pins stay in analog mode for good.
-    let _analog = (pins.load_cell, pins.shunts);
-    let adc = init_adc(dp.ADC1, &dp.ADC_COMMON, &mut rcc);
+    // DACs: only the channels of DAC segments (PA4, PA5).
+    let mut dacs: [Option<DacChannel>; 2] = [None, None];
+    if USES_DAC2 {
+        let (c1, c2) = dp
+            .DAC
+            .constrain((a.pa4.into_analog(), a.pa5.into_analog()), &mut rcc);
+        dacs = [
+            Some(DacChannel::One(dac_channel(c1))),
+            Some(DacChannel::Two(dac_channel(c2))),
+        ];
+    } else if USES_DAC1 {
+        let c1 = dp.DAC.constrain(a.pa4.into_analog(), &mut rcc);
+        dacs[0] = Some(DacChannel::One(dac_channel(c1)));
+    }
+
+    let segments: [Result<Segment, &'static str>; N] = core::array::from_fn(|i| match dac_of(i) {
+        Some(k) => match dacs[k].take() {
+            Some(ch) => DacOutput::new(ch, DAC_GAIN, DAC_VREF_V, DAC_ZERO_CODE)
+                .map(Segment::Dac)
+                .map_err(|_| "DAC_GAIN, DAC_VREF_V or DAC_ZERO_CODE is invalid"),
+            None => Err("a DAC segment's channel is not wired"),
+        },
+        None => match bridge_legs[i].take() {
+            Some((la, lb)) => HBridge::new(la, lb, BRIDGE_SUPPLY_V)
+                .map(Segment::Bridge)
+                .map_err(|_| "BRIDGE_SUPPLY_V is not a valid supply voltage"),
+            None => Err("a bridge segment's legs are not wired"),
+        },
+    });
+    let segments = segments.map(|s| match s {
+        Ok(s) => s,
+        // Compiled-in configuration: a build error only a run can show.
+        Err(what) => defmt::panic!("segment outputs: {}", what),
+    });
+
+    // The ADC pins go to analog mode for good (a pin's mode outlives its
+    // handle).
+    let _ = a.pa1.into_analog();
+    let _ = a.pa2.into_analog();
+    if N > 1 {
+        let _ = a.pa3.into_analog();
+    }
+    if N > 2 {
+        let _ = c.pc1.into_analog();
+    }
+    if N > 3 {
+        let _ = c.pc2.into_analog();
+    }
+    if N > 4 {
+        let _ = c.pc4.into_analog();
+    }
+    if N > 5 {
+        let _ = c.pc5.into_analog();
+    }
+    if N > 6 {
+        let _ = b.pb0.into_analog();
+    }
+    if N > 7 {
+        let _ = b.pb1.into_analog();
+    }
+    init_adcs(&dp.ADC1, &dp.ADC2, &dp.ADC3, &dp.ADC_COMMON, &mut rcc);
     init_trigger(dp.TIM5, &mut rcc);
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
@@ -192,10 +409,11 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
 
     Parts {
         io: Io {
-            adc,
-            seg0,
-            seg1,
-            seg2,
+            adc1: dp.ADC1,
+            adc2: dp.ADC2,
+            adc3: dp.ADC3,
+            segments,
+            secondary_late: false,
             watchdog,
         },
         frames,
@@ -226,38 +444,73 @@ fn init_rtt() -> (FrameOut, CommandIn) {
     )
 }
 
-/// ADC1: 12-bit, 21 MHz (PCLK2 / 4), injected group of 4 started by
-/// TIM5_TRGO on its rising edge, JEOC interrupt at the group's end. 84
-/// cycles of sampling (4 µs) per channel suit the amplifiers' outputs; the
-/// group takes 4 × (84 + 12) / 21 MHz ≈ 18 µs of the 1 ms period.
-fn init_adc(adc: pac::ADC1, common: &pac::ADC_COMMON, rcc: &mut pac::RCC) -> pac::ADC1 {
+/// ADC1 (load cell, shunts 0..=2), ADC2 (shunts 3..=6) and ADC3 (shunt
+/// 7), those in use: 12-bit, 21 MHz (PCLK2 / 4), an injected group each
+/// started by TIM5_TRGO on its rising edge; only ADC1 raises the interrupt
+/// (JEOC). 84 cycles of sampling (4 µs) per channel suit the amplifiers'
+/// outputs; ADC1's group of at most 4 takes 4 × (84 + 12) / 21 MHz ≈ 18 µs
+/// of the 1 ms period, the others run beside it.
+fn init_adcs(
+    adc1: &pac::ADC1,
+    adc2: &pac::ADC2,
+    adc3: &pac::ADC3,
+    common: &pac::ADC_COMMON,
+    rcc: &mut pac::RCC,
+) {
     pac::ADC1::enable(rcc);
     pac::ADC1::reset(rcc);
     common.ccr().modify(|_, w| w.adcpre().div4());
-    adc.cr1().write(|w| w.scan().set_bit().jeocie().set_bit());
-    // 84 cycles (0b100) on every channel we use.
-    adc.smpr2().write(|w| {
-        w.smp1().cycles84();
-        w.smp2().cycles84();
-        w.smp3().cycles84()
-    });
-    adc.smpr1().write(|w| w.smp11().cycles84());
-    // JL = 3: four conversions, JSQ1..4 in order.
+    let mut group1 = [pins::LOAD_CELL_CHANNEL; 4];
+    group1[1..=ADC1_SHUNTS].copy_from_slice(&pins::SHUNT_CHANNELS[..ADC1_SHUNTS]);
+    init_group(adc1, &group1[..=ADC1_SHUNTS], true);
+    if ADC2_SHUNTS > 0 {
+        pac::ADC2::enable(rcc);
+        pac::ADC2::reset(rcc);
+        init_group(adc2, &pins::SHUNT_CHANNELS[3..3 + ADC2_SHUNTS], false);
+    }
+    if ADC3_SHUNTS > 0 {
+        pac::ADC3::enable(rcc);
+        pac::ADC3::reset(rcc);
+        init_group(adc3, &pins::SHUNT_CHANNELS[7..8], false);
+    }
+}
+
+/// One ADC's injected group: `channels` (1..=4, each below 19) in order,
+/// 84-cycle sampling, TIM5_TRGO rising edge, JEOC interrupt if `interrupt`.
+fn init_group(adc: &pac::adc1::RegisterBlock, channels: &[u8], interrupt: bool) {
+    adc.cr1()
+        .write(|w| w.scan().set_bit().jeocie().bit(interrupt));
+    // 84 cycles (0b100) on the channels used: SMPR2 holds channels 0..=9,
+    // SMPR1 10..=18, three bits each.
+    let (mut smpr1, mut smpr2) = (0u32, 0u32);
+    for &ch in channels {
+        if ch < 10 {
+            smpr2 |= 0b100 << (3 * u32::from(ch));
+        } else {
+            smpr1 |= 0b100 << (3 * u32::from(ch - 10));
+        }
+    }
+    // A group of JL + 1 conversions runs JSQ(4 - JL)..JSQ4 (RM0090 13.13.12)
+    // and leaves its results in JDR1.. in order: channels go right-aligned.
+    let len = channels.len().clamp(1, 4);
+    let mut jsqr = ((len - 1) as u32) << 20;
+    for (k, &ch) in channels.iter().take(len).enumerate() {
+        let slot = 4 - len + k;
+        jsqr |= u32::from(ch & 0x1f) << (5 * slot);
+    }
     #[allow(unsafe_code)]
-    // SAFETY: channel numbers are the pin map's, all below 19.
-    adc.jsqr().write(|w| unsafe {
-        w.jl().set(3);
-        w.jsq1().bits(pins::LOAD_CELL_CHANNEL);
-        w.jsq2().bits(pins::SHUNT_CHANNELS[0]);
-        w.jsq3().bits(pins::SHUNT_CHANNELS[1]);
-        w.jsq4().bits(pins::SHUNT_CHANNELS[2])
-    });
+    // SAFETY: SMPRx and JSQR take any bit pattern; the fields written are
+    // the pin map's channels (below 19) and a length of 1..=4.
+    unsafe {
+        adc.smpr1().write(|w| w.bits(smpr1));
+        adc.smpr2().write(|w| w.bits(smpr2));
+        adc.jsqr().write(|w| w.bits(jsqr));
+    }
     adc.cr2().write(|w| {
         w.jexten().rising_edge();
         w.jextsel().tim5trgo();
         w.adon().set_bit()
     });
-    adc
 }
 
 /// TIM5 counts at 1 MHz (84 MHz / 84) and updates at the sample rate; its
@@ -273,37 +526,50 @@ fn init_trigger(tim: pac::TIM5, rcc: &mut pac::RCC) {
 }
 
 impl Io {
-    /// The group that just ended, as sample `tick`; `None` if no group
-    /// ended (a spurious interrupt).
+    /// The groups that just ended, as sample `tick`; `None` if ADC1's group
+    /// did not end (a spurious interrupt).
     pub fn read(&mut self, tick: u64) -> Option<TickInput<N>> {
-        let sr = self.adc.sr().read();
-        if sr.jeoc().bit_is_clear() {
+        if self.adc1.sr().read().jeoc().bit_is_clear() {
             return None;
         }
-        self.adc
+        self.adc1
             .sr()
             .modify(|_, w| w.jeoc().clear_bit().jstrt().clear_bit());
-        let counts = |i: usize| self.adc.jdr(i).read().jdata().bits();
+        if ADC2_SHUNTS > 0 && !secondary_done(&self.adc2) {
+            self.secondary_late = true;
+        }
+        if ADC3_SHUNTS > 0 && !secondary_done(&self.adc3) {
+            self.secondary_late = true;
+        }
+        let counts = |adc: &pac::adc1::RegisterBlock, i: usize| adc.jdr(i).read().jdata().bits();
+        let mut current_counts = [0u16; N];
+        for (i, c) in current_counts.iter_mut().enumerate() {
+            *c = match i {
+                0..=2 => counts(&self.adc1, i + 1),
+                3..=6 => counts(&self.adc2, i - 3),
+                _ => counts(&self.adc3, 0),
+            };
+        }
         Some(TickInput {
             tick,
             t_us: (tick * 1_000_000 / u64::from(SAMPLE_HZ)) as u32,
-            load_cell_counts: counts(0),
-            current_counts: [counts(1), counts(2), counts(3)],
+            load_cell_counts: counts(&self.adc1, 0),
+            current_counts,
         })
     }
 
-    /// Writes the controller's voltages to the bridges.
+    /// Writes the controller's voltages to the segments.
     pub fn write_v(&mut self, v: &[f32; N]) {
-        self.seg0.set_v(v[0]);
-        self.seg1.set_v(v[1]);
-        self.seg2.set_v(v[2]);
+        for (segment, &v) in self.segments.iter_mut().zip(v) {
+            segment.set_v(v);
+        }
     }
 
-    /// Every bridge off.
+    /// Every segment off.
     pub fn off(&mut self) {
-        self.seg0.off();
-        self.seg1.off();
-        self.seg2.off();
+        for segment in self.segments.iter_mut() {
+            segment.off();
+        }
     }
 
     /// Feeds the IWDG.
@@ -311,10 +577,24 @@ impl Io {
         self.watchdog.feed();
     }
 
-    /// Whether the next group already ended: this period overran.
+    /// Whether the next group already ended (this period overran), or
+    /// ADC2/ADC3's group was late (their results are then a period old).
     pub fn deadline_missed(&mut self) -> bool {
-        self.adc.sr().read().jeoc().bit_is_set()
+        core::mem::take(&mut self.secondary_late) || self.adc1.sr().read().jeoc().bit_is_set()
     }
+}
+
+/// Waits (bounded) for a secondary ADC's group to end and clears its flag;
+/// false if it did not end in [`SECONDARY_ADC_POLLS`] polls.
+fn secondary_done(adc: &pac::adc1::RegisterBlock) -> bool {
+    for _ in 0..SECONDARY_ADC_POLLS {
+        if adc.sr().read().jeoc().bit_is_set() {
+            adc.sr()
+                .modify(|_, w| w.jeoc().clear_bit().jstrt().clear_bit());
+            return true;
+        }
+    }
+    false
 }
 
 /// The ADC trigger timer paces the sample task: nothing to do.
@@ -331,33 +611,46 @@ pub async fn housekeeping(_: &mut Housekeeping) -> ! {
     }
 }
 
-/// Forces every bridge input low by register writes, whatever state the
-/// drivers are in: compare registers to 0 and each channel's output mode to
-/// "force inactive" (the pin then stays low even if the counter runs on).
+/// Forces every bridge input low and every DAC segment to 0 V by register
+/// writes, whatever state the drivers are in: compare registers to 0 and
+/// each channel's output mode to "force inactive" (the pin then stays low
+/// even if the counter runs on), DAC data to the 0 V code. Only the
+/// peripherals this build clocks are touched.
 fn zero_outputs_now() {
     // SAFETY: called only on the way to a halt (panic, HardFault), when no
-    // other code will touch these timers again; each write is to a timer's
-    // own compare and mode registers.
+    // other code will touch these peripherals again; each write is to a
+    // timer's own compare and mode registers or the DAC's data registers.
     #[allow(unsafe_code)]
     let dp = unsafe { pac::Peripherals::steal() };
-    for ccr in dp.TIM1.ccr_iter() {
-        ccr.write(|w| w.ccr().set(0));
+    macro_rules! zero_timer {
+        ($tim:expr) => {
+            for ccr in $tim.ccr_iter() {
+                ccr.write(|w| w.ccr().set(0));
+            }
+            $tim.ccmr1_output()
+                .modify(|_, w| w.oc1m().force_inactive().oc2m().force_inactive());
+            $tim.ccmr2_output()
+                .modify(|_, w| w.oc3m().force_inactive().oc4m().force_inactive());
+        };
     }
-    dp.TIM1
-        .ccmr1_output()
-        .modify(|_, w| w.oc1m().force_inactive().oc2m().force_inactive());
-    dp.TIM1
-        .ccmr2_output()
-        .modify(|_, w| w.oc3m().force_inactive().oc4m().force_inactive());
-    for ccr in dp.TIM8.ccr_iter() {
-        ccr.write(|w| w.ccr().set(0));
+    if USES_TIM1 {
+        zero_timer!(dp.TIM1);
     }
-    dp.TIM8
-        .ccmr1_output()
-        .modify(|_, w| w.oc1m().force_inactive().oc2m().force_inactive());
-    dp.TIM8
-        .ccmr2_output()
-        .modify(|_, w| w.oc3m().force_inactive().oc4m().force_inactive());
+    if USES_TIM8 {
+        zero_timer!(dp.TIM8);
+    }
+    if USES_TIM2 {
+        zero_timer!(dp.TIM2);
+    }
+    if USES_TIM4 {
+        zero_timer!(dp.TIM4);
+    }
+    if USES_DAC1 {
+        dp.DAC.dhr12r1().write(|w| w.daccdhr().set(DAC_ZERO_CODE));
+    }
+    if USES_DAC2 {
+        dp.DAC.dhr12r2().write(|w| w.daccdhr().set(DAC_ZERO_CODE));
+    }
 }
 
 /// Outputs to zero first, then the message, then stop for the debugger
