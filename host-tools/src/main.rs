@@ -105,7 +105,7 @@ struct ProbeArgs {
     /// Debug probe as VID:PID[:SERIAL] (hex), when more than one is attached.
     #[arg(long)]
     probe: Option<String>,
-    /// Longest wait for the probe search and attach, s.
+    /// Longest wait for the probe search, the attach and each later probe call (reset, RTT read or write), s.
     #[arg(long, default_value_t = 5.0)]
     probe_timeout_s: f64,
 }
@@ -122,6 +122,7 @@ impl ProbeArgs {
             chip: self.chip.clone(),
             probe: self.probe.clone(),
             timeout: std::time::Duration::from_secs_f64(self.probe_timeout_s),
+            flash_timeout: finrs::probe::DEFAULT_FLASH_TIMEOUT,
         })
     }
 }
@@ -210,6 +211,9 @@ struct RunArgs {
     elf: PathBuf,
     #[command(flatten)]
     probe: ProbeArgs,
+    /// Longest wait for flashing the ELF, s.
+    #[arg(long, default_value_t = finrs::probe::DEFAULT_FLASH_TIMEOUT.as_secs_f64())]
+    flash_timeout_s: f64,
     #[command(flatten)]
     record: RecordArgs,
 }
@@ -539,7 +543,14 @@ fn run_log(args: LogArgs) -> anyhow::Result<()> {
 }
 
 fn run_run(args: RunArgs) -> anyhow::Result<()> {
-    let probe = args.probe.options()?;
+    let mut probe = args.probe.options()?;
+    if !(args.flash_timeout_s.is_finite() && args.flash_timeout_s > 0.0) {
+        bail!(
+            "--flash-timeout-s must be a positive number of seconds, got {}",
+            args.flash_timeout_s
+        );
+    }
+    probe.flash_timeout = std::time::Duration::from_secs_f64(args.flash_timeout_s);
     let opts = args.record.options(format!(
         "RTT up channel {} on {} running {}",
         finrs::probe::FORCE_UP_CHANNEL,

@@ -241,6 +241,10 @@ fn invalid_commands_are_refused_on_the_host_before_any_probe() {
             &["limit", "5"],
             "limit 5 V: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         ),
+        (
+            &["run", "fw.elf", "--out", "x.csv", "--flash-timeout-s", "0"],
+            "--flash-timeout-s must be a positive number of seconds, got 0",
+        ),
     ] {
         let out = finrs().args(args).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
