@@ -112,18 +112,20 @@ struct ProbeArgs {
 
 impl ProbeArgs {
     fn options(&self) -> anyhow::Result<finrs::probe::ProbeOptions> {
-        if !(self.probe_timeout_s.is_finite() && self.probe_timeout_s > 0.0) {
-            bail!(
-                "--probe-timeout-s must be a positive number of seconds, got {}",
-                self.probe_timeout_s
-            );
-        }
         Ok(finrs::probe::ProbeOptions {
             chip: self.chip.clone(),
             probe: self.probe.clone(),
-            timeout: std::time::Duration::from_secs_f64(self.probe_timeout_s),
+            timeout: timeout("--probe-timeout-s", self.probe_timeout_s)?,
             flash_timeout: finrs::probe::DEFAULT_FLASH_TIMEOUT,
         })
+    }
+}
+
+/// A bound given in seconds on the command line.
+fn timeout(flag: &str, s: f64) -> anyhow::Result<std::time::Duration> {
+    match std::time::Duration::try_from_secs_f64(s) {
+        Ok(d) if s > 0.0 => Ok(d),
+        _ => bail!("{flag} must be a positive number of seconds, got {s:?}"),
     }
 }
 
@@ -544,13 +546,7 @@ fn run_log(args: LogArgs) -> anyhow::Result<()> {
 
 fn run_run(args: RunArgs) -> anyhow::Result<()> {
     let mut probe = args.probe.options()?;
-    if !(args.flash_timeout_s.is_finite() && args.flash_timeout_s > 0.0) {
-        bail!(
-            "--flash-timeout-s must be a positive number of seconds, got {}",
-            args.flash_timeout_s
-        );
-    }
-    probe.flash_timeout = std::time::Duration::from_secs_f64(args.flash_timeout_s);
+    probe.flash_timeout = timeout("--flash-timeout-s", args.flash_timeout_s)?;
     let opts = args.record.options(format!(
         "RTT up channel {} on {} running {}",
         finrs::probe::FORCE_UP_CHANNEL,
