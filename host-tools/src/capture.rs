@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::probe::{self, ProbeOptions, DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL};
+use crate::probe::{self, Bounded, ProbeOptions, Target, DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL};
 use crate::stream::{GapSource, Recorder, Setup};
 
 /// Where the recording goes and when to stop.
@@ -114,8 +114,8 @@ pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> anyhow::Result<String> 
 }
 
 /// A flag that Ctrl-C sets (the handler is installed once per process).
-/// A second Ctrl-C exits at once, in case a probe call never returns and
-/// the loop cannot see the flag.
+/// A second Ctrl-C exits at once, for when the loop cannot see the flag
+/// soon enough (each probe call is bounded, but by seconds).
 fn interrupted() -> anyhow::Result<Arc<AtomicBool>> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
@@ -138,19 +138,15 @@ pub trait Link {
     fn read_log(&mut self, buf: &mut [u8]) -> anyhow::Result<usize>;
 }
 
-/// The probe's RTT up channels 1 (force) and 0 (defmt).
-struct ProbeLink {
-    session: probe_rs::Session,
-    rtt: probe_rs::rtt::Rtt,
-}
-
-impl Link for ProbeLink {
+/// The probe's RTT up channels 1 (force) and 0 (defmt), each read bounded
+/// in time.
+impl<T: Target> Link for Bounded<T> {
     fn read_force(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
-        probe::read_up(&mut self.session, &mut self.rtt, FORCE_UP_CHANNEL, buf)
+        self.read_up(FORCE_UP_CHANNEL, buf)
     }
 
     fn read_log(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
-        probe::read_up(&mut self.session, &mut self.rtt, DEFMT_UP_CHANNEL, buf)
+        self.read_up(DEFMT_UP_CHANNEL, buf)
     }
 }
 
@@ -180,7 +176,7 @@ pub fn from_probe(
         .as_ref()
         .map(|p| std::fs::read(p).with_context(|| format!("reading {}", p.display())))
         .transpose()?;
-    let mut session = probe::attach(probe_opts)?;
+    let session = probe::attach(probe_opts)?;
     let (rtt_at, table) = match (&elf_path, &elf) {
         (Some(p), Some(bytes)) => {
             let name = p.display().to_string();
@@ -197,13 +193,15 @@ pub fn from_probe(
             (None, None)
         }
     };
+    let mut link = probe::connect(session, probe_opts)?;
     if let Firmware::Flash(p) = firmware {
+        // Set above: `finrs run` always reads its ELF.
+        let at = rtt_at.ok_or_else(|| anyhow::anyhow!("{}: no RTT address", p.display()))?;
         eprintln!("flashing {}", p.display());
-        probe::flash_and_run(&mut session, p)?;
+        probe::flash_and_run(&mut link, p, at)?;
     }
-    let rtt = probe::attach_rtt(&mut session, rtt_at, Duration::from_secs(5))?;
+    probe::attach_rtt(&mut link, rtt_at, Duration::from_secs(5))?;
     let stop = interrupted()?;
-    let mut link = ProbeLink { session, rtt };
     capture(&mut link, table.as_ref(), &stop, opts)
 }
 
@@ -281,7 +279,11 @@ pub fn capture(
         }
     };
     bar.finish_and_clear();
-    // Whatever stopped the loop, what came so far is written.
+    // Whatever stopped the loop, what came so far is written, and why it
+    // ended early goes into the notes.
+    if let Err(e) = &outcome {
+        rec.stopped_early(format!("the link failed: {e:#}"));
+    }
     let written = finish(rec, &opts.out);
     let mut text = match (written, outcome) {
         (Ok(text), Ok(())) => text,

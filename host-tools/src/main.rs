@@ -105,24 +105,27 @@ struct ProbeArgs {
     /// Debug probe as VID:PID[:SERIAL] (hex), when more than one is attached.
     #[arg(long)]
     probe: Option<String>,
-    /// Longest wait for the probe search and attach, s.
+    /// Longest wait for the probe search, the attach and each later probe call (reset, RTT read or write), s.
     #[arg(long, default_value_t = 5.0)]
     probe_timeout_s: f64,
 }
 
 impl ProbeArgs {
     fn options(&self) -> anyhow::Result<finrs::probe::ProbeOptions> {
-        if !(self.probe_timeout_s.is_finite() && self.probe_timeout_s > 0.0) {
-            bail!(
-                "--probe-timeout-s must be a positive number of seconds, got {}",
-                self.probe_timeout_s
-            );
-        }
         Ok(finrs::probe::ProbeOptions {
             chip: self.chip.clone(),
             probe: self.probe.clone(),
-            timeout: std::time::Duration::from_secs_f64(self.probe_timeout_s),
+            timeout: timeout("--probe-timeout-s", self.probe_timeout_s)?,
+            flash_timeout: finrs::probe::DEFAULT_FLASH_TIMEOUT,
         })
+    }
+}
+
+/// A bound given in seconds on the command line.
+fn timeout(flag: &str, s: f64) -> anyhow::Result<std::time::Duration> {
+    match std::time::Duration::try_from_secs_f64(s) {
+        Ok(d) if s > 0.0 => Ok(d),
+        _ => bail!("{flag} must be a positive number of seconds, got {s:?}"),
     }
 }
 
@@ -210,6 +213,9 @@ struct RunArgs {
     elf: PathBuf,
     #[command(flatten)]
     probe: ProbeArgs,
+    /// Longest wait for flashing the ELF, s.
+    #[arg(long, default_value_t = finrs::probe::DEFAULT_FLASH_TIMEOUT.as_secs_f64())]
+    flash_timeout_s: f64,
     #[command(flatten)]
     record: RecordArgs,
 }
@@ -539,7 +545,8 @@ fn run_log(args: LogArgs) -> anyhow::Result<()> {
 }
 
 fn run_run(args: RunArgs) -> anyhow::Result<()> {
-    let probe = args.probe.options()?;
+    let mut probe = args.probe.options()?;
+    probe.flash_timeout = timeout("--flash-timeout-s", args.flash_timeout_s)?;
     let opts = args.record.options(format!(
         "RTT up channel {} on {} running {}",
         finrs::probe::FORCE_UP_CHANNEL,

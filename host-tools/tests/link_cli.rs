@@ -241,6 +241,21 @@ fn invalid_commands_are_refused_on_the_host_before_any_probe() {
             &["limit", "5"],
             "limit 5 V: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         ),
+        (
+            &["run", "fw.elf", "--out", "x.csv", "--flash-timeout-s", "0"],
+            "--flash-timeout-s must be a positive number of seconds, got 0.0",
+        ),
+        (
+            &[
+                "run",
+                "fw.elf",
+                "--out",
+                "x.csv",
+                "--flash-timeout-s",
+                "1e300",
+            ],
+            "--flash-timeout-s must be a positive number of seconds, got 1e300",
+        ),
     ] {
         let out = finrs().args(args).output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -250,6 +265,25 @@ fn invalid_commands_are_refused_on_the_host_before_any_probe() {
             !stderr.contains("probe"),
             "{args:?} looked for a probe: {stderr}"
         );
+    }
+}
+
+#[test]
+fn a_bad_probe_timeout_is_refused_by_name() {
+    for (value, shown) in [("NaN", "NaN"), ("0", "0.0"), ("1e300", "1e300")] {
+        let out = finrs()
+            .args(["log", "--out", "x.csv", "--probe-timeout-s", value])
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains(&format!(
+                "--probe-timeout-s must be a positive number of seconds, got {shown}"
+            )),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
     }
 }
 

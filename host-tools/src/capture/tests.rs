@@ -10,6 +10,7 @@ use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, MAX_FRAME_LEN
 
 use super::*;
 use crate::params::Geometry;
+use crate::probe::tests::{timeouts, Act, FakeTarget};
 use crate::recording::{Medium, Recording};
 
 /// Hands out `chunks`, then either sets `stop` (as Ctrl-C would), fails,
@@ -141,7 +142,69 @@ fn a_failing_link_still_writes_what_came() {
         "{text}"
     );
     assert!(text.contains("probe unplugged"), "{text}");
-    assert_eq!(Recording::read(&opts.out).unwrap().t_s.len(), 17);
+    let rec = Recording::read(&opts.out).unwrap();
+    assert_eq!(rec.t_s.len(), 17);
+    assert!(rec
+        .meta
+        .notes
+        .unwrap()
+        .ends_with("; stopped early: the link failed: probe unplugged"));
+    std::fs::remove_dir_all(opts.out.parent().unwrap()).unwrap();
+}
+
+/// The probe link itself (each read bounded on its own thread) over a
+/// fake target whose force channel hangs after the chunks.
+fn bounded_link(after: Act, call_s: f64) -> Bounded<FakeTarget> {
+    let mut fake = FakeTarget::new();
+    fake.up = chunks();
+    fake.after_up = after;
+    Bounded::new(fake, timeouts(call_s, 10.0)).unwrap()
+}
+
+#[test]
+fn a_hanging_read_ends_the_capture_within_its_bound_and_the_samples_are_written() {
+    let mut link = bounded_link(Act::Hang, 0.4);
+    let opts = options("hang", None);
+    let stop = AtomicBool::new(false);
+    let started = Instant::now();
+    let e = capture(&mut link, None, &stop, &opts).unwrap_err();
+    let took_s = started.elapsed().as_secs_f64();
+    assert!((0.4..1.4).contains(&took_s), "took {took_s} s");
+    let text = format!("{e:#}");
+    assert!(
+        text.starts_with(&format!(
+            "the link failed; the samples so far are in {}: \
+             reading RTT up channel 1 did not finish within 0.4 s: ",
+            opts.out.display()
+        )),
+        "{text}"
+    );
+    let rec = Recording::read(&opts.out).unwrap();
+    assert_eq!(rec.t_s.len(), 17);
+    let notes = rec.meta.notes.unwrap();
+    assert!(notes.contains("7+2 reported, 12+1 detected"), "{notes}");
+    assert!(
+        notes.contains(
+            "; stopped early: the link failed: reading RTT up channel 1 did not finish within 0.4 s"
+        ),
+        "{notes}"
+    );
+    std::fs::remove_dir_all(opts.out.parent().unwrap()).unwrap();
+}
+
+#[test]
+fn a_bounded_link_that_keeps_answering_records_until_the_duration() {
+    let mut link = bounded_link(Act::Answer, 0.4);
+    let opts = options("bounded-ok", Some(0.3));
+    let stop = AtomicBool::new(false);
+    let report = capture(&mut link, None, &stop, &opts).unwrap();
+    assert!(report.contains("17 samples; 3 lost in 2 gaps"), "{report}");
+    assert!(!Recording::read(&opts.out)
+        .unwrap()
+        .meta
+        .notes
+        .unwrap()
+        .contains("stopped early"));
     std::fs::remove_dir_all(opts.out.parent().unwrap()).unwrap();
 }
 

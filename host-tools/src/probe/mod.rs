@@ -3,18 +3,46 @@
 //! `_SEGGER_RTT`, read up channels and write the down channel.
 //!
 //! Anything that talks to USB or to the target is bounded in time: a call
-//! that has not returned by then is an error, never a hang.
+//! that has not returned by then is an error, never a hang. The probe
+//! search, open and attach run on a thread of their own (`bounded()`);
+//! after that the session lives on the thread of a [`Bounded`] link, which
+//! serves flash, reset, memory writes, RTT attach, reads and writes one at
+//! a time, each within [`Timeouts`] (`--probe-timeout-s`, 5 s by default;
+//! flashing `--flash-timeout-s`, 60 s). A stalled call fails naming what
+//! stalled and for how long ("reading RTT up channel 1 did not finish
+//! within 5.0 s: ..."), and the link refuses every later call, so the
+//! command exits non-zero; `finrs log`/`run` still write the samples
+//! recorded so far, with the stall in the file's notes.
+//!
+//! `finrs run` flashes, then resets and halts the core, zeroes the ID of
+//! the RTT control block at the ELF's `_SEGGER_RTT` and only then runs it
+//! ([`flash_and_run`]): RAM survives a reset, and without this the host
+//! could attach to the previous run's block and read its stale bytes.
+//! `finrs log` attaches to the running firmware and changes nothing.
+//!
+//! The sequences and the bounds are written against the [`Target`] trait;
+//! [`ProbeTarget`] is its probe-rs implementation, and the tests use a fake
+//! target that hangs or fails (no probe is attached where they run).
 
 use std::path::Path;
 use std::sync::mpsc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{anyhow, bail, Context};
-use probe_rs::flashing::{download_file, ElfLoader, ElfOptions};
 use probe_rs::probe::list::Lister;
 use probe_rs::probe::{DebugProbeInfo, DebugProbeSelector, Probe};
-use probe_rs::rtt::{find_rtt_control_block_in_raw_file, Rtt};
+use probe_rs::rtt::find_rtt_control_block_in_raw_file;
 use probe_rs::{Permissions, Session};
+
+mod probe_rs_target;
+mod steps;
+mod target;
+mod worker;
+
+pub use probe_rs_target::ProbeTarget;
+pub use steps::{attach_rtt, flash_and_run, write_all, RTT_ID_LEN};
+pub use target::Target;
+pub use worker::{Bounded, Timeouts};
 
 /// The chip on the fin's board.
 pub const DEFAULT_CHIP: &str = "STM32F407VGTx";
@@ -35,9 +63,16 @@ pub struct ProbeOptions {
     pub chip: String,
     /// `VID:PID[:SERIAL]`, when more than one probe is attached.
     pub probe: Option<String>,
-    /// Longest wait for the probe search and the attach.
+    /// Longest wait for the probe search, the attach, and each later call
+    /// (reset, RTT attach attempt, read, write).
     pub timeout: Duration,
+    /// Longest wait for flashing an ELF image.
+    pub flash_timeout: Duration,
 }
+
+/// The default bound on flashing: generous, since it only has to catch a
+/// stalled probe, not time a slow erase.
+pub const DEFAULT_FLASH_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// Runs `f` on its own thread and waits at most `timeout` for it: the USB
 /// search can block (`probe-rs list` hung in this project's container).
@@ -142,13 +177,17 @@ pub fn attach(opts: &ProbeOptions) -> anyhow::Result<Session> {
     .map_err(|e| anyhow!("cannot attach to chip {}: {e}", opts.chip))
 }
 
-/// Flashes the ELF at `path`, then resets the core and lets it run.
-pub fn flash_and_run(session: &mut Session, path: &Path) -> anyhow::Result<()> {
-    download_file(session, path, ElfLoader(ElfOptions::default()))
-        .with_context(|| format!("flashing {}", path.display()))?;
-    let mut core = session.core(0).context("core 0")?;
-    core.reset().context("resetting the core after flashing")?;
-    Ok(())
+/// Moves the attached session onto its own thread: from here on every call
+/// to the target is bounded ([`Timeouts::call`] = `opts.timeout`, flashing
+/// `opts.flash_timeout`).
+pub fn connect(session: Session, opts: &ProbeOptions) -> anyhow::Result<Bounded<ProbeTarget>> {
+    Bounded::new(
+        ProbeTarget::new(session),
+        Timeouts {
+            call: opts.timeout,
+            flash: opts.flash_timeout,
+        },
+    )
 }
 
 /// The address of `_SEGGER_RTT` in an ELF image.
@@ -160,84 +199,6 @@ pub fn rtt_address(elf_name: &str, elf: &[u8]) -> anyhow::Result<u64> {
     }
 }
 
-/// Attaches to the RTT control block at `address` (or found by scanning
-/// RAM when `None`), retrying until the firmware has set it up or
-/// `timeout` has passed.
-pub fn attach_rtt(
-    session: &mut Session,
-    address: Option<u64>,
-    timeout: Duration,
-) -> anyhow::Result<Rtt> {
-    let started = Instant::now();
-    loop {
-        let mut core = session.core(0).context("core 0")?;
-        let attempt = match address {
-            Some(a) => Rtt::attach_at(&mut core, a),
-            None => Rtt::attach(&mut core),
-        };
-        match attempt {
-            Ok(rtt) => return Ok(rtt),
-            Err(e) if started.elapsed() >= timeout => {
-                let at = address
-                    .map(|a| format!("at {a:#010x}"))
-                    .unwrap_or_else(|| "in RAM".to_string());
-                bail!(
-                    "no RTT control block {at} after {:.1} s: {e}",
-                    timeout.as_secs_f64()
-                );
-            }
-            Err(_) => std::thread::sleep(Duration::from_millis(50)),
-        }
-    }
-}
-
-/// Reads what up channel `channel` holds now, without waiting.
-pub fn read_up(
-    session: &mut Session,
-    rtt: &mut Rtt,
-    channel: usize,
-    buf: &mut [u8],
-) -> anyhow::Result<usize> {
-    let mut core = session.core(0).context("core 0")?;
-    let up = rtt
-        .up_channel(channel)
-        .with_context(|| format!("the firmware has no RTT up channel {channel}"))?;
-    up.read(&mut core, buf)
-        .with_context(|| format!("reading RTT up channel {channel}"))
-}
-
-/// Writes all of `bytes` to down channel `channel`, waiting for room in its
-/// buffer at most `timeout`.
-pub fn write_down(
-    session: &mut Session,
-    rtt: &mut Rtt,
-    channel: usize,
-    mut bytes: &[u8],
-    timeout: Duration,
-) -> anyhow::Result<()> {
-    let started = Instant::now();
-    let mut core = session.core(0).context("core 0")?;
-    let down = rtt
-        .down_channel(channel)
-        .with_context(|| format!("the firmware has no RTT down channel {channel}"))?;
-    while !bytes.is_empty() {
-        let n = down
-            .write(&mut core, bytes)
-            .with_context(|| format!("writing RTT down channel {channel}"))?;
-        bytes = &bytes[n..];
-        if n == 0 {
-            if started.elapsed() >= timeout {
-                bail!(
-                    "RTT down channel {channel} stayed full for {:.1} s: is the firmware reading commands?",
-                    timeout.as_secs_f64()
-                );
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-    }
-    Ok(())
-}
-
 /// Sends `bytes` (encoded commands) to the running firmware's command down
 /// channel: attach without reset, find RTT (at the ELF's `_SEGGER_RTT` if
 /// `elf` is given, else by scanning RAM), write.
@@ -246,23 +207,20 @@ pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> anyhow::Re
     let image = elf
         .map(|p| std::fs::read(p).with_context(|| format!("reading {}", p.display())))
         .transpose()?;
-    let mut session = attach(opts)?;
     let address = match (elf, &image) {
         (Some(p), Some(image)) => Some(rtt_address(&p.display().to_string(), image)?),
         _ => None,
     };
-    let mut rtt = attach_rtt(&mut session, address, opts.timeout)?;
-    write_down(
-        &mut session,
-        &mut rtt,
-        COMMAND_DOWN_CHANNEL,
-        bytes,
-        opts.timeout,
-    )
+    let mut link = connect(attach(opts)?, opts)?;
+    attach_rtt(&mut link, address, opts.timeout)?;
+    write_all(&mut link, COMMAND_DOWN_CHANNEL, bytes, opts.timeout)
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests;
+
+#[cfg(test)]
+mod glue_tests {
     use super::*;
 
     #[test]

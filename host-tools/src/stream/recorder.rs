@@ -108,6 +108,7 @@ pub struct Recorder {
     faults: Vec<Fault>,
     rejected: Vec<Rejected>,
     restart: Option<Restart>,
+    stopped_early: Option<String>,
     summary: Summary,
 }
 
@@ -127,6 +128,7 @@ impl Recorder {
             faults: Vec::new(),
             rejected: Vec::new(),
             restart: None,
+            stopped_early: None,
             summary: Summary::default(),
         }
     }
@@ -294,6 +296,12 @@ impl Recorder {
         self.restart
     }
 
+    /// Records why the recording ended before it was asked to (e.g. the
+    /// probe link stalled), for the notes.
+    pub fn stopped_early(&mut self, why: impl Into<String>) {
+        self.stopped_early = Some(why.into());
+    }
+
     /// Times of the rows so far, s.
     pub fn times_s(&self) -> &[f64] {
         &self.t_s
@@ -368,6 +376,9 @@ impl Recorder {
                 r.expected_seq.wrapping_sub(1),
                 s.after_restart
             );
+        }
+        if let Some(why) = &self.stopped_early {
+            let _ = write!(out, "; stopped early: {why}");
         }
         out
     }
