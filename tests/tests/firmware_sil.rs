@@ -29,6 +29,9 @@
 //! - Log: the defmt log (semihosting stdout, decoded with defmt-decoder)
 //!   names each refused command with its reason, the accepted one, and the
 //!   latched fault.
+//! - Stack: the log's stack line (`firmware/src/stack.rs`) gives init's and
+//!   the tasks' high-water marks, both above 0 and at least
+//!   [`STACK_MARGIN_B`] below the stack's size.
 //!
 //! QEMU runs with `-icount shift=ICOUNT_SHIFT,sleep=off`: the guest's clock
 //! follows its instruction count, so the run is deterministic and does not
@@ -56,6 +59,11 @@ mod config;
 mod sim;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// Stack the firmware must leave untouched at both of its high-water marks
+/// (init and the running tasks), bytes: room for what a run did not reach
+/// (another interrupt nesting, a longer log call).
+const STACK_MARGIN_B: usize = 16 * 1024;
 const ICOUNT_SHIFT: u32 = 5;
 
 fn workspace() -> PathBuf {
@@ -176,6 +184,45 @@ fn defmt_lines(elf: &Path, bytes: &[u8]) -> Vec<String> {
     lines
 }
 
+/// Stands for the stack line in the expected log (its numbers are checked
+/// apart, by [`check_stack`]).
+const STACK_LINE: &str = "INFO stack: …";
+
+/// The numbers of a stack line, `(init_b, tasks_b, size_b)`, if `line` is
+/// one: `INFO stack: init used I B, tasks used T B of S B`.
+fn stack_line(line: &str) -> Option<(usize, usize, usize)> {
+    let rest = line.strip_prefix("INFO stack: init used ")?;
+    let (init, rest) = rest.split_once(" B, tasks used ")?;
+    let (tasks, rest) = rest.split_once(" B of ")?;
+    let size = rest.strip_suffix(" B")?;
+    Some((init.parse().ok()?, tasks.parse().ok()?, size.parse().ok()?))
+}
+
+/// Exactly one stack line, both marks above 0 and at least
+/// [`STACK_MARGIN_B`] below the stack's size, which is the 128 KiB of RAM
+/// less the statics.
+fn check_stack(log: &[String]) -> (usize, usize, usize) {
+    let found: Vec<_> = log.iter().filter_map(|l| stack_line(l)).collect();
+    assert_eq!(found.len(), 1, "one stack line in the log: {log:?}");
+    let (init_b, tasks_b, size_b) = found[0];
+    assert!(
+        (64 * 1024..128 * 1024).contains(&size_b),
+        "stack size {size_b} B: 128 KiB less statics"
+    );
+    for (what, used_b) in [("init", init_b), ("tasks", tasks_b)] {
+        assert!(
+            used_b > 0,
+            "{what} used no stack: the measurement is broken"
+        );
+        assert!(
+            used_b + STACK_MARGIN_B <= size_b,
+            "{what} used {used_b} B of the {size_b} B stack, less than {STACK_MARGIN_B} B left"
+        );
+    }
+    eprintln!("stack: init {init_b} B, tasks {tasks_b} B of {size_b} B");
+    found[0]
+}
+
 /// The limit the down channel sets, V.
 const COMMANDED_LIMIT_V: f32 = 1.5;
 
@@ -210,10 +257,15 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
         "ERROR SetLimit refused: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         "INFO command accepted: SetLimit",
         "ERROR fault latched at tick 10500: overcurrent (segment Some(1))",
+        STACK_LINE,
         "INFO run over after 12 s",
     ];
-    let got: Vec<&str> = log.iter().map(String::as_str).collect();
+    let got: Vec<&str> = log
+        .iter()
+        .map(|line| stack_line(line).map_or(line.as_str(), |_| STACK_LINE))
+        .collect();
     assert_eq!(got, expected, "the defmt log");
+    check_stack(&log);
 
     let mut decoder = Decoder::new();
     let mut events = Vec::new();

@@ -133,6 +133,11 @@ pub struct Housekeeping {
 }
 
 /// Sets up the simulated board.
+///
+/// Not inlined: the plant's set-up (`Strip::new`) needs tens of KiB of
+/// stack for a moment; inlined into RTIC's `main`, whose frame lives as long
+/// as the program, it would stay reserved below every task.
+#[inline(never)]
 pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
     // No clock setup: QEMU does not emulate RCC (waiting for the PLL would
     // hang); SysTick runs at 168 MHz regardless.
@@ -275,6 +280,7 @@ pub async fn housekeeping(h: &mut Housekeeping) -> ! {
             exit(false);
         }
         if done {
+            crate::stack::report();
             defmt::info!("run over after {} s", sim::RUN_S);
             exit(true);
         }
