@@ -75,7 +75,10 @@ impl SegmentOutput for PlantSegment {
 
 /// The simulated ADC inputs and segment outputs.
 pub struct Io {
-    plant: Strip<f32, N, 1, S>,
+    /// In a static: the model (9 KiB for N = 8) then never passes through
+    /// `Parts` and RTIC's resource hand-over, which would copy it on the
+    /// stack several times.
+    plant: &'static Strip<f32, N, 1, S>,
     x: [f32; S],
     segments: [PlantSegment; N],
     currents_a: [f32; N],
@@ -142,14 +145,19 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
     // No clock setup: QEMU does not emulate RCC (waiting for the PLL would
     // hang); SysTick runs at 168 MHz regardless.
     Mono::start(core.SYST, SYSCLK_HZ);
-    let plant = match Strip::new(
+    let built = Strip::new(
         &Params::thesis_2006(),
         Fixture::Blocked,
         1.0 / f64::from(SAMPLE_HZ),
-    ) {
-        Ok(p) => p,
+    );
+    let plant = match built {
+        Ok(p) => cortex_m::singleton!(: Strip<f32, N, 1, S> = p),
         Err(_) => defmt::panic!("the seed's parameters do not make a plant"),
     };
+    let Some(plant) = plant else {
+        defmt::panic!("board init ran twice");
+    };
+    let plant: &'static Strip<f32, N, 1, S> = plant;
     let Some(queue) = cortex_m::singleton!(: Queue<u8, QUEUE_LEN> = Queue::new()) else {
         defmt::panic!("board init ran twice");
     };
