@@ -38,7 +38,10 @@ pub fn rows_mut<T, const N: usize, const E: usize, const S: usize>(
 /// size (a ninth of an `S × S` array for `E = 1`): the nesting spells
 /// `2NE` without arithmetic on const generics. Indexed `m[(row, col)]`.
 #[derive(Clone)]
-pub struct Square<const N: usize, const E: usize>([[[[[[f64; E]; 2]; N]; E]; 2]; N]);
+pub struct Square<const N: usize, const E: usize>([[[DofRow<N, E>; E]; 2]; N]);
+
+/// One row of a [`Square`]: `2NE` entries.
+type DofRow<const N: usize, const E: usize> = [[[f64; E]; 2]; N];
 
 impl<const N: usize, const E: usize> Square<N, E> {
     /// Rows and columns: `2NE`.
@@ -51,7 +54,7 @@ impl<const N: usize, const E: usize> Square<N, E> {
 
     /// Row `i`, `2NE` entries.
     pub fn row(&self, i: usize) -> &[f64] {
-        &self.0.as_flattened().as_flattened()[i]
+        self.0.as_flattened().as_flattened()[i]
             .as_flattened()
             .as_flattened()
     }
