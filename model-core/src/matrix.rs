@@ -129,3 +129,48 @@ pub fn norm1<const R: usize, const C: usize>(a: &Mat<R, C>) -> f64 {
     }
     best
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every `(i, j)` of a `Square` is its own entry, in row-major order,
+    /// and `row(i)` sees exactly row `i`: the nesting neither aliases nor
+    /// reorders entries.
+    #[test]
+    fn square_entries_are_distinct_and_row_major() {
+        let mut m = Square::<3, 2>::zeros();
+        let dim = Square::<3, 2>::DIM;
+        assert_eq!(dim, 12);
+        assert_eq!(core::mem::size_of::<Square<3, 2>>(), 12 * 12 * 8);
+        for i in 0..dim {
+            for j in 0..dim {
+                m[(i, j)] = (100 * i + j) as f64;
+            }
+        }
+        for i in 0..dim {
+            let row = m.row(i);
+            assert_eq!(row.len(), dim);
+            for (j, &x) in row.iter().enumerate() {
+                assert_eq!(x, (100 * i + j) as f64, "entry ({i}, {j})");
+                assert_eq!(m[(i, j)], x);
+            }
+        }
+        m.clear();
+        assert!((0..dim).all(|i| m.row(i).iter().all(|&x| x == 0.0)));
+    }
+
+    /// A `DofMat` has `2NE` rows of `S` entries, each its own.
+    #[test]
+    fn dof_mat_has_2ne_rows() {
+        let mut m = dof_zeros::<f64, 2, 3, 28>(0.0);
+        assert_eq!(rows(&m).len(), 12);
+        for (i, row) in rows_mut(&mut m).iter_mut().enumerate() {
+            row[i] = i as f64 + 1.0;
+        }
+        for (i, row) in rows(&m).iter().enumerate() {
+            assert_eq!(row.iter().sum::<f64>(), i as f64 + 1.0);
+            assert_eq!(row[i], i as f64 + 1.0);
+        }
+    }
+}
