@@ -26,6 +26,8 @@ mod board;
 mod config;
 #[cfg(feature = "qemu")]
 mod sim;
+mod stack;
+mod watermark;
 
 use rtic_monotonics::systick::prelude::*;
 
@@ -66,6 +68,8 @@ mod app {
 
     #[init]
     fn init(cx: init::Context) -> (Shared, Local) {
+        // First thing: init's stack use is measured from here.
+        stack::paint_init();
         let parts = board::init(cx.core, cx.device);
         let controller = match config::controller_config()
             .map_err(|_| "limits")
@@ -85,6 +89,7 @@ mod app {
         if commands::spawn().is_err() || pace::spawn().is_err() || housekeeping::spawn().is_err() {
             defmt::panic!("a task was spawned twice");
         }
+        stack::record_init();
         (
             Shared { controller },
             Local {
@@ -167,9 +172,12 @@ mod app {
         board::pace().await
     }
 
-    /// Board chores at low priority (QEMU: flush frames, end the run).
+    /// Board chores at low priority (QEMU: flush frames, end the run;
+    /// both: report the stack's use).
     #[task(priority = 1, local = [housekeeping])]
     async fn housekeeping(cx: housekeeping::Context) {
+        // The tasks' stack use is measured from here on (init's is kept).
+        stack::repaint_for_tasks();
         board::housekeeping(cx.local.housekeeping).await
     }
 

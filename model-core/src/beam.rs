@@ -15,7 +15,7 @@
 // Index loops mirror the textbook formulas (Cholesky, Jacobi) one to one.
 #![allow(clippy::needless_range_loop)]
 
-use crate::matrix::Mat;
+use crate::matrix::{Mat, Square};
 use crate::params::{ParamError, Params};
 
 /// Element mass matrix of eq. 2.14 in units of `ρA ℓ / 420`, slopes scaled by `ℓ`.
@@ -35,10 +35,10 @@ const ELEMENT_STIFFNESS: [[f64; 4]; 4] = [
 ];
 
 /// Global mass `M`, stiffness `K` and per-segment load `F` (unit moments),
-/// assembled in the top-left `2NE × 2NE` corner of `S × S` arrays.
-pub(crate) struct Assembly<const N: usize, const S: usize> {
-    pub m: Mat<S, S>,
-    pub k: Mat<S, S>,
+/// assembled in the first `2NE` columns of `2NE`-row arrays.
+pub(crate) struct Assembly<const N: usize, const E: usize, const S: usize> {
+    pub m: Square<N, E>,
+    pub k: Square<N, E>,
     pub f: Mat<S, N>,
     /// Element length `ℓ`, m.
     pub element_m: f64,
@@ -47,14 +47,14 @@ pub(crate) struct Assembly<const N: usize, const S: usize> {
 /// Assembles eq. 2.26 for `N` segments of `E` elements each.
 pub(crate) fn assemble<const N: usize, const E: usize, const S: usize>(
     p: &Params,
-) -> Assembly<N, S> {
+) -> Assembly<N, E, S> {
     let l = p.length_m / (N * E) as f64;
     let m_scale = p.mass_per_length_kg_per_m * l / 420.0;
     let k_scale = p.ei_nm2 / (l * l * l);
     let load = [0.0, -1.0 / l, 0.0, 1.0 / l];
     let mut a = Assembly {
-        m: [[0.0; S]; S],
-        k: [[0.0; S]; S],
+        m: Square::zeros(),
+        k: Square::zeros(),
         f: [[0.0; N]; S],
         element_m: l,
     };
@@ -68,8 +68,8 @@ pub(crate) fn assemble<const N: usize, const E: usize, const S: usize>(
             a.f[gr][segment] += load[r];
             for c in 0..4 {
                 let Some(gc) = global(c) else { continue };
-                a.m[gr][gc] += m_scale * ELEMENT_MASS[r][c];
-                a.k[gr][gc] += k_scale * ELEMENT_STIFFNESS[r][c];
+                a.m[(gr, gc)] += m_scale * ELEMENT_MASS[r][c];
+                a.k[(gr, gc)] += k_scale * ELEMENT_STIFFNESS[r][c];
             }
         }
     }
@@ -80,66 +80,70 @@ pub(crate) fn assemble<const N: usize, const E: usize, const S: usize>(
 ///
 /// On return, column `k < active.len()` of `psi` is mode `k` in the global
 /// numbering (rows not in `active` are zero), `ψₖᵀ M ψₖ = 1`, and
-/// `omega2[k]` is its squared angular frequency, ascending.
-pub(crate) fn modes<const S: usize>(
-    m: &Mat<S, S>,
-    k: &Mat<S, S>,
+/// `omega2[k]` is its squared angular frequency, ascending. `m`, `k` and
+/// `psi` are `2NE × 2NE`, as are the three work arrays, which are the whole
+/// stack this takes beyond its small vectors. Not inlined, so that they are
+/// freed on return.
+#[inline(never)]
+pub(crate) fn modes<const N: usize, const E: usize, const S: usize>(
+    m: &Square<N, E>,
+    k: &Square<N, E>,
     active: &[usize],
-    psi: &mut Mat<S, S>,
+    psi: &mut Square<N, E>,
     omega2: &mut [f64; S],
 ) -> Result<(), ParamError> {
     let n = active.len();
+    let mut l = Square::<N, E>::zeros();
+    let mut y = Square::<N, E>::zeros();
+    let mut a = Square::<N, E>::zeros();
     // Cholesky of the reduced mass matrix, in place: M_r = L Lᵀ.
-    let mut l = [[0.0; S]; S];
     for i in 0..n {
         for j in 0..=i {
-            let mut sum = m[active[i]][active[j]];
+            let mut sum = m[(active[i], active[j])];
             for q in 0..j {
-                sum -= l[i][q] * l[j][q];
+                sum -= l[(i, q)] * l[(j, q)];
             }
             if i == j {
                 if sum.is_nan() || sum <= 0.0 {
                     return Err(ParamError::SingularMass);
                 }
-                l[i][i] = libm::sqrt(sum);
+                l[(i, i)] = libm::sqrt(sum);
             } else {
-                l[i][j] = sum / l[j][j];
+                l[(i, j)] = sum / l[(j, j)];
             }
         }
     }
     // C = L⁻¹ K_r L⁻ᵀ: forward substitution on the columns of K_r, then on
     // the columns of the transpose (K_r is symmetric, so that is L⁻¹ K_r L⁻ᵀ).
-    let mut y = [[0.0; S]; S];
     for c in 0..n {
         for i in 0..n {
-            let mut sum = k[active[i]][active[c]];
+            let mut sum = k[(active[i], active[c])];
             for q in 0..i {
-                sum -= l[i][q] * y[q][c];
+                sum -= l[(i, q)] * y[(q, c)];
             }
-            y[i][c] = sum / l[i][i];
+            y[(i, c)] = sum / l[(i, i)];
         }
     }
-    let mut a = [[0.0; S]; S];
     for c in 0..n {
         for i in 0..n {
-            let mut sum = y[c][i];
+            let mut sum = y[(c, i)];
             for q in 0..i {
-                sum -= l[i][q] * a[q][c];
+                sum -= l[(i, q)] * a[(q, c)];
             }
-            a[i][c] = sum / l[i][i];
+            a[(i, c)] = sum / l[(i, i)];
         }
     }
     for i in 0..n {
         for j in 0..i {
-            let s = 0.5 * (a[i][j] + a[j][i]);
-            a[i][j] = s;
-            a[j][i] = s;
+            let s = 0.5 * (a[(i, j)] + a[(j, i)]);
+            a[(i, j)] = s;
+            a[(j, i)] = s;
         }
     }
     // Eigenvectors of C accumulate in `y` (reused).
-    y = [[0.0; S]; S];
-    for (i, row) in y.iter_mut().enumerate().take(n) {
-        row[i] = 1.0;
+    y.clear();
+    for i in 0..n {
+        y[(i, i)] = 1.0;
     }
     jacobi(&mut a, &mut y, n);
 
@@ -151,26 +155,26 @@ pub(crate) fn modes<const S: usize>(
     for i in 0..n {
         let mut best = i;
         for j in i + 1..n {
-            if a[order[j]][order[j]] < a[order[best]][order[best]] {
+            if a[(order[j], order[j])] < a[(order[best], order[best])] {
                 best = j;
             }
         }
         order.swap(i, best);
     }
     // ψ = L⁻ᵀ v by back substitution, scattered to global rows.
-    *psi = [[0.0; S]; S];
+    psi.clear();
     for (col, &src) in order.iter().enumerate().take(n) {
-        omega2[col] = a[src][src];
+        omega2[col] = a[(src, src)];
         let mut x = [0.0; S];
         for i in (0..n).rev() {
-            let mut sum = y[i][src];
+            let mut sum = y[(i, src)];
             for q in i + 1..n {
-                sum -= l[q][i] * x[q];
+                sum -= l[(q, i)] * x[q];
             }
-            x[i] = sum / l[i][i];
+            x[i] = sum / l[(i, i)];
         }
         for i in 0..n {
-            psi[active[i]][col] = x[i];
+            psi[(active[i], col)] = x[i];
         }
     }
     for w in omega2.iter_mut().skip(n) {
@@ -182,14 +186,14 @@ pub(crate) fn modes<const S: usize>(
 /// Cyclic Jacobi on the symmetric leading `n × n` block of `a`; rotations
 /// accumulate into `v`. Ends when the off-diagonal part is negligible
 /// against the diagonal, or after a bounded number of sweeps.
-fn jacobi<const S: usize>(a: &mut Mat<S, S>, v: &mut Mat<S, S>, n: usize) {
+fn jacobi<const N: usize, const E: usize>(a: &mut Square<N, E>, v: &mut Square<N, E>, n: usize) {
     for _sweep in 0..64 {
         let mut off = 0.0;
         let mut diag = 0.0;
         for i in 0..n {
-            diag += a[i][i] * a[i][i];
+            diag += a[(i, i)] * a[(i, i)];
             for j in i + 1..n {
-                off += a[i][j] * a[i][j];
+                off += a[(i, j)] * a[(i, j)];
             }
         }
         if off <= 1e-32 * diag {
@@ -197,32 +201,32 @@ fn jacobi<const S: usize>(a: &mut Mat<S, S>, v: &mut Mat<S, S>, n: usize) {
         }
         for p in 0..n {
             for q in p + 1..n {
-                let apq = a[p][q];
+                let apq = a[(p, q)];
                 if apq == 0.0 {
                     continue;
                 }
-                let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+                let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
                 let t = libm::copysign(1.0, theta)
                     / (libm::fabs(theta) + libm::sqrt(theta * theta + 1.0));
                 let c = 1.0 / libm::sqrt(t * t + 1.0);
                 let s = t * c;
-                a[p][p] -= t * apq;
-                a[q][q] += t * apq;
-                a[p][q] = 0.0;
-                a[q][p] = 0.0;
+                a[(p, p)] -= t * apq;
+                a[(q, q)] += t * apq;
+                a[(p, q)] = 0.0;
+                a[(q, p)] = 0.0;
                 for r in 0..n {
                     if r != p && r != q {
-                        let arp = a[r][p];
-                        let arq = a[r][q];
-                        a[r][p] = c * arp - s * arq;
-                        a[p][r] = a[r][p];
-                        a[r][q] = s * arp + c * arq;
-                        a[q][r] = a[r][q];
+                        let arp = a[(r, p)];
+                        let arq = a[(r, q)];
+                        a[(r, p)] = c * arp - s * arq;
+                        a[(p, r)] = a[(r, p)];
+                        a[(r, q)] = s * arp + c * arq;
+                        a[(q, r)] = a[(r, q)];
                     }
-                    let vrp = v[r][p];
-                    let vrq = v[r][q];
-                    v[r][p] = c * vrp - s * vrq;
-                    v[r][q] = s * vrp + c * vrq;
+                    let vrp = v[(r, p)];
+                    let vrq = v[(r, q)];
+                    v[(r, p)] = c * vrp - s * vrq;
+                    v[(r, q)] = s * vrp + c * vrq;
                 }
             }
         }

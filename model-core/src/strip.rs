@@ -29,9 +29,9 @@
 // Index loops mirror the block structure of the state (η, ζ, e).
 #![allow(clippy::needless_range_loop)]
 
-use crate::beam::{assemble, modes, Assembly};
+use crate::beam::{assemble, modes};
 use crate::extensions::Extensions;
-use crate::matrix::Mat;
+use crate::matrix::{dof_zeros, rows, rows_mut, DofMat, Mat, Square};
 use crate::params::{ParamError, Params};
 use crate::real::Real;
 use crate::zoh::discretise;
@@ -82,8 +82,9 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     /// The electrical block, the same for every segment:
     /// `v_C ← a v_C + g₀ v`, `r ← b v_C + c r + g₁ v`, as `[a, b, c, g₀, g₁]`.
     elec: [T; 5],
-    /// Row `d`: freedom `d` (deflection in m, slope in rad) from `η`.
-    dof_from_modal: [[T; S]; S],
+    /// Row `d` (of `2NE`, see [`rows`]): freedom `d` (deflection in m,
+    /// slope in rad) from `η`.
+    dof_from_modal: DofMat<T, N, E, S>,
     /// Blocking force (N) from the whole state.
     force_row: [T; S],
     /// Angular frequencies of the active modes, rad/s, ascending.
@@ -103,18 +104,25 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     moment_gain: T,
 }
 
-/// What the modal analysis of the beam gives, in `f64`.
-struct Analysis<const N: usize, const S: usize> {
-    beam: Assembly<N, S>,
+/// What the modal analysis of the beam gives, in `f64`: only what the
+/// discretisation and the outputs need, so that the beam's matrices do not
+/// stay on the stack while the model is built.
+struct Analysis<const N: usize, const E: usize, const S: usize> {
+    /// Element length `ℓ`, m.
+    element_m: f64,
+    /// The tip deflection's rows of `M` and `K` (the load cell's force).
+    m_tip: [f64; S],
+    k_tip: [f64; S],
+    /// The tip deflection's row of `F` with crosstalk: load per unit moment
+    /// of segment `i`.
+    f_tip: [f64; N],
     /// Mass-normalised modes as columns (rows: freedoms).
-    psi: Mat<S, S>,
+    psi: Square<N, E>,
     omega2: [f64; S],
     omega: [f64; S],
     /// `g[k][i]`: modal force of mode `k` per unit moment of segment `i`,
     /// crosstalk included.
     g: [[f64; N]; S],
-    /// `F` with crosstalk: load on freedom `d` per unit moment of segment `i`.
-    f: [[f64; N]; S],
     /// `2ζω` of every mode, 1/s.
     two_zeta_omega: [f64; S],
     modes: usize,
@@ -227,15 +235,12 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
 
         // Outputs. Freedoms: q = Ψ η; odd rows are ℓθ, so divide by ℓ.
-        let mut dof_from_modal = [[T::ZERO; S]; S];
+        let mut dof_from_modal = dof_zeros(T::ZERO);
+        let (rows_out, psi) = (rows_mut(&mut dof_from_modal), &an.psi);
         for d in 0..Self::DOF {
-            let scale = if d % 2 == 1 {
-                1.0 / an.beam.element_m
-            } else {
-                1.0
-            };
+            let scale = if d % 2 == 1 { 1.0 / an.element_m } else { 1.0 };
             for k in 0..an.modes {
-                dof_from_modal[d][k] = T::from_f64(an.psi[d][k] * scale);
+                rows_out[d][k] = T::from_f64(psi[(d, k)] * scale);
             }
         }
         // Blocking force on the cell: the tip row of M q̈ + K q = F u,
@@ -243,18 +248,18 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         // q̈ = Ψ (−Ω² η + g u).
         let mut force_row = [T::ZERO; S];
         if fixture == Fixture::Blocked {
-            let t = Self::TIP;
+            let (m_t, k_t) = (&an.m_tip, &an.k_tip);
             let mut mt_psi = [0.0; S];
             for k in 0..an.modes {
                 let mut kt_psi = 0.0;
                 for d in 0..Self::DOF {
-                    mt_psi[k] += an.beam.m[t][d] * an.psi[d][k];
-                    kt_psi += an.beam.k[t][d] * an.psi[d][k];
+                    mt_psi[k] += m_t[d] * psi[(d, k)];
+                    kt_psi += k_t[d] * psi[(d, k)];
                 }
                 force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
             }
             for i in 0..N {
-                let mut per_moment = an.f[t][i];
+                let mut per_moment = an.f_tip[i];
                 for k in 0..an.modes {
                     per_moment -= mt_psi[k] * an.g[k][i];
                 }
@@ -287,11 +292,16 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     }
 
     /// Assembles the beam for the fixture and finds its modes.
+    ///
+    /// Not inlined (nor is `modes`): each frame's arrays are then freed on
+    /// return instead of piling up in the caller's frame, which keeps
+    /// [`Strip::new`] within a Cortex-M4's RAM for N = 8.
+    #[inline(never)]
     fn analyse(
         params: &Params,
         ext: &Extensions,
         fixture: Fixture,
-    ) -> Result<Analysis<N, S>, ParamError> {
+    ) -> Result<Analysis<N, E, S>, ParamError> {
         // The fluid's added mass moves with the strip.
         let loaded = Params {
             mass_per_length_kg_per_m: params.mass_per_length_kg_per_m + ext.added_mass_kg_per_m,
@@ -306,7 +316,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 n_active += 1;
             }
         }
-        let mut psi = [[0.0; S]; S];
+        let mut psi = Square::zeros();
         let mut omega2 = [0.0; S];
         modes(&beam.m, &beam.k, &active[..n_active], &mut psi, &mut omega2)?;
         let mut omega = [0.0; S];
@@ -328,20 +338,25 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         let mut g = [[0.0; N]; S];
         for (k, gk) in g.iter_mut().enumerate().take(n_active) {
             for (i, gki) in gk.iter_mut().enumerate() {
-                *gki = (0..Self::DOF).map(|d| psi[d][k] * f[d][i]).sum();
+                *gki = (0..Self::DOF).map(|d| psi[(d, k)] * f[d][i]).sum();
             }
         }
         let mut two_zeta_omega = [0.0; S];
         for k in 0..n_active {
             two_zeta_omega[k] = ext.two_zeta_omega(omega[k], params.mass_per_length_kg_per_m);
         }
+        let (mut m_tip, mut k_tip) = ([0.0; S], [0.0; S]);
+        m_tip[..Self::DOF].copy_from_slice(beam.m.row(Self::TIP));
+        k_tip[..Self::DOF].copy_from_slice(beam.k.row(Self::TIP));
         Ok(Analysis {
-            beam,
+            element_m: beam.element_m,
+            m_tip,
+            k_tip,
+            f_tip: f[Self::TIP],
             psi,
             omega2,
             omega,
             g,
-            f,
             two_zeta_omega,
             modes: n_active,
         })
@@ -446,14 +461,14 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// Tip deflection across the strip, m (zero for the blocked fixture).
     #[inline]
     pub fn tip_deflection_m(&self, x: &[T; S]) -> T {
-        dot(&self.dof_from_modal[Self::TIP], x)
+        dot(&rows(&self.dof_from_modal)[Self::TIP], x)
     }
 
     /// Deflection of node `node` (0 = clamp, `N E` = tip), m; `None` past the tip.
     pub fn node_deflection_m(&self, x: &[T; S], node: usize) -> Option<T> {
         match node {
             0 => Some(T::ZERO),
-            n if n <= N * E => Some(dot(&self.dof_from_modal[2 * (n - 1)], x)),
+            n if n <= N * E => Some(dot(&rows(&self.dof_from_modal)[2 * (n - 1)], x)),
             _ => None,
         }
     }
@@ -462,7 +477,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     pub fn node_slope_rad(&self, x: &[T; S], node: usize) -> Option<T> {
         match node {
             0 => Some(T::ZERO),
-            n if n <= N * E => Some(dot(&self.dof_from_modal[2 * (n - 1) + 1], x)),
+            n if n <= N * E => Some(dot(&rows(&self.dof_from_modal)[2 * (n - 1) + 1], x)),
             _ => None,
         }
     }

@@ -1,7 +1,9 @@
 //! Software in the loop: the whole fin driver firmware, built for QEMU's
 //! netduinoplus2 (`finrs-firmware --features qemu,inject-overcurrent`), runs
 //! 12 simulated seconds against the model core as plant; this test decodes
-//! its frames with `finrs_frames::Decoder` and checks them.
+//! its frames with `finrs_frames::Decoder` and checks them. It does so for
+//! the default 3 segments and for 8 (`FINRS_SEGMENTS=8`, the largest fin:
+//! the plant's set-up must fit the stack), with the same checks below.
 //!
 //! - Lossless: every Sample arrives, numbered 0, 1, 2, … with no gap, no
 //!   Dropped report and no corrupt byte; it covers at least 10 s.
@@ -29,6 +31,9 @@
 //! - Log: the defmt log (semihosting stdout, decoded with defmt-decoder)
 //!   names each refused command with its reason, the accepted one, and the
 //!   latched fault.
+//! - Stack: the log's stack line (`firmware/src/stack.rs`) gives init's and
+//!   the tasks' high-water marks, both above 0 and at least
+//!   [`STACK_MARGIN_B`] below the stack's size.
 //!
 //! QEMU runs with `-icount shift=ICOUNT_SHIFT,sleep=off`: the guest's clock
 //! follows its instruction count, so the run is deterministic and does not
@@ -40,7 +45,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use finrs_frames::{
@@ -56,27 +61,46 @@ mod config;
 mod sim;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// Stack the firmware must leave untouched at both of its high-water marks
+/// (init and the running tasks), bytes: room for what a run did not reach
+/// (another interrupt nesting, a longer log call).
+const STACK_MARGIN_B: usize = 16 * 1024;
 const ICOUNT_SHIFT: u32 = 5;
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// Builds the QEMU firmware from `firmware/`, so that its own
-/// `.cargo/config.toml` (linker, DEFMT_LOG) applies as for a user, into its
-/// own target directory (this `cargo test` holds the workspace's lock).
-fn build_elf() -> PathBuf {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(build_elf_once).clone()
+/// Builds the QEMU firmware for `segments` segments (`FINRS_SEGMENTS`)
+/// from `firmware/`, so that its own `.cargo/config.toml` (linker,
+/// DEFMT_LOG) applies as for a user, into its own target directory (this
+/// `cargo test` holds the workspace's lock), and copies the ELF aside per
+/// segment count: the builds share the target directory (only the firmware
+/// crate differs), so they take turns and each test runs its own copy.
+fn build_elf(segments: usize) -> PathBuf {
+    static BUILD: Mutex<()> = Mutex::new(());
+    static ELFS: OnceLock<Mutex<Vec<(usize, PathBuf)>>> = OnceLock::new();
+    let _turn = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+    let elfs = ELFS.get_or_init(|| Mutex::new(Vec::new()));
+    if let Some((_, elf)) = elfs.lock().unwrap().iter().find(|(n, _)| *n == segments) {
+        return elf.clone();
+    }
+    let elf = build_elf_once(segments);
+    elfs.lock().unwrap().push((segments, elf.clone()));
+    elf
 }
 
-fn build_elf_once() -> PathBuf {
+fn build_elf_once(segments: usize) -> PathBuf {
     let ws = workspace();
     // Shared with qemu_vs_x86.rs (same target, most dependencies in common).
     let target_dir = ws.join("target/qemu");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    let start = Instant::now();
     let status = Command::new(cargo)
         .current_dir(ws.join("firmware"))
+        .env("FINRS_SEGMENTS", segments.to_string())
+        .env_remove("FINRS_DAC_SEGMENTS")
         .args(["build", "--release", "--locked", "-p", "finrs-firmware"])
         .args([
             "--no-default-features",
@@ -92,14 +116,23 @@ fn build_elf_once() -> PathBuf {
         status.success(),
         "building the QEMU firmware failed (target, flip-link installed? run scripts/setup)"
     );
-    target_dir.join(TARGET).join("release/finrs-firmware")
+    eprintln!(
+        "built the QEMU firmware, N = {segments}, in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    let release = target_dir.join(TARGET).join("release");
+    let copy = release.join(format!("finrs-firmware-n{segments}"));
+    std::fs::copy(release.join("finrs-firmware"), &copy).expect("the ELF copies");
+    copy
 }
 
 /// Runs the firmware in a fresh directory with `-icount shift` and the
 /// given command bytes on its down channel; returns the frames file's
 /// bytes.
 fn run_qemu(elf: &Path, shift: u32, commands: &[u8]) -> (Vec<u8>, Vec<u8>) {
-    let dir = std::env::temp_dir().join(format!("finrs-sil-{}-{shift}", std::process::id()));
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("finrs-sil-{}-{shift}-{run}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     if !commands.is_empty() {
@@ -176,6 +209,45 @@ fn defmt_lines(elf: &Path, bytes: &[u8]) -> Vec<String> {
     lines
 }
 
+/// Stands for the stack line in the expected log (its numbers are checked
+/// apart, by [`check_stack`]).
+const STACK_LINE: &str = "INFO stack: …";
+
+/// The numbers of a stack line, `(init_b, tasks_b, size_b)`, if `line` is
+/// one: `INFO stack: init used I B, tasks used T B of S B`.
+fn stack_line(line: &str) -> Option<(usize, usize, usize)> {
+    let rest = line.strip_prefix("INFO stack: init used ")?;
+    let (init, rest) = rest.split_once(" B, tasks used ")?;
+    let (tasks, rest) = rest.split_once(" B of ")?;
+    let size = rest.strip_suffix(" B")?;
+    Some((init.parse().ok()?, tasks.parse().ok()?, size.parse().ok()?))
+}
+
+/// Exactly one stack line, both marks above 0 and at least
+/// [`STACK_MARGIN_B`] below the stack's size, which is the 128 KiB of RAM
+/// less the statics.
+fn check_stack(log: &[String]) -> (usize, usize, usize) {
+    let found: Vec<_> = log.iter().filter_map(|l| stack_line(l)).collect();
+    assert_eq!(found.len(), 1, "one stack line in the log: {log:?}");
+    let (init_b, tasks_b, size_b) = found[0];
+    assert!(
+        (64 * 1024..128 * 1024).contains(&size_b),
+        "stack size {size_b} B: 128 KiB less statics"
+    );
+    for (what, used_b) in [("init", init_b), ("tasks", tasks_b)] {
+        assert!(
+            used_b > 0,
+            "{what} used no stack: the measurement is broken"
+        );
+        assert!(
+            used_b + STACK_MARGIN_B <= size_b,
+            "{what} used {used_b} B of the {size_b} B stack, less than {STACK_MARGIN_B} B left"
+        );
+    }
+    eprintln!("stack: init {init_b} B, tasks {tasks_b} B of {size_b} B");
+    found[0]
+}
+
 /// The limit the down channel sets, V.
 const COMMANDED_LIMIT_V: f32 = 1.5;
 
@@ -198,22 +270,43 @@ fn commands() -> Vec<u8> {
 
 #[test]
 fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
-    let elf = build_elf();
+    check_run::<3, 18>();
+}
+
+/// The same run and checks with the largest fin, 8 segments: the plant's
+/// set-up (`Strip::new`, S = 48) must fit the stack, and the sample task
+/// its deadline.
+#[test]
+fn firmware_in_qemu_with_8_segments_logs_losslessly_within_limits_and_stops_on_overcurrent() {
+    check_run::<8, 48>();
+}
+
+/// Runs the firmware built for `N` segments (state length `S`) with the
+/// down channel's commands and checks its frames and log against a host
+/// plant of `N` segments.
+fn check_run<const N: usize, const S: usize>() {
+    let elf = build_elf(N);
     let (bytes, log) = run_qemu(&elf, ICOUNT_SHIFT, &commands());
     let log = defmt_lines(&elf, &log);
-    eprintln!("defmt log:\n{}", log.join("\n"));
+    eprintln!("defmt log (N = {N}):\n{}", log.join("\n"));
     // Each refusal logged as an error with its reason, the good command
     // taken, the fault latched and logged, in this order.
+    let up = format!("INFO fin driver up: {N} segments at 1000 Hz, limit 4.0 V");
     let expected = [
-        "INFO fin driver up: 3 segments at 1000 Hz, limit 4.0 V",
+        up.as_str(),
         "ERROR command refused: 5 bytes without a sync pair skipped",
         "ERROR SetLimit refused: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         "INFO command accepted: SetLimit",
         "ERROR fault latched at tick 10500: overcurrent (segment Some(1))",
+        STACK_LINE,
         "INFO run over after 12 s",
     ];
-    let got: Vec<&str> = log.iter().map(String::as_str).collect();
+    let got: Vec<&str> = log
+        .iter()
+        .map(|line| stack_line(line).map_or(line.as_str(), |_| STACK_LINE))
+        .collect();
     assert_eq!(got, expected, "the defmt log");
+    check_stack(&log);
 
     let mut decoder = Decoder::new();
     let mut events = Vec::new();
@@ -262,7 +355,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     );
     for (k, s) in samples.iter().enumerate() {
         assert_eq!(s.seq as usize, k, "sequence numbers count up from 0");
-        assert_eq!(s.n, config::N);
+        assert_eq!(s.n, N);
         let tick = if k < fault_at { k } else { k + 1 };
         assert_eq!(
             u64::from(s.t_us),
@@ -285,7 +378,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
 
     // Limits.
     let dt_s = 1.0 / config::SAMPLE_HZ as f32;
-    let mut last = [0.0f32; config::N];
+    let mut last = [0.0f32; N];
     let mut peak_v = 0.0f32;
     for s in &samples[..fault_at] {
         for (i, &v) in s.voltages().iter().enumerate() {
@@ -307,7 +400,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
 
     // Force against the host's plant, driven by the logged voltages.
     let plant =
-        Strip::<f32, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Blocked, f64::from(dt_s))
+        Strip::<f32, N, 1, S>::new(&Params::thesis_2006(), Fixture::Blocked, f64::from(dt_s))
             .unwrap();
     let mut x = plant.rest();
     let bound_n = (2 * sim::LOAD_CELL_NOISE_COUNTS) as f32 * config::NEWTONS_PER_COUNT
@@ -318,7 +411,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
     // The shunts read the plant's currents under the voltage still applied
     // (the previous tick's), rounded to a count.
     let current_bound_a = 0.5 * config::AMPS_PER_COUNT;
-    let mut applied = [0.0f32; 3];
+    let mut applied = [0.0f32; N];
     let mut worst_a = 0.0f32;
     for s in &samples {
         if (s.seq as usize) < fault_at {
@@ -347,13 +440,13 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
                 s.force_n
             );
         }
-        let v: [f32; 3] = s.voltages().try_into().unwrap();
+        let v: [f32; N] = s.voltages().try_into().unwrap();
         plant.step(&mut x, &v);
         applied = v;
         if s.seq as usize + 1 == fault_at {
             // The faulting tick stepped the plant at 0 V and logged no Sample.
-            plant.step(&mut x, &[0.0; 3]);
-            applied = [0.0; 3];
+            plant.step(&mut x, &[0.0; N]);
+            applied = [0.0; N];
         }
     }
     assert!(
@@ -361,7 +454,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
         "the force ({peak_n} N) is large beside the tolerance ({bound_n} N)"
     );
     eprintln!(
-        "{} samples, {compared} forces compared: worst {worst_n:e} N, rms {:e} N, bound {bound_n:e} N, peak force {peak_n:e} N, peak voltage {peak_v} V; currents: worst {worst_a:e} A, bound {current_bound_a:e} A",
+        "N = {N}: {} samples, {compared} forces compared: worst {worst_n:e} N, rms {:e} N, bound {bound_n:e} N, peak force {peak_n:e} N, peak voltage {peak_v} V; currents: worst {worst_a:e} A, bound {current_bound_a:e} A",
         samples.len(),
         (sum_sq / compared as f64).sqrt()
     );
@@ -376,7 +469,7 @@ fn firmware_in_qemu_logs_losslessly_within_limits_and_stops_on_overcurrent() {
 /// from then on, and no Sample lost before it.
 #[test]
 fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
-    let elf = build_elf();
+    let elf = build_elf(3);
     let (bytes, _) = run_qemu(&elf, 9, &[]);
     let mut decoder = Decoder::new();
     let mut events = Vec::new();

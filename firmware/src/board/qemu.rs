@@ -49,7 +49,8 @@ pub const COMMANDS_FILE: &str = "finrs-commands.bin\0";
 pub const FLUSH_MS: u32 = 20;
 
 /// Frame queue, bytes: 42-byte frames (N = 3) at 1 kHz fill 840 bytes per
-/// flush interval; 4096 leaves a margin of almost five intervals.
+/// flush interval; 4096 leaves a margin of almost five intervals (of about
+/// two and a half with N = 8's 82-byte frames, which the SIL test also runs).
 const QUEUE_LEN: usize = 4096;
 
 const S: usize = state_len(N, 1);
@@ -75,7 +76,10 @@ impl SegmentOutput for PlantSegment {
 
 /// The simulated ADC inputs and segment outputs.
 pub struct Io {
-    plant: Strip<f32, N, 1, S>,
+    /// In a static: the model (9 KiB for N = 8) then never passes through
+    /// `Parts` and RTIC's resource hand-over, which would copy it on the
+    /// stack several times.
+    plant: &'static Strip<f32, N, 1, S>,
     x: [f32; S],
     segments: [PlantSegment; N],
     currents_a: [f32; N],
@@ -133,18 +137,28 @@ pub struct Housekeeping {
 }
 
 /// Sets up the simulated board.
+///
+/// Not inlined: the plant's set-up (`Strip::new`) needs tens of KiB of
+/// stack for a moment; inlined into RTIC's `main`, whose frame lives as long
+/// as the program, it would stay reserved below every task.
+#[inline(never)]
 pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
     // No clock setup: QEMU does not emulate RCC (waiting for the PLL would
     // hang); SysTick runs at 168 MHz regardless.
     Mono::start(core.SYST, SYSCLK_HZ);
-    let plant = match Strip::new(
+    let built = Strip::new(
         &Params::thesis_2006(),
         Fixture::Blocked,
         1.0 / f64::from(SAMPLE_HZ),
-    ) {
-        Ok(p) => p,
+    );
+    let plant = match built {
+        Ok(p) => cortex_m::singleton!(: Strip<f32, N, 1, S> = p),
         Err(_) => defmt::panic!("the seed's parameters do not make a plant"),
     };
+    let Some(plant) = plant else {
+        defmt::panic!("board init ran twice");
+    };
+    let plant: &'static Strip<f32, N, 1, S> = plant;
     let Some(queue) = cortex_m::singleton!(: Queue<u8, QUEUE_LEN> = Queue::new()) else {
         defmt::panic!("board init ran twice");
     };
@@ -275,6 +289,7 @@ pub async fn housekeeping(h: &mut Housekeeping) -> ! {
             exit(false);
         }
         if done {
+            crate::stack::report();
             defmt::info!("run over after {} s", sim::RUN_S);
             exit(true);
         }

@@ -604,10 +604,17 @@ pub async fn pace() -> ! {
     }
 }
 
-/// Nothing to do at low priority on the board.
+/// Interval between reports of the stack's use, s.
+const STACK_REPORT_S: u32 = 10;
+
+/// Reports the stack's use every [`STACK_REPORT_S`] (a scan of the painted
+/// words, well under a millisecond at this priority).
 pub async fn housekeeping(_: &mut Housekeeping) -> ! {
     loop {
-        core::future::pending::<()>().await;
+        // Qualified: the HAL's prelude has its own `delay` and `secs`.
+        let period = rtic_monotonics::fugit::ExtU32::secs(STACK_REPORT_S);
+        <Mono as rtic_monotonics::Timebase>::delay(period).await;
+        crate::stack::report();
     }
 }
 
