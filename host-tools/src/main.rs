@@ -272,15 +272,15 @@ struct SimulateArgs {
     /// Sample rate, Hz (whole: the generator's tick rate).
     #[arg(long, default_value_t = 1000.0)]
     rate_hz: f64,
-    /// Constant added to a sine: or standing: wave, V.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    offset_v: f64,
-    /// Raised-cosine ramp in, s, within --duration-s.
-    #[arg(long, default_value_t = 0.0)]
-    ramp_in_s: f64,
-    /// Raised-cosine ramp out, s, within --duration-s.
-    #[arg(long, default_value_t = 0.0)]
-    ramp_out_s: f64,
+    /// Constant added to a sine: or standing: wave, V (default 0).
+    #[arg(long, allow_negative_numbers = true)]
+    offset_v: Option<f64>,
+    /// Raised-cosine ramp in, s, within --duration-s (default 0).
+    #[arg(long)]
+    ramp_in_s: Option<f64>,
+    /// Raised-cosine ramp out, s, within --duration-s (default 0).
+    #[arg(long)]
+    ramp_out_s: Option<f64>,
     /// Length of one chirp: sweep, s (default: --duration-s).
     #[arg(long)]
     sweep_s: Option<f64>,
@@ -360,7 +360,21 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
         None => ModelFile::thesis_2006(),
     };
     let (name, input) = match (&args.input, &args.wave) {
-        (Some(path), _) => (path.display().to_string(), Recording::read(path)?),
+        (Some(path), _) => {
+            // Shaping a recording's own voltages is not what these mean.
+            for (option, given) in [
+                ("--offset-v", args.offset_v.is_some()),
+                ("--ramp-in-s", args.ramp_in_s.is_some()),
+                ("--ramp-out-s", args.ramp_out_s.is_some()),
+                ("--sweep-s", args.sweep_s.is_some()),
+                ("--limit-v", args.limit_v.is_some()),
+            ] {
+                if given {
+                    bail!("{option} shapes a --wave; it does not apply to --input");
+                }
+            }
+            (path.display().to_string(), Recording::read(path)?)
+        }
         (None, Some(spec)) => {
             let wave = Wave::parse(spec).map_err(anyhow::Error::msg)?;
             let fixture = match args.fixture {
@@ -376,16 +390,13 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
                 rate_hz: args.rate_hz,
             };
             let limits = match (args.limit_v, args.slew_v_per_s) {
-                (Some(v), Some(slew)) => Some(
-                    finrs_drive::Limits::new(v as f32, slew as f32)
-                        .map_err(|e| anyhow::anyhow!("--limit-v {v} --slew-v-per-s {slew}: {e}"))?,
-                ),
+                (Some(v), Some(slew)) => Some(synth::limits(v, slew)?),
                 _ => None,
             };
             let shaping = synth::Shaping {
-                offset_v: args.offset_v,
-                ramp_in_s: args.ramp_in_s,
-                ramp_out_s: args.ramp_out_s,
+                offset_v: args.offset_v.unwrap_or(0.0),
+                ramp_in_s: args.ramp_in_s.unwrap_or(0.0),
+                ramp_out_s: args.ramp_out_s.unwrap_or(0.0),
                 sweep_s: args.sweep_s,
                 limits,
             };

@@ -41,6 +41,18 @@ pub struct Shaping {
     pub limits: Option<finrs_drive::Limits>,
 }
 
+/// The firmware's limits from `--limit-v` and `--slew-v-per-s`, checked by
+/// [`finrs_drive::Limits::new`]; the error names the option and its rule.
+pub fn limits(limit_v: f64, slew_v_per_s: f64) -> anyhow::Result<finrs_drive::Limits> {
+    use finrs_drive::LimitError as E;
+    finrs_drive::Limits::new(limit_v as f32, slew_v_per_s as f32).map_err(|e| match e {
+        E::SlewNotFinite | E::SlewNotPositive => {
+            anyhow::anyhow!("--slew-v-per-s {slew_v_per_s}: {e}")
+        }
+        _ => anyhow::anyhow!("--limit-v {limit_v}: {e}"),
+    })
+}
+
 /// A voltage-only recording of the seed's strip driven by `wave`, with no
 /// ramps, offset nor limiter, and chirps sweeping over the whole duration.
 pub fn drive_recording(wave: &Wave, d: &Drive) -> anyhow::Result<Recording> {
@@ -131,4 +143,26 @@ pub fn drive_recording_shaped(
         v_v,
         channels: Vec::new(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limits_name_the_option_and_rule() {
+        assert_eq!(limits(1.5, 20.0).unwrap().max_abs_v(), 1.5);
+        assert_eq!(
+            limits(5.0, 20.0).unwrap_err().to_string(),
+            "--limit-v 5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"
+        );
+        assert_eq!(
+            limits(1.0, 0.0).unwrap_err().to_string(),
+            "--slew-v-per-s 0: slew_v_per_s must be above 0"
+        );
+        assert_eq!(
+            limits(f64::NAN, 1.0).unwrap_err().to_string(),
+            "--limit-v NaN: max_abs_v must be finite"
+        );
+    }
 }

@@ -276,3 +276,72 @@ fn simulate_refuses_what_the_firmware_refuses_and_bad_shaping() {
         "--segments must be 1..=8, got 9"
     );
 }
+
+/// The `finrs simulate --wave` command itself, options and all: its output
+/// file's voltage columns are the firmware's outputs, digit for digit.
+#[test]
+fn the_simulate_command_writes_the_firmware_voltages() {
+    let dir = std::env::temp_dir().join(format!("finrs-wave-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("sim.csv");
+    let run = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_finrs"))
+            .args(["simulate", "--segments", "3", "--rest-s", "0.25"])
+            .args(["--duration-s", "3", "--off-s", "0.5", "--out"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let start_row = (REST_S * f64::from(RATE_HZ)) as u64;
+    let rows = ((REST_S + DURATION_S + OFF_S) * f64::from(RATE_HZ)) as u64 + 1;
+    let limits = Limits::new(1.8, 40.0).unwrap();
+    let envelope = Envelope {
+        ramp_in_s: 0.5,
+        hold_s: 2.0,
+        ramp_out_s: 0.5,
+    };
+    for (text, program) in cases(3) {
+        let o = run(&[
+            "--wave",
+            &text,
+            "--ramp-in-s",
+            "0.5",
+            "--ramp-out-s",
+            "0.5",
+            "--limit-v",
+            "1.8",
+            "--slew-v-per-s",
+            "40",
+        ]);
+        assert!(o.status.success(), "{text}: {o:?}");
+        let rec = finrs::recording::Recording::read(&out).unwrap();
+        let expected = firmware_n(3, program, envelope, start_row, rows, Some(limits));
+        assert_same_rows(&text, &rec.v_v, &expected);
+    }
+    // Shaping options belong to --wave, and bad ones are named.
+    std::fs::copy(&out, dir.join("in.csv")).unwrap();
+    let input = dir.join("in.csv");
+    let o = run(&[
+        "--input",
+        input.to_str().unwrap(),
+        "--limit-v",
+        "1",
+        "--slew-v-per-s",
+        "5",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr)
+        .contains("--limit-v shapes a --wave; it does not apply to --input"));
+    let o = run(&[
+        "--wave",
+        "sine:1,1,0",
+        "--limit-v",
+        "4.5",
+        "--slew-v-per-s",
+        "5",
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr)
+        .contains("--limit-v 4.5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
