@@ -6,7 +6,8 @@
 //! A wave is the `--wave` syntax of `finrs simulate`, parsed and mapped
 //! onto the firmware's [`Program`](finrs_drive::Program) and
 //! [`Envelope`](finrs_drive::Envelope) by the one parser,
-//! [`crate::wave`]: refused unless `Generator::new` accepts it for the
+//! [`crate::wave`]: refused unless
+//! [`Generator::new`](finrs_drive::Generator::new) accepts it for the
 //! fin's segment count and its peak stays within
 //! [`HARD_LIMIT_V`](finrs_drive::HARD_LIMIT_V), so `finrs simulate` and
 //! `finrs wave` accept the same texts and drive the same voltages.
@@ -88,7 +89,8 @@ pub fn wave_command(req: &WaveRequest) -> Result<Command, String> {
 }
 
 /// The `SetLimit` command, refused unless the limit is one the firmware
-/// accepts (finite, above 0, at most [`HARD_LIMIT_V`]).
+/// accepts (finite, above 0, at most
+/// [`HARD_LIMIT_V`](finrs_drive::HARD_LIMIT_V)).
 pub fn limit_command(max_abs_v: f64) -> Result<Command, String> {
     let v = max_abs_v as f32;
     // Any valid slew will do: only the voltage is being checked.

@@ -234,7 +234,7 @@ fn travelling_wave_stays_within_the_sine_error_of_the_exact_wave() {
             worst = worst.max((rec.v_v[row][k] - exact).abs());
         }
     }
-    // 1.3 Hz in f32 is off by 4.8e-8 Hz: 2π·1.3e-7 rad over 3 s, far below.
+    // 1.3 Hz in f32 is off by 4.8e-8 Hz: 2π·1.4e-7 rad over 3 s, far below.
     assert!(
         worst <= 2.5 * f64::from(SINE_MAX_ERROR) + 1e-5,
         "worst {worst}"
