@@ -6,7 +6,9 @@
 //! - [`Generator`] evaluates a [`Program`] (travelling or standing sine,
 //!   steps, pulses, logarithmic chirp) under an [`Envelope`] for N = 1..=8
 //!   segments, at any time since the program started. It validates its
-//!   configuration and never limits.
+//!   configuration and never limits. It is the only wave generator of the
+//!   project: the host's `finrs simulate --wave` evaluates waves with it
+//!   as well, so simulations see the firmware's voltages.
 //! - [`Limiter`] enforces [`Limits`]: every voltage the firmware writes
 //!   passes through [`Limiter::apply`] (clamped to ±`max_abs_v` ≤
 //!   [`HARD_LIMIT_V`], slew-limited, NaN turned into a 0 V request) or is a

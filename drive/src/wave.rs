@@ -24,8 +24,11 @@ pub const MAX_FREQUENCY_HZ: f32 = 100.0;
 /// and catches typing errors.
 pub const MAX_PROGRAM_V: f32 = 1000.0;
 
-/// What each segment does. Every kind of the host's `--wave` is here
-/// (`step:`, `sine:`, `chirp:`, `pulses:`), plus a standing wave.
+/// What each segment does. The host's one `--wave` parser (`finrs::wave`)
+/// maps its texts onto these kinds one to one (`step:` → `Steps`, `sine:`
+/// → `Travelling`, `standing:` → `Standing`, `chirp:` → `Chirp`,
+/// `pulses:` → `Pulses`), and the host evaluates them with this generator
+/// too: `finrs simulate` and the firmware drive the same voltages.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Program {
     /// Travelling sine: segment k gets `offset_v + amplitude_v · sin(2π

@@ -3,11 +3,14 @@
 //! host with the firmware's own rules, and encode it with
 //! [`encode_command`].
 //!
-//! A wave is the `--wave` syntax of `finrs simulate` (`step:V[,V..]`,
-//! `sine:AMP,HZ,LAG_DEG`, `chirp:AMP,HZ0,HZ1`, `pulses:AMP,ON_S,OFF_S`) or
-//! `standing:AMP,HZ`, mapped onto a [`Program`] and an [`Envelope`] and
-//! refused unless [`Generator::new`] accepts it for the fin's segment
-//! count and its peak stays within [`HARD_LIMIT_V`].
+//! A wave is the `--wave` syntax of `finrs simulate`, parsed and mapped
+//! onto the firmware's [`Program`](finrs_drive::Program) and
+//! [`Envelope`](finrs_drive::Envelope) by the one parser,
+//! [`crate::wave`]: refused unless
+//! [`Generator::new`](finrs_drive::Generator::new) accepts it for the
+//! fin's segment count and its peak stays within
+//! [`HARD_LIMIT_V`](finrs_drive::HARD_LIMIT_V), so `finrs simulate` and
+//! `finrs wave` accept the same texts and drive the same voltages.
 //!
 //! ```
 //! use finrs::command::{wave_command, WaveRequest};
@@ -25,10 +28,10 @@
 //! assert_eq!(e, "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz");
 //! ```
 
-use finrs_drive::{Envelope, Generator, Limits, Program, HARD_LIMIT_V, MAX_SEGMENTS};
+use finrs_drive::Limits;
 use finrs_frames::{encode_command, Command, MAX_COMMAND_LEN};
 
-use crate::wave::Wave;
+use crate::wave::{Wave, WaveOptions};
 
 /// A wave for the firmware, as the command line gives it.
 #[derive(Clone, Debug, PartialEq)]
@@ -63,131 +66,31 @@ impl WaveRequest {
             sweep_s: 10.0,
         }
     }
+
+    /// The request's shaping options.
+    pub fn options(&self) -> WaveOptions {
+        WaveOptions {
+            offset_v: self.offset_v,
+            ramp_in_s: self.ramp_in_s,
+            hold_s: self.hold_s,
+            ramp_out_s: self.ramp_out_s,
+            sweep_s: self.sweep_s,
+        }
+    }
 }
 
 /// The `SetWave` command for a request, or the field and rule it breaks.
 pub fn wave_command(req: &WaveRequest) -> Result<Command, String> {
-    let spec = &req.spec;
-    if !(1..=MAX_SEGMENTS).contains(&req.segments) {
-        return Err(format!(
-            "--segments must be 1..={MAX_SEGMENTS}, got {}",
-            req.segments
-        ));
-    }
-    let f = |x: f64| x as f32;
-    let (program, peak_v) = if let Some(args) = spec.strip_prefix("standing:") {
-        let values: Vec<f64> = args
-            .split(',')
-            .map(|a| {
-                a.trim()
-                    .parse::<f64>()
-                    .map_err(|_| format!("wave `{spec}`: `{a}` is not a number"))
-            })
-            .collect::<Result<_, _>>()?;
-        let [amplitude_v, frequency_hz] = values[..] else {
-            return Err(format!(
-                "wave `{spec}`: standing takes AMPLITUDE_V,FREQUENCY_HZ"
-            ));
-        };
-        (
-            Program::Standing {
-                amplitude_v: f(amplitude_v),
-                frequency_hz: f(frequency_hz),
-                offset_v: f(req.offset_v),
-            },
-            amplitude_v.abs() + req.offset_v.abs(),
-        )
-    } else {
-        let wave = Wave::parse(spec)?;
-        wave.check_segments(req.segments)
-            .map_err(|e| format!("wave `{spec}`: {e}"))?;
-        if req.offset_v != 0.0 && !matches!(wave, Wave::Sine { .. }) {
-            return Err(format!(
-                "--offset-v applies to sine: and standing: waves only, not `{spec}`"
-            ));
-        }
-        match wave {
-            Wave::Step { levels_v } => {
-                let mut levels = [0.0f32; MAX_SEGMENTS];
-                for (k, level) in levels.iter_mut().take(req.segments).enumerate() {
-                    *level = f(levels_v[if levels_v.len() == 1 { 0 } else { k }]);
-                }
-                let peak = levels_v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                (Program::Steps { levels_v: levels }, peak)
-            }
-            Wave::Sine {
-                amplitude_v,
-                frequency_hz,
-                lag_deg,
-            } => (
-                Program::Travelling {
-                    amplitude_v: f(amplitude_v),
-                    frequency_hz: f(frequency_hz),
-                    lag_deg_per_segment: f(lag_deg),
-                    offset_v: f(req.offset_v),
-                },
-                amplitude_v.abs() + req.offset_v.abs(),
-            ),
-            Wave::Chirp {
-                amplitude_v,
-                start_hz,
-                end_hz,
-            } => (
-                Program::Chirp {
-                    amplitude_v: f(amplitude_v),
-                    start_hz: f(start_hz),
-                    end_hz: f(end_hz),
-                    duration_s: f(req.sweep_s),
-                },
-                amplitude_v.abs(),
-            ),
-            Wave::Pulses {
-                amplitude_v,
-                on_s,
-                off_s,
-            } => (
-                Program::Pulses {
-                    amplitude_v: f(amplitude_v),
-                    on_s: f(on_s),
-                    off_s: f(off_s),
-                },
-                amplitude_v.abs(),
-            ),
-        }
-    };
-    let envelope = Envelope {
-        ramp_in_s: f(req.ramp_in_s),
-        hold_s: f(req.hold_s),
-        ramp_out_s: f(req.ramp_out_s),
-    };
-    validate(req.segments, program, envelope).map_err(|e| format!("wave `{spec}`: {e}"))?;
-    // The firmware's limiter would clip a larger wave out of shape.
-    if peak_v.is_nan() || peak_v > f64::from(HARD_LIMIT_V) {
-        return Err(format!(
-            "wave `{spec}`: peak {peak_v} V (amplitude plus offset) exceeds the hard limit of ±{HARD_LIMIT_V} V"
-        ));
-    }
-    Ok(Command::SetWave { program, envelope })
-}
-
-/// Checks the program and envelope as the firmware's `Generator<N>` will.
-fn validate(segments: usize, program: Program, envelope: Envelope) -> Result<(), String> {
-    let checked = match segments {
-        1 => Generator::<1>::new(program, envelope).map(drop),
-        2 => Generator::<2>::new(program, envelope).map(drop),
-        3 => Generator::<3>::new(program, envelope).map(drop),
-        4 => Generator::<4>::new(program, envelope).map(drop),
-        5 => Generator::<5>::new(program, envelope).map(drop),
-        6 => Generator::<6>::new(program, envelope).map(drop),
-        7 => Generator::<7>::new(program, envelope).map(drop),
-        8 => Generator::<8>::new(program, envelope).map(drop),
-        n => return Err(format!("--segments must be 1..={MAX_SEGMENTS}, got {n}")),
-    };
-    checked.map_err(|e| e.to_string())
+    let generator = Wave::parse(&req.spec)?.generator(req.segments, &req.options())?;
+    Ok(Command::SetWave {
+        program: generator.program(),
+        envelope: generator.envelope(),
+    })
 }
 
 /// The `SetLimit` command, refused unless the limit is one the firmware
-/// accepts (finite, above 0, at most [`HARD_LIMIT_V`]).
+/// accepts (finite, above 0, at most
+/// [`HARD_LIMIT_V`](finrs_drive::HARD_LIMIT_V)).
 pub fn limit_command(max_abs_v: f64) -> Result<Command, String> {
     let v = max_abs_v as f32;
     // Any valid slew will do: only the voltage is being checked.
@@ -206,6 +109,7 @@ pub fn encode(c: &Command) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use finrs_drive::Program;
     use finrs_frames::{CommandDecoder, CommandEvent};
 
     fn program(spec: &str, segments: usize) -> Program {
@@ -291,16 +195,38 @@ mod tests {
         assert!(
             refuse(r).contains("peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V")
         );
-        assert!(refuse(WaveRequest::new("step:5", 3)).contains("exceeds the safe range"));
-        assert!(
-            refuse(WaveRequest::new("step:1,2", 3)).contains("step has 2 levels for 3 segments")
+        assert_eq!(
+            refuse(WaveRequest::new("step:5", 3)),
+            "wave `step:5`: peak 5 V (largest level) exceeds the hard limit of ±4 V"
         );
-        assert!(refuse(WaveRequest::new("standing:1", 3))
-            .contains("standing takes AMPLITUDE_V,FREQUENCY_HZ"));
-        assert!(refuse(WaveRequest::new("sine:1,1,0", 9)).contains("--segments must be 1..=8"));
+        assert_eq!(
+            refuse(WaveRequest::new("step:1,2", 3)),
+            "wave `step:1,2`: step has 2 levels for 3 segments"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("standing:1", 3)),
+            "wave `standing:1`: standing takes AMPLITUDE_V,FREQUENCY_HZ, got 1 value(s)"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("standing:1,x", 3)),
+            "wave `standing:1,x`: `x` is not a finite number"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("sine:1,1,0", 9)),
+            "--segments must be 1..=8, got 9"
+        );
         let mut r = WaveRequest::new("pulses:1,1,1", 3);
         r.offset_v = 0.5;
-        assert!(refuse(r).contains("--offset-v applies to sine: and standing:"));
+        assert_eq!(
+            refuse(r),
+            "--offset-v applies to sine: and standing: waves only, not `pulses:1,1,1`"
+        );
+        let mut r = WaveRequest::new("standing:1,1", 3);
+        r.offset_v = 3.5;
+        assert_eq!(
+            refuse(r),
+            "wave `standing:1,1`: peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V"
+        );
     }
 
     #[test]

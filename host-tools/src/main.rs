@@ -256,7 +256,8 @@ struct SimulateArgs {
     #[arg(long, conflicts_with = "wave", required_unless_present = "wave")]
     input: Option<PathBuf>,
     /// A wave instead of a recording: step:V[,V..], sine:AMP,HZ,LAG_DEG,
-    /// chirp:AMP,HZ0,HZ1 or pulses:AMP,ON_S,OFF_S.
+    /// standing:AMP,HZ, chirp:AMP,HZ0,HZ1 or pulses:AMP,ON_S,OFF_S (as
+    /// `finrs wave`, evaluated by the firmware's generator).
     #[arg(long)]
     wave: Option<String>,
     /// Segments, with --wave.
@@ -274,9 +275,28 @@ struct SimulateArgs {
     /// Rest at 0 V after the wave, s.
     #[arg(long, default_value_t = 0.0)]
     off_s: f64,
-    /// Sample rate, Hz.
+    /// Sample rate, Hz (whole: the generator's tick rate).
     #[arg(long, default_value_t = 1000.0)]
     rate_hz: f64,
+    /// Constant added to a sine: or standing: wave, V (default 0).
+    #[arg(long, allow_negative_numbers = true)]
+    offset_v: Option<f64>,
+    /// Raised-cosine ramp in, s, within --duration-s (default 0).
+    #[arg(long)]
+    ramp_in_s: Option<f64>,
+    /// Raised-cosine ramp out, s, within --duration-s (default 0).
+    #[arg(long)]
+    ramp_out_s: Option<f64>,
+    /// Length of one chirp: sweep, s (default: --duration-s).
+    #[arg(long)]
+    sweep_s: Option<f64>,
+    /// Pass the wave through the firmware's limiter at this voltage limit,
+    /// V (with --slew-v-per-s).
+    #[arg(long, requires = "slew_v_per_s")]
+    limit_v: Option<f64>,
+    /// The limiter's slew limit, V/s (with --limit-v).
+    #[arg(long, requires = "limit_v")]
+    slew_v_per_s: Option<f64>,
     /// Parameter file (TOML); default: the thesis_2006 preset.
     #[arg(long)]
     params: Option<PathBuf>,
@@ -346,7 +366,21 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
         None => ModelFile::thesis_2006(),
     };
     let (name, input) = match (&args.input, &args.wave) {
-        (Some(path), _) => (path.display().to_string(), Recording::read(path)?),
+        (Some(path), _) => {
+            // Shaping a recording's own voltages is not what these mean.
+            for (option, given) in [
+                ("--offset-v", args.offset_v.is_some()),
+                ("--ramp-in-s", args.ramp_in_s.is_some()),
+                ("--ramp-out-s", args.ramp_out_s.is_some()),
+                ("--sweep-s", args.sweep_s.is_some()),
+                ("--limit-v", args.limit_v.is_some()),
+            ] {
+                if given {
+                    bail!("{option} shapes a --wave; it does not apply to --input");
+                }
+            }
+            (path.display().to_string(), Recording::read(path)?)
+        }
         (None, Some(spec)) => {
             let wave = Wave::parse(spec).map_err(anyhow::Error::msg)?;
             let fixture = match args.fixture {
@@ -361,7 +395,21 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
                 off_s: args.off_s,
                 rate_hz: args.rate_hz,
             };
-            (spec.clone(), synth::drive_recording(&wave, &drive)?)
+            let limits = match (args.limit_v, args.slew_v_per_s) {
+                (Some(v), Some(slew)) => Some(synth::limits(v, slew)?),
+                _ => None,
+            };
+            let shaping = synth::Shaping {
+                offset_v: args.offset_v.unwrap_or(0.0),
+                ramp_in_s: args.ramp_in_s.unwrap_or(0.0),
+                ramp_out_s: args.ramp_out_s.unwrap_or(0.0),
+                sweep_s: args.sweep_s,
+                limits,
+            };
+            (
+                spec.clone(),
+                synth::drive_recording_shaped(&wave, &drive, &shaping)?,
+            )
         }
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
     };

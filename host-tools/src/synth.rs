@@ -1,7 +1,12 @@
 //! Recordings made from a wave: the drive only, ready to simulate.
+//!
+//! The voltages are the firmware's: the wave's [`finrs_drive::Generator`]
+//! counts ticks of the sample rate from the first row of the wave, as the
+//! firmware's controller counts its sample ticks, and, if asked, they pass
+//! through the firmware's [`finrs_drive::Limiter`] on every row.
 
 use crate::recording::{Fixture, Medium, Metadata, Recording};
-use crate::wave::Wave;
+use crate::wave::{Wave, WaveOptions};
 
 /// When and how a wave is applied.
 #[derive(Clone, Copy, Debug)]
@@ -12,22 +17,63 @@ pub struct Drive {
     pub fixture: Fixture,
     /// Rest at 0 V before the wave, s.
     pub rest_s: f64,
-    /// Duration of the wave, s.
+    /// Duration of the wave, s (ramps included).
     pub duration_s: f64,
     /// Rest at 0 V after the wave, s.
     pub off_s: f64,
-    /// Sample rate, Hz.
+    /// Sample rate, Hz: a whole number, the generator's tick rate.
     pub rate_hz: f64,
 }
 
-/// A voltage-only recording of the seed's strip driven by `wave`.
+/// How the wave is shaped and limited beyond its text.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shaping {
+    /// Constant added to a `sine:` or `standing:` wave, V.
+    pub offset_v: f64,
+    /// Ramp in at the start of the wave, s (within its duration).
+    pub ramp_in_s: f64,
+    /// Ramp out at the end of the wave, s (within its duration).
+    pub ramp_out_s: f64,
+    /// Length of one `chirp:` sweep, s; `None`: the wave's duration.
+    pub sweep_s: Option<f64>,
+    /// The firmware's limiter (voltage and slew limits) on every row;
+    /// `None`: the generator's voltages as they are (within the hard limit).
+    pub limits: Option<finrs_drive::Limits>,
+}
+
+/// The firmware's limits from `--limit-v` and `--slew-v-per-s`, checked by
+/// [`finrs_drive::Limits::new`]; the error names the option and its rule.
+pub fn limits(limit_v: f64, slew_v_per_s: f64) -> anyhow::Result<finrs_drive::Limits> {
+    use finrs_drive::LimitError as E;
+    finrs_drive::Limits::new(limit_v as f32, slew_v_per_s as f32).map_err(|e| match e {
+        E::SlewNotFinite | E::SlewNotPositive => {
+            anyhow::anyhow!("--slew-v-per-s {slew_v_per_s}: {e}")
+        }
+        _ => anyhow::anyhow!("--limit-v {limit_v}: {e}"),
+    })
+}
+
+/// A voltage-only recording of the seed's strip driven by `wave`, with no
+/// ramps, offset nor limiter, and chirps sweeping over the whole duration.
 pub fn drive_recording(wave: &Wave, d: &Drive) -> anyhow::Result<Recording> {
-    if !(1..=8).contains(&d.segments) {
-        anyhow::bail!("--segments must be 1..=8, got {}", d.segments);
-    }
-    wave.check_segments(d.segments)
-        .map_err(anyhow::Error::msg)?;
-    for (name, v) in [("--rest-s", d.rest_s), ("--off-s", d.off_s)] {
+    drive_recording_shaped(wave, d, &Shaping::default())
+}
+
+/// A voltage-only recording of the seed's strip driven by `wave`, shaped by
+/// `shaping`. The wave starts on the first row at or after `rest_s` and
+/// its envelope (ramp in, hold, ramp out) lasts `duration_s`; every row's
+/// voltages are the firmware generator's at that row's tick.
+pub fn drive_recording_shaped(
+    wave: &Wave,
+    d: &Drive,
+    shaping: &Shaping,
+) -> anyhow::Result<Recording> {
+    for (name, v) in [
+        ("--rest-s", d.rest_s),
+        ("--off-s", d.off_s),
+        ("--ramp-in-s", shaping.ramp_in_s),
+        ("--ramp-out-s", shaping.ramp_out_s),
+    ] {
         if !(v.is_finite() && v >= 0.0) {
             anyhow::bail!("{name} must be zero or positive, got {v}");
         }
@@ -37,30 +83,48 @@ pub fn drive_recording(wave: &Wave, d: &Drive) -> anyhow::Result<Recording> {
             anyhow::bail!("{name} must be positive, got {v}");
         }
     }
+    // The firmware's generator counts whole ticks of a whole-hertz clock.
+    if d.rate_hz.fract() != 0.0 || d.rate_hz > f64::from(u32::MAX) {
+        anyhow::bail!(
+            "--rate-hz must be a whole number of Hz up to {} (the generator counts ticks), got {}",
+            u32::MAX,
+            d.rate_hz
+        );
+    }
+    let tick_hz = d.rate_hz as u32;
+    let hold_s = d.duration_s - shaping.ramp_in_s - shaping.ramp_out_s;
+    if hold_s < 0.0 {
+        anyhow::bail!(
+            "--ramp-in-s + --ramp-out-s must not exceed --duration-s: {} + {} > {}",
+            shaping.ramp_in_s,
+            shaping.ramp_out_s,
+            d.duration_s
+        );
+    }
+    let options = WaveOptions {
+        offset_v: shaping.offset_v,
+        ramp_in_s: shaping.ramp_in_s,
+        hold_s,
+        ramp_out_s: shaping.ramp_out_s,
+        sweep_s: shaping.sweep_s.unwrap_or(d.duration_s),
+    };
+    let generator = wave
+        .generator(d.segments, &options)
+        .map_err(anyhow::Error::msg)?;
     let total_s = d.rest_s + d.duration_s + d.off_s;
     let rows = (total_s * d.rate_hz).round() as usize + 1;
     if rows > 50_000_000 {
         anyhow::bail!("{rows} rows is more than this tool writes (50 million)");
     }
-    let mut t_s = Vec::with_capacity(rows);
-    let mut v_v = Vec::with_capacity(rows);
-    for k in 0..rows {
-        let t = k as f64 / d.rate_hz;
-        let local = t - d.rest_s;
-        let on = local >= 0.0 && local < d.duration_s;
-        v_v.push(
-            (0..d.segments)
-                .map(|s| {
-                    if on {
-                        wave.voltage_v(s, local, d.duration_s)
-                    } else {
-                        0.0
-                    }
-                })
-                .collect(),
-        );
-        t_s.push(t);
-    }
+    // First row at or after rest_s (the 1e-9 forgives rounding in the
+    // product, e.g. 0.1 s × 1000 Hz).
+    let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
+    let mut v_v = vec![vec![0.0; d.segments]; start_row];
+    let wave_rows = (rows - start_row) as u64;
+    // A limiter through the rest would hold its outputs at 0 V: starting
+    // it with the wave gives the same rows.
+    v_v.extend(generator.run(wave_rows, tick_hz, shaping.limits));
+    let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
     let g = crate::params::Geometry::THESIS_2006;
     Ok(Recording {
         meta: Metadata {
@@ -79,4 +143,26 @@ pub fn drive_recording(wave: &Wave, d: &Drive) -> anyhow::Result<Recording> {
         v_v,
         channels: Vec::new(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limits_name_the_option_and_rule() {
+        assert_eq!(limits(1.5, 20.0).unwrap().max_abs_v(), 1.5);
+        assert_eq!(
+            limits(5.0, 20.0).unwrap_err().to_string(),
+            "--limit-v 5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"
+        );
+        assert_eq!(
+            limits(1.0, 0.0).unwrap_err().to_string(),
+            "--slew-v-per-s 0: slew_v_per_s must be above 0"
+        );
+        assert_eq!(
+            limits(f64::NAN, 1.0).unwrap_err().to_string(),
+            "--limit-v NaN: max_abs_v must be finite"
+        );
+    }
 }

@@ -1,15 +1,39 @@
-//! Drive waves described on the command line, for simulating without a
-//! recording: `step:2.5`, `step:2,1,-2`, `sine:2.5,1,120`, `chirp:2,0.1,20`,
-//! `pulses:2.5,20,20`.
+//! The one parser of the `--wave` syntax, shared by `finrs simulate` and
+//! `finrs wave`: `step:V[,V..]`, `sine:AMP,HZ,LAG_DEG`, `standing:AMP,HZ`,
+//! `chirp:AMP,HZ0,HZ1`, `pulses:AMP,ON_S,OFF_S`.
+//!
+//! [`Wave::parse`] checks the syntax only (kind, number of values, finite
+//! numbers). [`Wave::generator`] maps the wave, with its [`WaveOptions`]
+//! (offset, ramps, hold, chirp sweep), onto a [`finrs_drive::Program`] and
+//! [`finrs_drive::Envelope`] for a segment count, and validates them once:
+//! with [`Generator::new`], the firmware's own rules, and the host's check
+//! that the peak stays within [`HARD_LIMIT_V`]. The host evaluates waves
+//! with nothing else than the firmware's [`Generator`]: [`SegmentGenerator`]
+//! holds one for a segment count known at run time.
+//!
+//! ```
+//! use finrs::wave::{Wave, WaveOptions};
+//!
+//! let wave = Wave::parse("sine:2,1,120").unwrap();
+//! let g = wave.generator(3, &WaveOptions::steady(10.0)).unwrap();
+//! // A quarter period in, at 1 kHz: the root at the crest, the others lag.
+//! let v = g.voltages_at_tick_v(250, 1000);
+//! assert!((v[0] - 2.0).abs() < 2.0 * finrs_drive::SINE_MAX_ERROR as f64);
+//! assert!((v[1] - 2.0 * (-30f64).to_radians().sin()).abs() < 5e-3);
+//!
+//! let e = wave.generator(3, &WaveOptions { offset_v: 2.5, ..WaveOptions::steady(10.0) });
+//! assert_eq!(
+//!     e.unwrap_err(),
+//!     "wave `sine:2,1,120`: peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V"
+//! );
+//! ```
 
-use std::f64::consts::PI;
+use finrs_drive::{Envelope, Generator, Program, HARD_LIMIT_V, MAX_SEGMENTS};
 
-/// The safe range of the seed's Nafion samples, V (as in `FORMAT.md`).
-pub const SAFE_VOLTAGE_V: f64 = 4.0;
-
-/// A wave on every segment.
+/// A wave as its text gives it: what each segment does, before the options
+/// and the segment count turn it into a drive program.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Wave {
+pub enum WaveKind {
     /// Constant voltages; one value means every segment.
     Step {
         /// Voltage per segment, V.
@@ -24,7 +48,16 @@ pub enum Wave {
         /// Phase lag per segment, degrees.
         lag_deg: f64,
     },
-    /// Logarithmic chirp, all segments in phase.
+    /// Standing wave: root and tip in antiphase, node in the middle (see
+    /// [`Program::Standing`]).
+    Standing {
+        /// Amplitude at the root and tip, V.
+        amplitude_v: f64,
+        /// Frequency, Hz.
+        frequency_hz: f64,
+    },
+    /// Logarithmic chirp, all segments in phase; the sweep's length is an
+    /// option ([`WaveOptions::sweep_s`]).
     Chirp {
         /// Amplitude, V.
         amplitude_v: f64,
@@ -45,8 +78,45 @@ pub enum Wave {
     },
 }
 
+/// A parsed `--wave` text.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wave {
+    text: String,
+    kind: WaveKind,
+}
+
+/// What shapes a wave beyond its text.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WaveOptions {
+    /// Constant added to a `sine:` or `standing:` wave, V (0 for others).
+    pub offset_v: f64,
+    /// Time to full amplitude, s.
+    pub ramp_in_s: f64,
+    /// Time at full amplitude, s (infinite: for ever).
+    pub hold_s: f64,
+    /// Time from full amplitude to zero, s.
+    pub ramp_out_s: f64,
+    /// Length of one `chirp:` sweep, s.
+    pub sweep_s: f64,
+}
+
+impl WaveOptions {
+    /// No offset, no ramps, held for ever, chirps sweeping over `sweep_s`.
+    pub fn steady(sweep_s: f64) -> Self {
+        WaveOptions {
+            offset_v: 0.0,
+            ramp_in_s: 0.0,
+            hold_s: f64::INFINITY,
+            ramp_out_s: 0.0,
+            sweep_s,
+        }
+    }
+}
+
 impl Wave {
-    /// Parses `kind:a,b,c`; the message names the rule broken.
+    /// Parses `kind:a,b,c`; the message names the wave, the value and the
+    /// rule broken. Only the syntax is checked here: the values' ranges are
+    /// the firmware's ([`Wave::generator`]).
     pub fn parse(spec: &str) -> Result<Wave, String> {
         let (kind, args) = spec
             .split_once(':')
@@ -65,24 +135,34 @@ impl Wave {
             if values.len() == n {
                 Ok(())
             } else {
-                Err(format!("wave `{spec}`: {kind} takes {usage}"))
+                Err(format!(
+                    "wave `{spec}`: {kind} takes {usage}, got {} value(s)",
+                    values.len()
+                ))
             }
         };
-        let wave = match kind {
-            "step" => Wave::Step {
+        let kind = match kind {
+            "step" => WaveKind::Step {
                 levels_v: values.clone(),
             },
             "sine" => {
                 need(3, "AMPLITUDE_V,FREQUENCY_HZ,LAG_DEG")?;
-                Wave::Sine {
+                WaveKind::Sine {
                     amplitude_v: values[0],
                     frequency_hz: values[1],
                     lag_deg: values[2],
                 }
             }
+            "standing" => {
+                need(2, "AMPLITUDE_V,FREQUENCY_HZ")?;
+                WaveKind::Standing {
+                    amplitude_v: values[0],
+                    frequency_hz: values[1],
+                }
+            }
             "chirp" => {
                 need(3, "AMPLITUDE_V,START_HZ,END_HZ")?;
-                Wave::Chirp {
+                WaveKind::Chirp {
                     amplitude_v: values[0],
                     start_hz: values[1],
                     end_hz: values[2],
@@ -90,7 +170,7 @@ impl Wave {
             }
             "pulses" => {
                 need(3, "AMPLITUDE_V,ON_S,OFF_S")?;
-                Wave::Pulses {
+                WaveKind::Pulses {
                     amplitude_v: values[0],
                     on_s: values[1],
                     off_s: values[2],
@@ -98,137 +178,441 @@ impl Wave {
             }
             other => {
                 return Err(format!(
-                    "wave `{spec}`: unknown kind `{other}` (step, sine, chirp, pulses)"
+                    "wave `{spec}`: unknown kind `{other}` (step, sine, standing, chirp, pulses)"
                 ))
             }
         };
-        wave.check(spec)?;
-        Ok(wave)
+        Ok(Wave {
+            text: spec.to_string(),
+            kind,
+        })
     }
 
-    fn check(&self, spec: &str) -> Result<(), String> {
-        let peak = match self {
-            Wave::Step { levels_v } => levels_v.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-            Wave::Sine { amplitude_v, .. }
-            | Wave::Chirp { amplitude_v, .. }
-            | Wave::Pulses { amplitude_v, .. } => amplitude_v.abs(),
-        };
-        if peak > SAFE_VOLTAGE_V {
-            return Err(format!(
-                "wave `{spec}`: {peak} V exceeds the safe range of ±{SAFE_VOLTAGE_V} V"
-            ));
-        }
-        let positive = |name: &str, v: f64| {
-            if v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("wave `{spec}`: {name} must be positive"))
-            }
-        };
-        match *self {
-            Wave::Sine { frequency_hz, .. } => positive("frequency", frequency_hz),
-            Wave::Chirp {
-                start_hz, end_hz, ..
-            } => {
-                positive("start frequency", start_hz)?;
-                positive("end frequency", end_hz)
-            }
-            Wave::Pulses { on_s, off_s, .. } => {
-                positive("on time", on_s)?;
-                positive("off time", off_s)
-            }
-            Wave::Step { .. } => Ok(()),
-        }
+    /// The wave's text, as given.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// What the text describes.
+    pub fn kind(&self) -> &WaveKind {
+        &self.kind
     }
 
     /// Checks that a step names one level or one per segment.
     pub fn check_segments(&self, segments: usize) -> Result<(), String> {
-        match self {
-            Wave::Step { levels_v } if levels_v.len() != 1 && levels_v.len() != segments => Err(
-                format!("step has {} levels for {segments} segments", levels_v.len()),
-            ),
+        match &self.kind {
+            WaveKind::Step { levels_v } if levels_v.len() != 1 && levels_v.len() != segments => {
+                Err(format!(
+                    "wave `{}`: step has {} levels for {segments} segments",
+                    self.text,
+                    levels_v.len()
+                ))
+            }
             _ => Ok(()),
         }
     }
 
-    /// Voltage on `segment` (0-based) at `t_s` after the drive starts, over
-    /// a drive of `duration_s`.
-    pub fn voltage_v(&self, segment: usize, t_s: f64, duration_s: f64) -> f64 {
-        match self {
-            Wave::Step { levels_v } => levels_v[if levels_v.len() == 1 { 0 } else { segment }],
-            Wave::Sine {
+    /// The firmware's program and envelope for `segments` segments, checked
+    /// as the firmware checks them ([`Generator::new`]) and for a peak
+    /// within [`HARD_LIMIT_V`], ready to evaluate.
+    pub fn generator(
+        &self,
+        segments: usize,
+        options: &WaveOptions,
+    ) -> Result<SegmentGenerator, String> {
+        if !(1..=MAX_SEGMENTS).contains(&segments) {
+            return Err(format!(
+                "--segments must be 1..={MAX_SEGMENTS}, got {segments}"
+            ));
+        }
+        self.check_segments(segments)?;
+        let spec = &self.text;
+        let offset_v = match self.kind {
+            WaveKind::Sine { .. } | WaveKind::Standing { .. } => options.offset_v,
+            _ if options.offset_v == 0.0 => 0.0,
+            _ => {
+                return Err(format!(
+                    "--offset-v applies to sine: and standing: waves only, not `{spec}`"
+                ))
+            }
+        };
+        let f = |x: f64| x as f32;
+        let (program, peak_v, peak_is) = match &self.kind {
+            WaveKind::Step { levels_v } => {
+                let mut levels = [0.0f32; MAX_SEGMENTS];
+                for (k, level) in levels.iter_mut().take(segments).enumerate() {
+                    *level = f(levels_v[if levels_v.len() == 1 { 0 } else { k }]);
+                }
+                let peak = levels_v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                (Program::Steps { levels_v: levels }, peak, "largest level")
+            }
+            &WaveKind::Sine {
                 amplitude_v,
                 frequency_hz,
                 lag_deg,
-            } => {
-                amplitude_v
-                    * (2.0 * PI * frequency_hz * t_s - segment as f64 * lag_deg.to_radians()).sin()
-            }
-            Wave::Chirp {
+            } => (
+                Program::Travelling {
+                    amplitude_v: f(amplitude_v),
+                    frequency_hz: f(frequency_hz),
+                    lag_deg_per_segment: f(lag_deg),
+                    offset_v: f(offset_v),
+                },
+                amplitude_v.abs() + offset_v.abs(),
+                "amplitude plus offset",
+            ),
+            &WaveKind::Standing {
+                amplitude_v,
+                frequency_hz,
+            } => (
+                Program::Standing {
+                    amplitude_v: f(amplitude_v),
+                    frequency_hz: f(frequency_hz),
+                    offset_v: f(offset_v),
+                },
+                amplitude_v.abs() + offset_v.abs(),
+                "amplitude plus offset",
+            ),
+            &WaveKind::Chirp {
                 amplitude_v,
                 start_hz,
                 end_hz,
-            } => {
-                // Phase of f(t) = f0 (f1/f0)^(t/T): 2π f0 T (r^(t/T) − 1)/ln r.
-                let ratio = end_hz / start_hz;
-                let phase = if (ratio - 1.0).abs() < 1e-12 {
-                    2.0 * PI * start_hz * t_s
-                } else {
-                    2.0 * PI * start_hz * duration_s * (ratio.powf(t_s / duration_s) - 1.0)
-                        / ratio.ln()
-                };
-                amplitude_v * phase.sin()
-            }
-            Wave::Pulses {
+            } => (
+                Program::Chirp {
+                    amplitude_v: f(amplitude_v),
+                    start_hz: f(start_hz),
+                    end_hz: f(end_hz),
+                    duration_s: f(options.sweep_s),
+                },
+                amplitude_v.abs(),
+                "amplitude",
+            ),
+            &WaveKind::Pulses {
                 amplitude_v,
                 on_s,
                 off_s,
-            } => {
-                if t_s % (on_s + off_s) < *on_s {
-                    *amplitude_v
-                } else {
-                    0.0
-                }
-            }
+            } => (
+                Program::Pulses {
+                    amplitude_v: f(amplitude_v),
+                    on_s: f(on_s),
+                    off_s: f(off_s),
+                },
+                amplitude_v.abs(),
+                "amplitude",
+            ),
+        };
+        let envelope = Envelope {
+            ramp_in_s: f(options.ramp_in_s),
+            hold_s: f(options.hold_s),
+            ramp_out_s: f(options.ramp_out_s),
+        };
+        let generator = SegmentGenerator::new(segments, program, envelope)
+            .map_err(|e| format!("wave `{spec}`: {e}"))?;
+        // The firmware's limiter would clip a larger wave out of shape.
+        if peak_v.is_nan() || peak_v > f64::from(HARD_LIMIT_V) {
+            return Err(format!(
+                "wave `{spec}`: peak {peak_v} V ({peak_is}) exceeds the hard limit of ±{HARD_LIMIT_V} V"
+            ));
+        }
+        Ok(generator)
+    }
+}
+
+/// The firmware's [`Generator<N>`] for a segment count known at run time
+/// (N = 1..=8). Built only through [`Generator::new`], so it holds a
+/// program the firmware accepts.
+#[derive(Clone, Debug)]
+pub enum SegmentGenerator {
+    /// One segment.
+    N1(Generator<1>),
+    /// Two segments.
+    N2(Generator<2>),
+    /// Three segments.
+    N3(Generator<3>),
+    /// Four segments.
+    N4(Generator<4>),
+    /// Five segments.
+    N5(Generator<5>),
+    /// Six segments.
+    N6(Generator<6>),
+    /// Seven segments.
+    N7(Generator<7>),
+    /// Eight segments.
+    N8(Generator<8>),
+}
+
+/// Runs `$body` with `$g` bound to the inner `Generator<N>`, whatever N.
+macro_rules! each_generator {
+    ($self:expr, $g:ident => $body:expr) => {
+        match $self {
+            SegmentGenerator::N1($g) => $body,
+            SegmentGenerator::N2($g) => $body,
+            SegmentGenerator::N3($g) => $body,
+            SegmentGenerator::N4($g) => $body,
+            SegmentGenerator::N5($g) => $body,
+            SegmentGenerator::N6($g) => $body,
+            SegmentGenerator::N7($g) => $body,
+            SegmentGenerator::N8($g) => $body,
+        }
+    };
+}
+
+impl SegmentGenerator {
+    /// `Generator::<segments>::new(program, envelope)`; the error names the
+    /// field and rule (or the segment count) broken.
+    pub fn new(segments: usize, program: Program, envelope: Envelope) -> Result<Self, String> {
+        let e = |e: finrs_drive::WaveError| e.to_string();
+        Ok(match segments {
+            1 => SegmentGenerator::N1(Generator::new(program, envelope).map_err(e)?),
+            2 => SegmentGenerator::N2(Generator::new(program, envelope).map_err(e)?),
+            3 => SegmentGenerator::N3(Generator::new(program, envelope).map_err(e)?),
+            4 => SegmentGenerator::N4(Generator::new(program, envelope).map_err(e)?),
+            5 => SegmentGenerator::N5(Generator::new(program, envelope).map_err(e)?),
+            6 => SegmentGenerator::N6(Generator::new(program, envelope).map_err(e)?),
+            7 => SegmentGenerator::N7(Generator::new(program, envelope).map_err(e)?),
+            8 => SegmentGenerator::N8(Generator::new(program, envelope).map_err(e)?),
+            n => return Err(format!("--segments must be 1..={MAX_SEGMENTS}, got {n}")),
+        })
+    }
+
+    /// The segment count N.
+    pub fn segments(&self) -> usize {
+        match self {
+            SegmentGenerator::N1(_) => 1,
+            SegmentGenerator::N2(_) => 2,
+            SegmentGenerator::N3(_) => 3,
+            SegmentGenerator::N4(_) => 4,
+            SegmentGenerator::N5(_) => 5,
+            SegmentGenerator::N6(_) => 6,
+            SegmentGenerator::N7(_) => 7,
+            SegmentGenerator::N8(_) => 8,
         }
     }
+
+    /// The program.
+    pub fn program(&self) -> Program {
+        each_generator!(self, g => g.program())
+    }
+
+    /// The envelope.
+    pub fn envelope(&self) -> Envelope {
+        each_generator!(self, g => g.envelope())
+    }
+
+    /// [`Generator::voltages_at_tick_v`], one value per segment, in f64.
+    pub fn voltages_at_tick_v(&self, tick: u64, tick_hz: u32) -> Vec<f64> {
+        each_generator!(self, g => widen(&g.voltages_at_tick_v(tick, tick_hz)))
+    }
+
+    /// Every tick's voltages from tick 0 to `ticks − 1` at `tick_hz`, after
+    /// the firmware's [`finrs_drive::Limiter`] with `limits` if given (its
+    /// outputs start at 0 V, as on the board; one limiter step per tick).
+    pub fn run(
+        &self,
+        ticks: u64,
+        tick_hz: u32,
+        limits: Option<finrs_drive::Limits>,
+    ) -> Vec<Vec<f64>> {
+        each_generator!(self, g => run(g, ticks, tick_hz, limits))
+    }
+}
+
+fn widen(v: &[f32]) -> Vec<f64> {
+    v.iter().map(|&x| f64::from(x)).collect()
+}
+
+fn run<const N: usize>(
+    g: &Generator<N>,
+    ticks: u64,
+    tick_hz: u32,
+    limits: Option<finrs_drive::Limits>,
+) -> Vec<Vec<f64>> {
+    let mut limiter = limits.map(finrs_drive::Limiter::<N>::new);
+    // As the firmware's controller: the tick period in f32.
+    let dt_s = 1.0 / tick_hz as f32;
+    (0..ticks)
+        .map(|tick| {
+            let wanted = g.voltages_at_tick_v(tick, tick_hz);
+            match &mut limiter {
+                Some(l) => widen(&l.apply(wanted, dt_s)),
+                None => widen(&wanted),
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn generator(spec: &str, segments: usize) -> Result<SegmentGenerator, String> {
+        Wave::parse(spec)?.generator(segments, &WaveOptions::steady(10.0))
+    }
+
     #[test]
     fn parses_every_kind() {
         assert_eq!(
-            Wave::parse("step:2,1,-2").unwrap(),
-            Wave::Step {
+            Wave::parse("step:2,1,-2").unwrap().kind(),
+            &WaveKind::Step {
                 levels_v: vec![2.0, 1.0, -2.0]
             }
         );
-        let sine = Wave::parse("sine:2.5,1,120").unwrap();
-        assert!((sine.voltage_v(1, 0.0, 1.0) - 2.5 * (-120f64.to_radians()).sin()).abs() < 1e-12);
-        let chirp = Wave::parse("chirp:2,0.1,20").unwrap();
-        assert!(chirp.voltage_v(0, 3.0, 12.0).abs() <= 2.0);
-        let pulses = Wave::parse("pulses:2.5,20,20").unwrap();
-        assert_eq!(pulses.voltage_v(0, 19.9, 100.0), 2.5);
-        assert_eq!(pulses.voltage_v(0, 20.1, 100.0), 0.0);
+        assert_eq!(
+            Wave::parse("sine:2.5,1,120").unwrap().kind(),
+            &WaveKind::Sine {
+                amplitude_v: 2.5,
+                frequency_hz: 1.0,
+                lag_deg: 120.0
+            }
+        );
+        assert_eq!(
+            Wave::parse("standing:1, 0.5").unwrap().kind(),
+            &WaveKind::Standing {
+                amplitude_v: 1.0,
+                frequency_hz: 0.5
+            }
+        );
+        assert_eq!(
+            Wave::parse("chirp:2,0.1,20").unwrap().kind(),
+            &WaveKind::Chirp {
+                amplitude_v: 2.0,
+                start_hz: 0.1,
+                end_hz: 20.0
+            }
+        );
+        assert_eq!(
+            Wave::parse("pulses:2.5,20,20").unwrap().kind(),
+            &WaveKind::Pulses {
+                amplitude_v: 2.5,
+                on_s: 20.0,
+                off_s: 20.0
+            }
+        );
+        assert_eq!(
+            Wave::parse("sine:2.5,1,120").unwrap().text(),
+            "sine:2.5,1,120"
+        );
+    }
+
+    #[test]
+    fn every_kind_evaluates_through_the_generator() {
+        let sine = generator("sine:2.5,1,120", 3).unwrap();
+        let v = sine.voltages_at_tick_v(0, 1000);
+        assert_eq!(v.len(), 3);
+        assert_eq!(v[0], 0.0);
+        let exact = 2.5 * (-120f64).to_radians().sin();
+        assert!((v[1] - exact).abs() < 2.5 * 1.1e-3, "{v:?}");
+        let chirp = generator("chirp:2,0.1,20", 3).unwrap();
+        for tick in (0..12_000).step_by(7) {
+            assert!(chirp.voltages_at_tick_v(tick, 1000)[0].abs() <= 2.0);
+        }
+        let pulses = generator("pulses:2.5,20,20", 1).unwrap();
+        assert_eq!(pulses.voltages_at_tick_v(19_900, 1000), [2.5]);
+        assert_eq!(pulses.voltages_at_tick_v(20_100, 1000), [0.0]);
+        let step = generator("step:1.5", 2).unwrap();
+        assert_eq!(step.voltages_at_tick_v(123_456, 1000), [1.5, 1.5]);
+        assert_eq!(step.segments(), 2);
+        // Standing, N = 3: root and tip in antiphase, the middle a node.
+        let standing = generator("standing:1,0.5", 3).unwrap();
+        let v = standing.voltages_at_tick_v(500, 1000);
+        assert!(
+            (v[0] - 1.0).abs() < 1.1e-3 && (v[2] + 1.0).abs() < 1.1e-3,
+            "{v:?}"
+        );
+        assert!(v[1].abs() < 1.1e-3, "{v:?}");
     }
 
     #[test]
     fn refuses_with_reasons() {
-        for (spec, needle) in [
-            ("step", "KIND:VALUES"),
-            ("step:5", "safe range"),
-            ("sine:2,1", "takes AMPLITUDE_V"),
-            ("sine:2,0,1", "frequency must be positive"),
-            ("wobble:1", "unknown kind"),
-            ("step:x", "not a finite number"),
-            ("step:nan", "not a finite number"),
+        for (spec, message) in [
+            ("step", "wave `step`: expected KIND:VALUES, e.g. step:2.5"),
+            (
+                "sine:2,1",
+                "wave `sine:2,1`: sine takes AMPLITUDE_V,FREQUENCY_HZ,LAG_DEG, got 2 value(s)",
+            ),
+            (
+                "standing:1",
+                "wave `standing:1`: standing takes AMPLITUDE_V,FREQUENCY_HZ, got 1 value(s)",
+            ),
+            (
+                "wobble:1",
+                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses)",
+            ),
+            ("step:x", "wave `step:x`: `x` is not a finite number"),
+            ("step:nan", "wave `step:nan`: `nan` is not a finite number"),
+            (
+                "step:1,inf",
+                "wave `step:1,inf`: `inf` is not a finite number",
+            ),
         ] {
-            let err = Wave::parse(spec).unwrap_err();
-            assert!(err.contains(needle), "{spec}: {err}");
+            assert_eq!(Wave::parse(spec).unwrap_err(), message);
         }
-        assert!(Wave::parse("step:1,2").unwrap().check_segments(3).is_err());
+        // Ranges are the firmware's, checked when the program is built.
+        for (spec, message) in [
+            (
+                "step:5",
+                "wave `step:5`: peak 5 V (largest level) exceeds the hard limit of ±4 V",
+            ),
+            (
+                "sine:2,0,1",
+                "wave `sine:2,0,1`: Travelling.frequency_hz must be within 0.001..=100 Hz",
+            ),
+            (
+                "sine:-1,1,0",
+                "wave `sine:-1,1,0`: Travelling.amplitude_v must be at least 0",
+            ),
+            (
+                "standing:1,300",
+                "wave `standing:1,300`: Standing.frequency_hz must be within 0.001..=100 Hz",
+            ),
+            (
+                "pulses:2,-1,1",
+                "wave `pulses:2,-1,1`: Pulses.on_s must be at least 0",
+            ),
+            (
+                "pulses:2,0,0",
+                "wave `pulses:2,0,0`: Pulses.on_s + off_s must be above 0",
+            ),
+            (
+                "chirp:2,5,1",
+                "wave `chirp:2,5,1`: Chirp.end_hz must be above start_hz",
+            ),
+            (
+                "step:1,2",
+                "wave `step:1,2`: step has 2 levels for 3 segments",
+            ),
+            (
+                "step:1e40",
+                "wave `step:1e40`: Steps.levels_v must be finite",
+            ),
+        ] {
+            assert_eq!(generator(spec, 3).unwrap_err(), message);
+        }
+        assert_eq!(
+            generator("sine:1,1,0", 0).unwrap_err(),
+            "--segments must be 1..=8, got 0"
+        );
+        let wave = Wave::parse("pulses:1,1,1").unwrap();
+        let offset = WaveOptions {
+            offset_v: 0.5,
+            ..WaveOptions::steady(10.0)
+        };
+        assert_eq!(
+            wave.generator(3, &offset).unwrap_err(),
+            "--offset-v applies to sine: and standing: waves only, not `pulses:1,1,1`"
+        );
+    }
+
+    #[test]
+    fn the_limiter_is_the_firmwares() {
+        let g = generator("step:3", 2).unwrap();
+        let limits = finrs_drive::Limits::new(2.0, 100.0).unwrap();
+        let rows = g.run(50, 1000, Some(limits));
+        // 0.1 V per 1 ms tick from 0 V, then held at the 2 V limit.
+        for (tick, row) in rows.iter().enumerate() {
+            let expected = (0.1 * (tick + 1) as f64).min(2.0);
+            assert!((row[0] - expected).abs() < 1e-5, "{tick}: {row:?}");
+            assert_eq!(row[0], row[1]);
+        }
+        assert_eq!(g.run(3, 1000, None), vec![vec![3.0, 3.0]; 3]);
     }
 }
