@@ -260,24 +260,28 @@ struct SimulateArgs {
     /// `finrs wave`, evaluated by the firmware's generator).
     #[arg(long)]
     wave: Option<String>,
-    /// Segments, with --wave.
-    #[arg(long, default_value_t = 3)]
-    segments: usize,
-    /// Fixture, with --wave.
-    #[arg(long, value_enum, default_value_t = FixtureArg::Free)]
-    fixture: FixtureArg,
-    /// Rest at 0 V before the wave, s.
-    #[arg(long, default_value_t = 1.0)]
-    rest_s: f64,
-    /// Duration of the wave, s.
-    #[arg(long, default_value_t = 10.0)]
-    duration_s: f64,
-    /// Rest at 0 V after the wave, s.
-    #[arg(long, default_value_t = 0.0)]
-    off_s: f64,
-    /// Sample rate, Hz (whole: the generator's tick rate).
-    #[arg(long, default_value_t = 1000.0)]
-    rate_hz: f64,
+    // The options below shape a --wave only; they are `Option`s, defaults
+    // applied in `run_simulate`, so that one given with --input is refused
+    // instead of silently ignored.
+    /// Segments, with --wave (default 3).
+    #[arg(long)]
+    segments: Option<usize>,
+    /// Fixture, with --wave (default free).
+    #[arg(long, value_enum)]
+    fixture: Option<FixtureArg>,
+    /// Rest at 0 V before the wave, s (default 1).
+    #[arg(long)]
+    rest_s: Option<f64>,
+    /// Duration of the wave, s (default 10).
+    #[arg(long)]
+    duration_s: Option<f64>,
+    /// Rest at 0 V after the wave, s (default 0).
+    #[arg(long)]
+    off_s: Option<f64>,
+    /// Sample rate, Hz, with --wave (whole: the generator's tick rate;
+    /// default 1000).
+    #[arg(long)]
+    rate_hz: Option<f64>,
     /// Constant added to a sine: or standing: wave, V (default 0).
     #[arg(long, allow_negative_numbers = true)]
     offset_v: Option<f64>,
@@ -367,8 +371,15 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
     };
     let (name, input) = match (&args.input, &args.wave) {
         (Some(path), _) => {
-            // Shaping a recording's own voltages is not what these mean.
+            // A recording brings its own segments, fixture, timing and
+            // voltages: these options would be silently ignored.
             for (option, given) in [
+                ("--segments", args.segments.is_some()),
+                ("--fixture", args.fixture.is_some()),
+                ("--rest-s", args.rest_s.is_some()),
+                ("--duration-s", args.duration_s.is_some()),
+                ("--off-s", args.off_s.is_some()),
+                ("--rate-hz", args.rate_hz.is_some()),
                 ("--offset-v", args.offset_v.is_some()),
                 ("--ramp-in-s", args.ramp_in_s.is_some()),
                 ("--ramp-out-s", args.ramp_out_s.is_some()),
@@ -376,24 +387,24 @@ fn run_simulate(args: SimulateArgs) -> anyhow::Result<()> {
                 ("--limit-v", args.limit_v.is_some()),
             ] {
                 if given {
-                    bail!("{option} shapes a --wave; it does not apply to --input");
+                    bail!("{option} describes a --wave; it does not apply to --input (the recording gives it)");
                 }
             }
             (path.display().to_string(), Recording::read(path)?)
         }
         (None, Some(spec)) => {
             let wave = Wave::parse(spec).map_err(anyhow::Error::msg)?;
-            let fixture = match args.fixture {
+            let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
                 FixtureArg::Free => Fixture::Free,
                 FixtureArg::Blocked => Fixture::Blocked,
             };
             let drive = synth::Drive {
-                segments: args.segments,
+                segments: args.segments.unwrap_or(3),
                 fixture,
-                rest_s: args.rest_s,
-                duration_s: args.duration_s,
-                off_s: args.off_s,
-                rate_hz: args.rate_hz,
+                rest_s: args.rest_s.unwrap_or(1.0),
+                duration_s: args.duration_s.unwrap_or(10.0),
+                off_s: args.off_s.unwrap_or(0.0),
+                rate_hz: args.rate_hz.unwrap_or(1000.0),
             };
             let limits = match (args.limit_v, args.slew_v_per_s) {
                 (Some(v), Some(slew)) => Some(synth::limits(v, slew)?),

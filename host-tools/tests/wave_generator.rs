@@ -322,17 +322,39 @@ fn the_simulate_command_writes_the_firmware_voltages() {
     // Shaping options belong to --wave, and bad ones are named.
     std::fs::copy(&out, dir.join("in.csv")).unwrap();
     let input = dir.join("in.csv");
-    let o = run(&[
-        "--input",
-        input.to_str().unwrap(),
-        "--limit-v",
-        "1",
-        "--slew-v-per-s",
-        "5",
-    ]);
+    let run_input = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_finrs"))
+            .args(["simulate", "--input"])
+            .arg(&input)
+            .arg("--out")
+            .arg(dir.join("from-input.csv"))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // Without wave options, a recording simulates.
+    let o = run_input(&[]);
+    assert!(o.status.success(), "{o:?}");
+    let o = run_input(&["--limit-v", "1", "--slew-v-per-s", "5"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr)
-        .contains("--limit-v shapes a --wave; it does not apply to --input"));
+        .contains("--limit-v describes a --wave; it does not apply to --input"));
+    // So do the drive's segments, fixture and timing: a recording has its own.
+    for (option, value) in [
+        ("--segments", "3"),
+        ("--rate-hz", "500"),
+        ("--fixture", "blocked"),
+    ] {
+        let o = run_input(&[option, value]);
+        assert!(!o.status.success(), "{option} with --input was accepted");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!(
+                "{option} describes a --wave; it does not apply to --input"
+            )),
+            "{option}: {err}"
+        );
+    }
     let o = run(&[
         "--wave",
         "sine:1,1,0",
