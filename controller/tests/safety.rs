@@ -180,16 +180,13 @@ fn any_config() -> impl Strategy<Value = Config> {
         prop_oneof![Just(100u32), Just(1000), Just(5000)],
         1u16..30,
     )
+        // The sensor scales are the common test board's; what varies is
+        // what the safety rules depend on.
         .prop_map(|(max_abs_v, slew, sample_hz, tare_samples)| Config {
             sample_hz,
             limits: Limits::new(max_abs_v, slew).unwrap(),
-            newtons_per_count: 1e-3,
-            adc_full_scale: 4095,
-            saturation_margin_counts: 2,
-            amps_per_count: 1e-3,
-            current_zero_counts: 2048,
-            overcurrent_a: 0.5,
             tare_samples,
+            ..common::config()
         })
 }
 
