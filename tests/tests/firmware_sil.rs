@@ -60,17 +60,13 @@ mod config;
 #[path = "../../firmware/src/sim.rs"]
 mod sim;
 
-const TARGET: &str = "thumbv7em-none-eabihf";
+mod common;
 
 /// Stack the firmware must leave untouched at both of its high-water marks
 /// (init and the running tasks), bytes: room for what a run did not reach
 /// (another interrupt nesting, a longer log call).
 const STACK_MARGIN_B: usize = 16 * 1024;
 const ICOUNT_SHIFT: u32 = 5;
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// Builds the QEMU firmware for `segments` segments (`FINRS_SEGMENTS`)
 /// from `firmware/`, so that its own `.cargo/config.toml` (linker,
@@ -92,35 +88,25 @@ fn build_elf(segments: usize) -> PathBuf {
 }
 
 fn build_elf_once(segments: usize) -> PathBuf {
-    let ws = workspace();
-    // Shared with qemu_vs_x86.rs (same target, most dependencies in common).
-    let target_dir = ws.join("target/qemu");
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
     let start = Instant::now();
-    let status = Command::new(cargo)
-        .current_dir(ws.join("firmware"))
-        .env("FINRS_SEGMENTS", segments.to_string())
-        .env_remove("FINRS_DAC_SEGMENTS")
-        .args(["build", "--release", "--locked", "-p", "finrs-firmware"])
-        .args([
-            "--no-default-features",
-            "--features",
-            "qemu,inject-overcurrent",
-        ])
-        .args(["--target", TARGET])
-        .arg("--target-dir")
-        .arg(&target_dir)
-        .status()
-        .expect("cargo runs");
-    assert!(
-        status.success(),
-        "building the QEMU firmware failed (target, flip-link installed? run scripts/setup)"
+    let release = common::build_release(
+        &common::workspace().join("firmware"),
+        "finrs-firmware",
+        |c| {
+            c.env("FINRS_SEGMENTS", segments.to_string())
+                .env_remove("FINRS_DAC_SEGMENTS")
+                .args([
+                    "--no-default-features",
+                    "--features",
+                    "qemu,inject-overcurrent",
+                ]);
+        },
+        "building the QEMU firmware failed (target, flip-link installed? run scripts/setup)",
     );
     eprintln!(
         "built the QEMU firmware, N = {segments}, in {:.1} s",
         start.elapsed().as_secs_f64()
     );
-    let release = target_dir.join(TARGET).join("release");
     let copy = release.join(format!("finrs-firmware-n{segments}"));
     std::fs::copy(release.join("finrs-firmware"), &copy).expect("the ELF copies");
     copy

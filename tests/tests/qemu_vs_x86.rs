@@ -18,29 +18,16 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-const TARGET: &str = "thumbv7em-none-eabihf";
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+mod common;
 
 fn build_elf() -> PathBuf {
-    let ws = workspace();
-    let target_dir = ws.join("target/qemu");
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
-    let status = Command::new(cargo)
-        .current_dir(&ws)
-        .args(["build", "--release", "--locked", "-p", "finrs-qemu-tests"])
-        .args(["--target", TARGET])
-        .arg("--target-dir")
-        .arg(&target_dir)
-        .status()
-        .expect("cargo runs");
-    assert!(
-        status.success(),
-        "building the QEMU program failed (is the target installed? run scripts/setup)"
-    );
-    target_dir.join(TARGET).join("release/finrs-qemu-tests")
+    common::build_release(
+        &common::workspace(),
+        "finrs-qemu-tests",
+        |_| {},
+        "building the QEMU program failed (is the target installed? run scripts/setup)",
+    )
+    .join("finrs-qemu-tests")
 }
 
 fn run_qemu(elf: &Path) -> String {

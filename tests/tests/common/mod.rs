@@ -1,0 +1,43 @@
+//! What the tests that run Cortex-M4F programs in QEMU share: the target,
+//! where the workspace is, and building a release ELF for QEMU.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The Cortex-M4F target every QEMU program is built for.
+pub const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// The workspace's root.
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Builds `package` in release for [`TARGET`] from `dir` (so that the
+/// `.cargo/config.toml` there applies, as for a user) with what `configure`
+/// adds (features, environment), and returns the directory holding the ELF.
+///
+/// The target directory is `target/qemu`, not the workspace's: this
+/// `cargo test` holds that one's lock. It is shared by every QEMU test
+/// (same target, most dependencies in common); cargo runs test binaries
+/// one after another, and a binary that builds from several threads
+/// serialises its own builds.
+pub fn build_release(
+    dir: &Path,
+    package: &str,
+    configure: impl FnOnce(&mut Command),
+    failure: &str,
+) -> PathBuf {
+    let target_dir = workspace().join("target/qemu");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    let mut command = Command::new(cargo);
+    command
+        .current_dir(dir)
+        .args(["build", "--release", "--locked", "-p", package])
+        .args(["--target", TARGET])
+        .arg("--target-dir")
+        .arg(&target_dir);
+    configure(&mut command);
+    let status = command.status().expect("cargo runs");
+    assert!(status.success(), "{failure}");
+    target_dir.join(TARGET).join("release")
+}
