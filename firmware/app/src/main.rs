@@ -6,7 +6,7 @@
 //! - `board` (default): the STM32F407 fin driver. ADC1 is triggered by a
 //!   timer at the sample rate; its end-of-conversion interrupt runs
 //!   [`app::sample`]. Frames leave on RTT up channel 1, defmt on channel 0,
-//!   commands arrive on down channel 0. `cd firmware && cargo run --release`
+//!   commands arrive on down channel 0. `cd firmware/app && cargo run --release`
 //!   flashes it through probe-rs.
 //! - `qemu` (`--no-default-features --features qemu`): QEMU's netduinoplus2
 //!   with the model core as plant; SysTick paces the sample interrupt, frames
@@ -23,11 +23,11 @@ compile_error!(
 compile_error!("no board chosen: use the default feature `board` or `--features qemu`");
 
 mod board;
-mod config;
+use finrs_firmware_support::config;
 #[cfg(feature = "qemu")]
-mod sim;
+use finrs_firmware_support::sim;
 mod stack;
-mod watermark;
+use finrs_firmware_support::watermark;
 
 use rtic_monotonics::systick::prelude::*;
 

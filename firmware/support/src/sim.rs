@@ -1,7 +1,8 @@
 //! The QEMU build's simulated board, as numbers: how long it runs, how the
 //! plant's force and currents become ADC counts, and the injected fault.
-//! Plain constants, so that the host's SIL test (`tests/tests/firmware_sil.rs`)
-//! includes this very file and cannot drift from it.
+//! Plain constants, shared with the host's SIL test
+//! (`tests/scenarios/tests/firmware_sil.rs`) so that it cannot drift from
+//! the firmware.
 
 /// Simulated seconds the QEMU build runs before it exits through
 /// semihosting.

@@ -1,5 +1,5 @@
 //! The seed's three-segment simulation (section 4.2: steps of 2, 1 and −2 V,
-//! n = 3) against the output kept in `tests/expected/seed_4_2.txt`, as the
+//! n = 3) against the output kept in `tests/scenarios/expected/seed_4_2.txt`, as the
 //! rtic examples compare QEMU runs with expected files. The seed's own
 //! figure is not in its text, so the run is also checked against the
 //! analytic facts it must obey. `FINRS_BLESS=1` rewrites the file.

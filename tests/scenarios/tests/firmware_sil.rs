@@ -31,7 +31,7 @@
 //! - Log: the defmt log (semihosting stdout, decoded with defmt-decoder)
 //!   names each refused command with its reason, the accepted one, and the
 //!   latched fault.
-//! - Stack: the log's stack line (`firmware/src/stack.rs`) gives init's and
+//! - Stack: the log's stack line (`firmware/app/src/stack.rs`) gives init's and
 //!   the tasks' high-water marks, both above 0 and at least
 //!   [`STACK_MARGIN_B`] below the stack's size.
 //!
@@ -53,12 +53,7 @@ use finrs_frames::{
 };
 use model_core::{Fixture, Params, Strip};
 
-#[allow(dead_code)]
-#[path = "../../firmware/src/config.rs"]
-mod config;
-#[allow(dead_code)]
-#[path = "../../firmware/src/sim.rs"]
-mod sim;
+use finrs_firmware_support::{config, sim};
 
 mod common;
 
@@ -69,7 +64,7 @@ const STACK_MARGIN_B: usize = 16 * 1024;
 const ICOUNT_SHIFT: u32 = 5;
 
 /// Builds the QEMU firmware for `segments` segments (`FINRS_SEGMENTS`)
-/// from `firmware/`, so that its own `.cargo/config.toml` (linker,
+/// from `firmware/app/`, so that its own `.cargo/config.toml` (linker,
 /// DEFMT_LOG) applies as for a user, into its own target directory (this
 /// `cargo test` holds the workspace's lock), and copies the ELF aside per
 /// segment count: the builds share the target directory (only the firmware
@@ -90,7 +85,7 @@ fn build_elf(segments: usize) -> PathBuf {
 fn build_elf_once(segments: usize) -> PathBuf {
     let start = Instant::now();
     let release = common::build_release(
-        &common::workspace().join("firmware"),
+        &common::workspace().join("firmware/app"),
         "finrs-firmware",
         |c| {
             c.env("FINRS_SEGMENTS", segments.to_string())

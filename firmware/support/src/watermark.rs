@@ -1,7 +1,7 @@
-//! The pure half of the stack measurement (`stack.rs` holds the unsafe
-//! half): the paint pattern and the scan for the high-water mark. No
-//! pointers here, so the host's tests include this very file
-//! (`tests/tests/firmware_watermark.rs`) and check the scan.
+//! The pure half of the stack measurement (`firmware/app/src/stack.rs`
+//! holds the unsafe half): the paint pattern and the scan for the
+//! high-water mark. No pointers here, so the scan is unit-tested on the
+//! host.
 
 /// The word painted over free stack. Not 0 (zeroed locals) nor a small
 /// count, an address in RAM or flash (0x2…, 0x0…/0x1…) or an `f32` a

@@ -1,6 +1,6 @@
 //! Runs the shared scenarios of `finrs-tests` in `f32` on a Cortex-M4F and
 //! prints them through semihosting; the host compares them with the same
-//! scenarios run on x86 (`tests/tests/qemu_vs_x86.rs`).
+//! scenarios run on x86 (`tests/scenarios/tests/qemu_vs_x86.rs`).
 //!
 //! Run it: `cargo run --release -p finrs-qemu-tests --target thumbv7em-none-eabihf`
 //! (the runner in `.cargo/config.toml` starts QEMU's netduinoplus2, an

@@ -9,7 +9,7 @@ pub const TARGET: &str = "thumbv7em-none-eabihf";
 
 /// The workspace's root.
 pub fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Builds `package` in release for [`TARGET`] from `dir` (so that the

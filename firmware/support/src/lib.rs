@@ -1,0 +1,17 @@
+//! `finrs-firmware-support`: the fin driver firmware's pure pieces, in a
+//! crate of their own so that the firmware (`firmware/app`) and the host's
+//! tests (`tests/scenarios`) depend on the same code instead of including
+//! its files.
+//!
+//! - [`config`]: the segment count and DAC segments chosen at build time
+//!   (`FINRS_SEGMENTS`, `FINRS_DAC_SEGMENTS`), the sample rate, limits and
+//!   sensor scales both boards run with.
+//! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
+//!   load-cell offset and noise, the injected fault).
+//! - [`watermark`]: the stack high-water mark's paint pattern and scan.
+#![no_std]
+#![deny(unsafe_code, missing_docs)]
+
+pub mod config;
+pub mod sim;
+pub mod watermark;
