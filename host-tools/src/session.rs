@@ -1,5 +1,5 @@
 //! A session: every recording of one sample from one day, in one folder
-//! (`shared/bench/FORMAT.md`). Fitting and diagnosis work on sessions.
+//! (`docs/FORMAT.md`). Fitting and diagnosis work on sessions.
 
 use std::path::{Path, PathBuf};
 
@@ -72,7 +72,7 @@ pub fn session_start_s(meta: &Metadata) -> Option<f64> {
 impl Session {
     /// Reads every `*.csv` of `dir`. All must share the sample: segments,
     /// geometry and medium; each must open with at least 1 s at zero volts
-    /// (FORMAT.md), which shows its rest and its noise.
+    /// (`docs/FORMAT.md`), which shows its rest and its noise.
     pub fn read(dir: &Path) -> Result<Session, SessionError> {
         let dir_name = dir.display().to_string();
         let io = |source| SessionError::Io {
@@ -137,7 +137,7 @@ impl Session {
             return Err(SessionError::Rule {
                 file,
                 message: format!(
-                    "data row {} (t = {} s) drives a segment after only {rest_s:.3} s at 0 V: a recording opens with at least 1 s at zero volts (FORMAT.md), which the fit needs for its rest and noise",
+                    "data row {} (t = {} s) drives a segment after only {rest_s:.3} s at 0 V: a recording opens with at least 1 s at zero volts (docs/FORMAT.md), which the fit needs for its rest and noise",
                     rest_rows + 1,
                     rec.t_s[rest_rows]
                 ),

@@ -49,7 +49,7 @@ fn verdict_and_report(
         finrs::diagnose::report::write(out, &session, &d).unwrap();
     }
     std::fs::remove_dir_all(&dir).ok();
-    // The README quotes these (`cargo test --test diagnose -- --nocapture`).
+    // docs/diagnosis.md quotes these (`cargo test --test diagnose -- --nocapture`).
     eprintln!(
         "{label}: verdict {}, causes {:?}, held-out NRMSE {:.4} -> {:.4} ({:.1} % gain), RSS/m {:.3} -> {:.3}",
         d.verdict.verdict,

@@ -1,5 +1,5 @@
 //! Terms beyond the seed's baseline model, for the effects that measured
-//! data show and the baseline lacks (`shared/bench/FORMAT.md`'s catalogue).
+//! data show and the baseline lacks (`docs/FORMAT.md`'s catalogue).
 //!
 //! Every term is off at its zero value, so [`Extensions::NONE`] is the
 //! seed's model exactly. Each keeps the model fixed-size and, except the

@@ -1,5 +1,5 @@
 //! Reading and writing recordings in the `ipmc-bench/1` format
-//! (`shared/bench/FORMAT.md`).
+//! (`docs/FORMAT.md`).
 //!
 //! Every rule of the format is enforced on reading, and again before
 //! writing: a refusal names the file, the line (1-based, as an editor shows
@@ -7,7 +7,8 @@
 //! order mark at the start is accepted and ignored; `\r\n` line ends are
 //! accepted.
 //!
-//! Beyond FORMAT.md's explicit list we enforce what its prose implies:
+//! Beyond the contract's explicit list we enforce what its prose implies
+//! (`docs/FORMAT.md` states these rules too):
 //! camera columns (`tip_*`, `dot*`) belong to the free fixture and
 //! `force_N` to the blocked one (the load cell holds the tip there), and
 //! unknown metadata keys are refused like unknown columns.

@@ -1,14 +1,16 @@
 //! `finrs-rig`: a synthetic bench for testing `finrs diagnose`.
 //!
-//! The rig is not the model the fit uses. Its strip has a finer mesh
-//! ([`strip::MESH`]), its own integrator
-//! (Runge–Kutta electrics, exact modal beam with first-order hold), a load
-//! cell that is a stiff spring rather than a pinned tip, and its effects
-//! come in forms the fitted extensions only approximate: constant modal
-//! damping, quadratic drag, a `sinh` leak and voltage-dependent
-//! capacitance, a second relaxation branch, hyperbolic drying, lagged
-//! crosstalk. Its sensors are the example session's: noise, 30 frames/s
-//! in whole pixels of 0.109 mm against a 1 kHz DAQ, rest offsets.
+//! The rig is not the model the fit uses. Its free strip has a finer mesh
+//! ([`strip::MESH`]; the blocked one pins the tip and keeps the fitted
+//! mesh, [`strip::BLOCKED_MESH`], whose undamped force would not converge),
+//! its own integrator (Runge–Kutta electrics, exact modal beam with
+//! first-order hold), and its effects come in forms the fitted extensions
+//! only approximate: constant modal damping, quadratic drag, a `sinh` leak
+//! and voltage-dependent capacitance, a second relaxation branch,
+//! hyperbolic drying, crosstalk from the neighbours' charge (instantaneous,
+//! without their relaxation); and mains pickup, outside the catalogue. Its
+//! sensors are the example session's: noise, 30 frames/s in whole pixels of
+//! 0.109 mm against a 1 kHz DAQ, rest offsets.
 //!
 //! ```no_run
 //! use rand::SeedableRng;

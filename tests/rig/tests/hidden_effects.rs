@@ -45,7 +45,7 @@ fn hide(names: &[&str], default_seed: u64) -> Verdict {
     let d = diagnose(&session, fixed, &|_| {}).unwrap();
     std::fs::remove_dir_all(&dir).ok();
     let v = d.verdict;
-    // The README's table quotes these lines (`-- --nocapture`).
+    // docs/rig.md's table quotes these lines (`-- --nocapture`).
     eprintln!(
         "hidden {names:?} (seed {seed}): verdict {}, causes {:?}, held-out NRMSE {:.4} -> {:.4} ({:.1} % gain), RSS/m {:.3} -> {:.3}\n  {hidden:?}",
         v.verdict,

@@ -20,7 +20,7 @@
 //!   as from the board's RTT down channel.
 //! - After [`sim::RUN_S`] simulated seconds the run flushes and exits
 //!   through semihosting; a panic or HardFault exits with a failure code
-//!   (panic-probe's `udf` would hang QEMU).
+//!   (the board's `udf`, which stops the core for probe-rs, would hang QEMU).
 
 use core::sync::atomic::{AtomicBool, Ordering};
 
