@@ -1,16 +1,19 @@
 //! `finrs log` and `finrs run`: bytes from the probe (or from a file) into a
-//! [`Recorder`], the defmt log printed as it comes, a live status line, and
-//! at the end the recording and the report of every gap.
+//! [`Recorder`], the defmt log and a live status handed to a [`Monitor`] as
+//! they come, and at the end the recording and the report of every gap.
+//!
+//! How the status is shown, and what stops the loop (Ctrl-C in the
+//! binary), are the caller's: the loop takes a [`Monitor`] and a stop flag.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::probe::{self, Bounded, ProbeOptions, Target, DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL};
+use crate::probe::{
+    self, Bounded, ProbeOptions, ProbeTarget, Target, DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL,
+};
 use crate::stream::{GapSource, Recorder, Setup};
 
 /// Where the recording goes and when to stop.
@@ -113,20 +116,21 @@ pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> anyhow::Result<String> 
     finish(rec, &opts.out)
 }
 
-/// A flag that Ctrl-C sets (the handler is installed once per process).
-/// A second Ctrl-C exits at once, for when the loop cannot see the flag
-/// soon enough (each probe call is bounded, but by seconds).
-fn interrupted() -> anyhow::Result<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let f = flag.clone();
-    ctrlc::set_handler(move || {
-        if f.swap(true, Ordering::SeqCst) {
-            eprintln!("second Ctrl-C: exiting without writing the recording");
-            std::process::exit(130);
-        }
-    })
-    .context("cannot install the Ctrl-C handler")?;
-    Ok(flag)
+/// Who watches a recording: hears the defmt log and notices line by line,
+/// and a live status now and then.
+pub trait Monitor {
+    /// A line to show: a defmt log frame or a notice.
+    fn line(&self, text: &str);
+    /// The recording's status so far (samples, rate, gaps), to show in place.
+    fn status(&self, text: &str);
+}
+
+/// A [`Monitor`] that shows nothing.
+pub struct Silent;
+
+impl Monitor for Silent {
+    fn line(&self, _: &str) {}
+    fn status(&self, _: &str) {}
 }
 
 /// Where the bytes come from while recording: the probe's RTT up channels,
@@ -160,13 +164,22 @@ pub enum Firmware {
     Flash(PathBuf),
 }
 
-/// `finrs log` / `finrs run` with a probe. Returns the report.
-pub fn from_probe(
+/// A probe attached to the firmware with RTT up, ready for [`capture`].
+pub struct Connected {
+    /// The probe's RTT channels, each read bounded in time.
+    pub link: Bounded<ProbeTarget>,
+    /// The ELF's defmt table, when there is one.
+    pub table: Option<defmt_decoder::Table>,
+}
+
+/// `finrs log` / `finrs run` up to the recording: reads the ELF (if any),
+/// attaches, flashes and runs it for [`Firmware::Flash`], and finds the RTT
+/// block. Notices go to `monitor`.
+pub fn connect(
     probe_opts: &ProbeOptions,
     firmware: &Firmware,
-    opts: &CaptureOptions,
-) -> anyhow::Result<String> {
-    opts.check()?;
+    monitor: &dyn Monitor,
+) -> anyhow::Result<Connected> {
     let elf_path = match firmware {
         Firmware::Running(p) => p.clone(),
         Firmware::Flash(p) => Some(p.clone()),
@@ -184,12 +197,14 @@ pub fn from_probe(
             let table = defmt_decoder::Table::parse(bytes)
                 .map_err(|e| anyhow::anyhow!("{name}: bad defmt table: {e}"))?;
             if table.is_none() {
-                eprintln!("{name}: no defmt table; the log on channel 0 is not shown");
+                monitor.line(&format!(
+                    "{name}: no defmt table; the log on channel 0 is not shown"
+                ));
             }
             (Some(at), table)
         }
         _ => {
-            eprintln!("no --elf: RTT block found by scanning RAM; the defmt log is not shown");
+            monitor.line("no ELF: RTT block found by scanning RAM; the defmt log is not shown");
             (None, None)
         }
     };
@@ -197,26 +212,25 @@ pub fn from_probe(
     if let Firmware::Flash(p) = firmware {
         // Set above: `finrs run` always reads its ELF.
         let at = rtt_at.ok_or_else(|| anyhow::anyhow!("{}: no RTT address", p.display()))?;
-        eprintln!("flashing {}", p.display());
+        monitor.line(&format!("flashing {}", p.display()));
         probe::flash_and_run(&mut link, p, at)?;
     }
     probe::attach_rtt(&mut link, rtt_at, Duration::from_secs(5))?;
-    let stop = interrupted()?;
-    capture(&mut link, table.as_ref(), &stop, opts)
+    Ok(Connected { link, table })
 }
 
-/// The recording loop: reads the link until `stop` is set (Ctrl-C) or the
-/// duration has passed, shows the defmt log and a live status line, then
-/// writes what came (also when the link fails) and returns the report.
+/// The recording loop: reads the link until `stop` is set (by the caller,
+/// e.g. on Ctrl-C) or the duration has passed, hands the defmt log and a
+/// live status to `monitor`, then writes what came (also when the link
+/// fails) and returns the report.
 pub fn capture(
     link: &mut impl Link,
     table: Option<&defmt_decoder::Table>,
     stop: &AtomicBool,
     opts: &CaptureOptions,
+    monitor: &dyn Monitor,
 ) -> anyhow::Result<String> {
     opts.check()?;
-    let bar = ProgressBar::new_spinner();
-    bar.set_style(ProgressStyle::with_template("{spinner} {msg}").expect("static template"));
     let mut defmt = table.map(|t| t.new_stream_decoder());
     let mut rec = Recorder::new(opts.setup.clone());
     let mut buf = vec![0u8; 16 * 1024];
@@ -225,7 +239,7 @@ pub fn capture(
     let mut malformed_defmt = 0u64;
     let outcome: anyhow::Result<()> = loop {
         if stop.load(Ordering::SeqCst) {
-            bar.println("stopped (Ctrl-C)");
+            monitor.line("stopped");
             break Ok(());
         }
         if opts
@@ -248,12 +262,12 @@ pub fn capture(
             decoder.received(&buf[..m]);
             loop {
                 match decoder.decode() {
-                    Ok(frame) => bar.println(frame.display(false).to_string()),
+                    Ok(frame) => monitor.line(&frame.display(false).to_string()),
                     Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
                     Err(defmt_decoder::DecodeError::Malformed) => {
                         malformed_defmt += 1;
                         if malformed_defmt == 1 {
-                            bar.println("defmt: malformed frame (is the ELF the one running?)");
+                            monitor.line("defmt: malformed frame (is the ELF the one running?)");
                         }
                     }
                 }
@@ -263,7 +277,7 @@ pub fn capture(
             last_status = Instant::now();
             let s = rec.summary();
             let secs = started.elapsed().as_secs_f64().max(1e-3);
-            bar.set_message(format!(
+            monitor.status(&format!(
                 "{} samples, {:.0}/s, {} gaps ({} lost), {} faults, {} corrupt bytes",
                 s.rows,
                 s.rows as f64 / secs,
@@ -272,13 +286,11 @@ pub fn capture(
                 s.faults,
                 s.corrupt_bytes
             ));
-            bar.tick();
         }
         if n == 0 && m == 0 {
             std::thread::sleep(Duration::from_millis(2));
         }
     };
-    bar.finish_and_clear();
     // Whatever stopped the loop, what came so far is written, and why it
     // ended early goes into the notes.
     if let Err(e) = &outcome {
@@ -288,7 +300,7 @@ pub fn capture(
     let mut text = match (written, outcome) {
         (Ok(text), Ok(())) => text,
         (Ok(text), Err(e)) => {
-            eprint!("{text}");
+            monitor.line(text.trim_end());
             return Err(e.context(format!(
                 "the link failed; the samples so far are in {}",
                 opts.out.display()

@@ -13,18 +13,18 @@
 //! `finrs wave` accept the same texts and drive the same voltages.
 //!
 //! ```
-//! use finrs::command::{wave_command, WaveRequest};
+//! use finrs::command::wave_command;
+//! use finrs::wave::WaveOptions;
 //! use finrs_frames::Command;
 //!
-//! let mut req = WaveRequest::new("sine:2,1,120", 4);
-//! req.ramp_in_s = 2.0;
-//! let Command::SetWave { program, envelope } = wave_command(&req).unwrap() else {
+//! let options = WaveOptions { ramp_in_s: 2.0, ..WaveOptions::steady(10.0) };
+//! let Command::SetWave { program, envelope } = wave_command("sine:2,1,120", 4, &options).unwrap() else {
 //!     unreachable!()
 //! };
 //! assert_eq!(envelope.ramp_in_s, 2.0);
 //! assert!(matches!(program, finrs_drive::Program::Travelling { .. }));
 //!
-//! let e = wave_command(&WaveRequest::new("sine:2,300,0", 4)).unwrap_err();
+//! let e = wave_command("sine:2,300,0", 4, &options).unwrap_err();
 //! assert_eq!(e, "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz");
 //! ```
 
@@ -33,55 +33,10 @@ use finrs_frames::{encode_command, Command, MAX_COMMAND_LEN};
 
 use crate::wave::{Wave, WaveOptions};
 
-/// A wave for the firmware, as the command line gives it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WaveRequest {
-    /// The wave, e.g. `sine:2,1,120`.
-    pub spec: String,
-    /// Segments of the fin, 1..=8 (the generator's N).
-    pub segments: usize,
-    /// Constant added to a `sine:` or `standing:` wave, V.
-    pub offset_v: f64,
-    /// Time to full amplitude, s.
-    pub ramp_in_s: f64,
-    /// Time at full amplitude, s (infinite: for ever).
-    pub hold_s: f64,
-    /// Time from full amplitude to zero, s.
-    pub ramp_out_s: f64,
-    /// Length of one `chirp:` sweep, s.
-    pub sweep_s: f64,
-}
-
-impl WaveRequest {
-    /// A request with the defaults of `finrs wave`: no offset, 1 s ramp in,
-    /// held for ever, 10 s sweeps.
-    pub fn new(spec: &str, segments: usize) -> Self {
-        WaveRequest {
-            spec: spec.to_string(),
-            segments,
-            offset_v: 0.0,
-            ramp_in_s: 1.0,
-            hold_s: f64::INFINITY,
-            ramp_out_s: 0.0,
-            sweep_s: 10.0,
-        }
-    }
-
-    /// The request's shaping options.
-    pub fn options(&self) -> WaveOptions {
-        WaveOptions {
-            offset_v: self.offset_v,
-            ramp_in_s: self.ramp_in_s,
-            hold_s: self.hold_s,
-            ramp_out_s: self.ramp_out_s,
-            sweep_s: self.sweep_s,
-        }
-    }
-}
-
-/// The `SetWave` command for a request, or the field and rule it breaks.
-pub fn wave_command(req: &WaveRequest) -> Result<Command, String> {
-    let generator = Wave::parse(&req.spec)?.generator(req.segments, &req.options())?;
+/// The `SetWave` command for the wave `spec` on `segments` segments shaped
+/// by `options`, or the field and rule it breaks.
+pub fn wave_command(spec: &str, segments: usize, options: &WaveOptions) -> Result<Command, String> {
+    let generator = Wave::parse(spec)?.generator(segments, options)?;
     Ok(Command::SetWave {
         program: generator.program(),
         envelope: generator.envelope(),
@@ -112,8 +67,34 @@ mod tests {
     use finrs_drive::Program;
     use finrs_frames::{CommandDecoder, CommandEvent};
 
+    /// A request as `finrs wave` makes it by default: no offset, 1 s ramp
+    /// in, held for ever, 10 s sweeps.
+    #[derive(Clone)]
+    struct WaveRequest {
+        spec: String,
+        segments: usize,
+        options: WaveOptions,
+    }
+
+    impl WaveRequest {
+        fn new(spec: &str, segments: usize) -> Self {
+            WaveRequest {
+                spec: spec.to_string(),
+                segments,
+                options: WaveOptions {
+                    ramp_in_s: 1.0,
+                    ..WaveOptions::steady(10.0)
+                },
+            }
+        }
+    }
+
+    fn request(req: &WaveRequest) -> Result<Command, String> {
+        wave_command(&req.spec, req.segments, &req.options)
+    }
+
     fn program(spec: &str, segments: usize) -> Program {
-        match wave_command(&WaveRequest::new(spec, segments)).unwrap() {
+        match request(&WaveRequest::new(spec, segments)).unwrap() {
             Command::SetWave { program, .. } => program,
             other => panic!("{other:?}"),
         }
@@ -171,7 +152,7 @@ mod tests {
 
     #[test]
     fn invalid_waves_are_refused_with_field_and_rule() {
-        let refuse = |req: WaveRequest| wave_command(&req).unwrap_err();
+        let refuse = |req: WaveRequest| request(&req).unwrap_err();
         assert_eq!(
             refuse(WaveRequest::new("sine:2,300,0", 3)),
             "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz"
@@ -182,16 +163,16 @@ mod tests {
             "wave `chirp:2,5,1`: Chirp.end_hz must be above start_hz"
         );
         r.spec = "chirp:2,1,5".into();
-        r.sweep_s = 0.0;
+        r.options.sweep_s = 0.0;
         assert_eq!(
             refuse(r),
             "wave `chirp:2,1,5`: Chirp.duration_s must be above 0"
         );
         let mut r = WaveRequest::new("sine:2,1,0", 3);
-        r.ramp_in_s = f64::NAN;
+        r.options.ramp_in_s = f64::NAN;
         assert!(refuse(r).contains("ramp_in_s must be finite"));
         let mut r = WaveRequest::new("sine:3,1,0", 3);
-        r.offset_v = 1.5;
+        r.options.offset_v = 1.5;
         assert!(
             refuse(r).contains("peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V")
         );
@@ -216,13 +197,13 @@ mod tests {
             "--segments must be 1..=8, got 9"
         );
         let mut r = WaveRequest::new("pulses:1,1,1", 3);
-        r.offset_v = 0.5;
+        r.options.offset_v = 0.5;
         assert_eq!(
             refuse(r),
             "--offset-v applies to sine: and standing: waves only, not `pulses:1,1,1`"
         );
         let mut r = WaveRequest::new("standing:1,1", 3);
-        r.offset_v = 3.5;
+        r.options.offset_v = 3.5;
         assert_eq!(
             refuse(r),
             "wave `standing:1,1`: peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V"
@@ -245,7 +226,7 @@ mod tests {
     #[test]
     fn encoded_commands_decode_to_themselves() {
         let commands = [
-            wave_command(&WaveRequest::new("sine:2,1,120", 3)).unwrap(),
+            request(&WaveRequest::new("sine:2,1,120", 3)).unwrap(),
             Command::Tare,
             Command::Stop,
             limit_command(2.0).unwrap(),

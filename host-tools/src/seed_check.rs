@@ -69,6 +69,29 @@ pub struct SeedCheck {
     pub explanations: Vec<String>,
 }
 
+/// The check as `finrs seed-check` prints it: a table of the seed's facts
+/// beside both models, then the explanations.
+impl std::fmt::Display for SeedCheck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "{:<44} {:>12} {:>12} {:>12}  extension",
+            "the seed's fact", "measured", "baseline", "extended"
+        )?;
+        for r in &self.rows {
+            writeln!(
+                f,
+                "{:<44} {:>12.4e} {:>12.4e} {:>12.4e}  {} ({})",
+                r.quantity, r.measured, r.baseline, r.extended, r.effect, r.unit
+            )?;
+        }
+        for e in &self.explanations {
+            writeln!(f, "\n{e}")?;
+        }
+        Ok(())
+    }
+}
+
 /// The last and the largest value of a model channel after a step of `v`
 /// held for `hold_s`.
 fn step_response(

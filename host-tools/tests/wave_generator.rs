@@ -4,10 +4,10 @@
 //! (as the controller calls it), for every kind of wave and N = 1, 3, 8;
 //! and `finrs wave` sends the same program for the same text.
 
-use finrs::command::{wave_command, WaveRequest};
+use finrs::command::wave_command;
 use finrs::recording::Fixture;
 use finrs::synth::{drive_recording, drive_recording_shaped, Drive, Shaping};
-use finrs::wave::Wave;
+use finrs::wave::{Wave, WaveOptions};
 use finrs_drive::{Envelope, Generator, Limiter, Limits, Program, SINE_MAX_ERROR};
 use finrs_frames::Command;
 
@@ -153,14 +153,12 @@ fn simulate_and_the_firmware_generator_agree_sample_by_sample() {
                 .flatten()
                 .all(|&v| v == 0.0));
             // `finrs wave` sends that very program for the same text.
-            let req = WaveRequest {
-                ramp_in_s: 0.0,
+            let options = WaveOptions {
                 hold_s: DURATION_S,
-                sweep_s: DURATION_S,
-                ..WaveRequest::new(&text, n)
+                ..WaveOptions::steady(DURATION_S)
             };
             assert_eq!(
-                wave_command(&req).unwrap(),
+                wave_command(&text, n, &options).unwrap(),
                 Command::SetWave { program, envelope },
                 "{what}"
             );
@@ -335,24 +333,23 @@ fn the_simulate_command_writes_the_firmware_voltages() {
     // Without wave options, a recording simulates.
     let o = run_input(&[]);
     assert!(o.status.success(), "{o:?}");
-    let o = run_input(&["--limit-v", "1", "--slew-v-per-s", "5"]);
-    assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr)
-        .contains("--limit-v describes a --wave; it does not apply to --input"));
-    // So do the drive's segments, fixture and timing: a recording has its own.
-    for (option, value) in [
-        ("--segments", "3"),
-        ("--rate-hz", "500"),
-        ("--fixture", "blocked"),
+    // Every option that describes a wave is refused by name: a recording
+    // has its own drive, segments, fixture and timing.
+    for extra in [
+        &["--limit-v", "1", "--slew-v-per-s", "5"][..],
+        &["--segments", "3"],
+        &["--rate-hz", "500"],
+        &["--fixture", "blocked"],
+        &["--offset-v", "0.5"],
+        &["--sweep-s", "2"],
     ] {
-        let o = run_input(&[option, value]);
-        assert!(!o.status.success(), "{option} with --input was accepted");
+        let o = run_input(extra);
+        assert!(!o.status.success(), "{extra:?} with --input was accepted");
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
-            err.contains(&format!(
-                "{option} describes a --wave; it does not apply to --input"
-            )),
-            "{option}: {err}"
+            err.contains("the argument '--input <INPUT>' cannot be used with")
+                && err.contains(extra[0]),
+            "{extra:?}: {err}"
         );
     }
     let o = run(&[

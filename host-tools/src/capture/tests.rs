@@ -115,7 +115,7 @@ fn link(then: Then) -> (FakeLink, Arc<AtomicBool>) {
 fn ctrl_c_writes_every_sample_so_far_and_the_gap_report() {
     let (mut link, stop) = link(Then::CtrlC);
     let opts = options("ctrlc", None);
-    let report = capture(&mut link, None, &stop, &opts).unwrap();
+    let report = capture(&mut link, None, &stop, &opts, &Silent).unwrap();
     assert!(report.contains("17 samples; 3 lost in 2 gaps"), "{report}");
     assert!(report.contains("gap: seq 7..=8 (2 samples) dropped by the firmware (reported)"));
     assert!(report.contains("gap: seq 12..=12 (1 samples) lost on the way (detected)"));
@@ -135,7 +135,7 @@ fn ctrl_c_writes_every_sample_so_far_and_the_gap_report() {
 fn a_failing_link_still_writes_what_came() {
     let (mut link, stop) = link(Then::Fail);
     let opts = options("fail", None);
-    let e = capture(&mut link, None, &stop, &opts).unwrap_err();
+    let e = capture(&mut link, None, &stop, &opts, &Silent).unwrap_err();
     let text = format!("{e:#}");
     assert!(
         text.contains("the link failed; the samples so far are in"),
@@ -167,7 +167,7 @@ fn a_hanging_read_ends_the_capture_within_its_bound_and_the_samples_are_written(
     let opts = options("hang", None);
     let stop = AtomicBool::new(false);
     let started = Instant::now();
-    let e = capture(&mut link, None, &stop, &opts).unwrap_err();
+    let e = capture(&mut link, None, &stop, &opts, &Silent).unwrap_err();
     let took_s = started.elapsed().as_secs_f64();
     assert!((0.4..1.4).contains(&took_s), "took {took_s} s");
     let text = format!("{e:#}");
@@ -197,7 +197,7 @@ fn a_bounded_link_that_keeps_answering_records_until_the_duration() {
     let mut link = bounded_link(Act::Answer, 0.4);
     let opts = options("bounded-ok", Some(0.3));
     let stop = AtomicBool::new(false);
-    let report = capture(&mut link, None, &stop, &opts).unwrap();
+    let report = capture(&mut link, None, &stop, &opts, &Silent).unwrap();
     assert!(report.contains("17 samples; 3 lost in 2 gaps"), "{report}");
     assert!(!Recording::read(&opts.out)
         .unwrap()
@@ -213,7 +213,7 @@ fn the_duration_ends_the_recording() {
     let (mut link, stop) = link(Then::Idle);
     let opts = options("duration", Some(0.3));
     let started = Instant::now();
-    let report = capture(&mut link, None, &stop, &opts).unwrap();
+    let report = capture(&mut link, None, &stop, &opts, &Silent).unwrap();
     let took_s = started.elapsed().as_secs_f64();
     assert!((0.3..3.0).contains(&took_s), "took {took_s} s");
     assert!(report.contains("17 samples"), "{report}");
@@ -223,7 +223,7 @@ fn the_duration_ends_the_recording() {
 #[test]
 fn a_bad_duration_is_refused() {
     let (mut link, stop) = link(Then::Idle);
-    let e = capture(&mut link, None, &stop, &options("bad", Some(-1.0))).unwrap_err();
+    let e = capture(&mut link, None, &stop, &options("bad", Some(-1.0)), &Silent).unwrap_err();
     assert_eq!(
         e.to_string(),
         "--duration-s must be a positive number of seconds, got -1"

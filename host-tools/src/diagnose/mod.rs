@@ -138,6 +138,40 @@ pub struct Verdict {
     pub analyses: analyses::Analyses,
 }
 
+/// The verdict as `finrs diagnose` prints it: verdict and causes, the
+/// held-out gain, then every candidate tried, one line each.
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let causes = if self.causes.is_empty() {
+            "none".to_string()
+        } else {
+            self.causes.join(", ")
+        };
+        writeln!(f, "verdict: {}; causes: {causes}", self.verdict)?;
+        writeln!(
+            f,
+            "held-out NRMSE {:.4} (baseline) -> {:.4} (final): {:.1} % gain; held-out RSS/m {:.3} -> {:.3}",
+            self.baseline.holdout_nrmse,
+            self.extended.holdout_nrmse,
+            self.gain_percent,
+            self.baseline.holdout_rss_per_residual,
+            self.extended.holdout_rss_per_residual
+        )?;
+        for c in &self.candidates {
+            writeln!(
+                f,
+                "  round {} {:<30} dBIC {:>12.1}  held-out gain {:>7.2} %  {}",
+                c.round + 1,
+                c.name,
+                c.delta_bic,
+                c.holdout_gain_percent,
+                if c.passed { "passed" } else { "-" }
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// Whether the measured channels carry structure before any drive.
 #[derive(Clone, Debug, Serialize)]
 pub struct RestStructure {
