@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use anyhow::bail;
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use finrs::params::Geometry;
+use finrs::recording::Geometry;
 use finrs::recording::Medium;
 
 /// Tools for segmented IPMC fins.
@@ -129,7 +129,7 @@ impl WaveArgs {
 #[derive(Args)]
 pub struct ProbeArgs {
     /// probe-rs chip name.
-    #[arg(long, default_value = finrs::probe::DEFAULT_CHIP)]
+    #[arg(long, default_value = finrs::link::probe::DEFAULT_CHIP)]
     pub chip: String,
     /// Debug probe as VID:PID[:SERIAL] (hex), when more than one is attached.
     #[arg(long)]
@@ -141,12 +141,12 @@ pub struct ProbeArgs {
 
 impl ProbeArgs {
     /// The library's probe options.
-    pub fn options(&self) -> anyhow::Result<finrs::probe::ProbeOptions> {
-        Ok(finrs::probe::ProbeOptions {
+    pub fn options(&self) -> anyhow::Result<finrs::link::probe::ProbeOptions> {
+        Ok(finrs::link::probe::ProbeOptions {
             chip: self.chip.clone(),
             probe: self.probe.clone(),
             timeout: timeout("--probe-timeout-s", self.probe_timeout_s)?,
-            flash_timeout: finrs::probe::DEFAULT_FLASH_TIMEOUT,
+            flash_timeout: finrs::link::probe::DEFAULT_FLASH_TIMEOUT,
         })
     }
 }
@@ -196,7 +196,7 @@ pub struct RecordArgs {
 
 impl RecordArgs {
     /// The library's capture options; `source` says where the bytes come from.
-    pub fn options(&self, source: String) -> anyhow::Result<finrs::capture::CaptureOptions> {
+    pub fn options(&self, source: String) -> anyhow::Result<finrs::link::capture::CaptureOptions> {
         let g = Geometry::THESIS_2006;
         let geometry = Geometry {
             length_m: self.length_m.unwrap_or(g.length_m),
@@ -217,10 +217,10 @@ impl RecordArgs {
                 bail!("--duration-s must be a positive number of seconds, got {d}");
             }
         }
-        Ok(finrs::capture::CaptureOptions {
+        Ok(finrs::link::capture::CaptureOptions {
             out: self.out.clone(),
             duration_s: self.duration_s,
-            setup: finrs::stream::Setup {
+            setup: finrs::link::stream::Setup {
                 geometry,
                 medium: match self.medium {
                     MediumArg::Air => Medium::Air,
@@ -256,7 +256,7 @@ pub struct RunArgs {
     #[command(flatten)]
     pub probe: ProbeArgs,
     /// Longest wait for flashing the ELF, s.
-    #[arg(long, default_value_t = finrs::probe::DEFAULT_FLASH_TIMEOUT.as_secs_f64())]
+    #[arg(long, default_value_t = finrs::link::probe::DEFAULT_FLASH_TIMEOUT.as_secs_f64())]
     pub flash_timeout_s: f64,
     #[command(flatten)]
     pub record: RecordArgs,

@@ -8,14 +8,16 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
-use finrs::capture::{self, Firmware, Monitor};
-use finrs::fit::{Effect, Fitter};
-use finrs::params::{Geometry, ModelFile};
+use finrs::analysis::fit::{Effect, Fitter};
+use finrs::link::capture::{self, Firmware, Monitor};
+use finrs::model::params::ModelFile;
+use finrs::model::simulate::simulate as simulate_recording;
+use finrs::model::synth;
+use finrs::plot;
+use finrs::recording::Geometry;
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
-use finrs::simulate::simulate as simulate_recording;
 use finrs::wave::Wave;
-use finrs::{plot, synth};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{
@@ -125,7 +127,10 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let fit = fitter.fit(&all, &effects, None, fixed)?;
     bar.finish_and_clear();
-    print!("{}", finrs::fit::report::text(&fit, fitter.targets()));
+    print!(
+        "{}",
+        finrs::analysis::fit::report::text(&fit, fitter.targets())
+    );
     eprintln!(
         "fitted {} recordings in {:.1} s ({} model evaluations, {})",
         all.len(),
@@ -134,7 +139,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
         fit.termination
     );
     if let Some(out) = &args.out {
-        let file = ModelFile::from_fit(&fit.spec, &effects);
+        let file = fit.model_file();
         std::fs::write(out, file.to_toml()).with_context(|| out.display().to_string())?;
         eprintln!("wrote {}", out.display());
     }
@@ -147,7 +152,9 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
     let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
     let bar = spinner("diagnosing");
     let started = Instant::now();
-    let d = finrs::diagnose::diagnose(&session, fixed, &|msg| bar.set_message(msg.to_string()))?;
+    let d = finrs::analysis::diagnose::diagnose(&session, fixed, &|msg| {
+        bar.set_message(msg.to_string())
+    })?;
     bar.finish_and_clear();
     print!("{}", d.verdict);
     eprintln!("diagnosed in {:.1} s", started.elapsed().as_secs_f64());
@@ -158,7 +165,7 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(dir) = &args.report {
-        finrs::diagnose::report::write(dir, &session, &d)
+        finrs::analysis::diagnose::report::write(dir, &session, &d)
             .with_context(|| dir.display().to_string())?;
         eprintln!("wrote {}", dir.join("REPORT.md").display());
     }
@@ -167,7 +174,7 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
 
 /// `finrs seed-check`.
 pub fn seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
-    let c = finrs::seed_check::seed_check()?;
+    let c = finrs::analysis::seed_check::seed_check()?;
     print!("{c}");
     if let Some(path) = json {
         std::fs::write(&path, serde_json::to_string_pretty(&c)? + "\n")
@@ -190,7 +197,7 @@ pub fn log(args: LogArgs) -> anyhow::Result<()> {
             let probe = args.probe.options()?;
             let opts = args.record.options(format!(
                 "RTT up channel {} on {}",
-                finrs::probe::FORCE_UP_CHANNEL,
+                finrs::link::probe::FORCE_UP_CHANNEL,
                 probe.chip
             ))?;
             record(&probe, &Firmware::Running(args.elf.clone()), &opts)?
@@ -206,7 +213,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     probe.flash_timeout = timeout("--flash-timeout-s", args.flash_timeout_s)?;
     let opts = args.record.options(format!(
         "RTT up channel {} on {} running {}",
-        finrs::probe::FORCE_UP_CHANNEL,
+        finrs::link::probe::FORCE_UP_CHANNEL,
         probe.chip,
         args.elf.display()
     ))?;
@@ -220,7 +227,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
 /// Connects through the probe, then records until Ctrl-C or the duration,
 /// with a live status line. Returns the report.
 fn record(
-    probe: &finrs::probe::ProbeOptions,
+    probe: &finrs::link::probe::ProbeOptions,
     firmware: &Firmware,
     opts: &capture::CaptureOptions,
 ) -> anyhow::Result<String> {
@@ -285,22 +292,22 @@ impl Drop for StatusLine {
 pub fn wave(args: WaveArgs) -> anyhow::Result<()> {
     let segments = args.shape.segments.unwrap_or(3);
     // Refused here, before any probe is looked for.
-    let command = finrs::command::wave_command(&args.wave, segments, &args.options())
+    let command = finrs::link::command::wave_command(&args.wave, segments, &args.options())
         .map_err(anyhow::Error::msg)?;
     send(&args.send, &command)
 }
 
 /// `finrs limit`.
 pub fn limit(max_abs_v: f64, args: &SendArgs) -> anyhow::Result<()> {
-    let command = finrs::command::limit_command(max_abs_v).map_err(anyhow::Error::msg)?;
+    let command = finrs::link::command::limit_command(max_abs_v).map_err(anyhow::Error::msg)?;
     send(args, &command)
 }
 
 /// Sends `command` down the firmware's command channel.
 pub fn send(args: &SendArgs, command: &finrs_frames::Command) -> anyhow::Result<()> {
     let probe = args.probe.options()?;
-    let bytes = finrs::command::encode(command);
-    finrs::probe::send(&probe, args.elf.as_deref(), &bytes)?;
+    let bytes = finrs::link::command::encode(command);
+    finrs::link::probe::send(&probe, args.elf.as_deref(), &bytes)?;
     eprintln!("sent {command:?}");
     Ok(())
 }

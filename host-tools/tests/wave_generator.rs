@@ -4,9 +4,9 @@
 //! (as the controller calls it), for every kind of wave and N = 1, 3, 8;
 //! and `finrs wave` sends the same program for the same text.
 
-use finrs::command::wave_command;
+use finrs::link::command::wave_command;
+use finrs::model::synth::{drive_recording, drive_recording_shaped, Drive, Shaping};
 use finrs::recording::Fixture;
-use finrs::synth::{drive_recording, drive_recording_shaped, Drive, Shaping};
 use finrs::wave::{Wave, WaveOptions};
 use finrs_drive::{Envelope, Generator, Limiter, Limits, Program, SINE_MAX_ERROR};
 use finrs_frames::Command;

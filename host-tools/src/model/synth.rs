@@ -125,7 +125,7 @@ pub fn drive_recording_shaped(
     // it with the wave gives the same rows.
     v_v.extend(generator.run(wave_rows, tick_hz, shaping.limits));
     let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
-    let g = crate::params::Geometry::THESIS_2006;
+    let g = crate::recording::Geometry::THESIS_2006;
     Ok(Recording {
         meta: Metadata {
             segments: d.segments,

@@ -9,8 +9,8 @@ use std::time::Instant;
 use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, MAX_FRAME_LEN};
 
 use super::*;
-use crate::params::Geometry;
-use crate::probe::tests::{timeouts, Act, FakeTarget};
+use crate::link::probe::tests::{timeouts, Act, FakeTarget};
+use crate::recording::Geometry;
 use crate::recording::{Medium, Recording};
 
 /// Hands out `chunks`, then either sets `stop` (as Ctrl-C would), fails,

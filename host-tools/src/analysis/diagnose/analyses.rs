@@ -8,7 +8,7 @@
 
 use serde::Serialize;
 
-use crate::fit::Score;
+use crate::analysis::fit::Score;
 use crate::recording::{Channel, Fixture};
 use crate::session::Session;
 
@@ -150,7 +150,7 @@ pub fn analyse(session: &Session, score: &Score) -> Analyses {
 }
 
 /// Median gain over the mechanical channels that carry signal.
-fn median_gain(channels: &[&crate::fit::ChannelFit]) -> Option<f64> {
+fn median_gain(channels: &[&crate::analysis::fit::ChannelFit]) -> Option<f64> {
     let mut gains: Vec<f64> = channels
         .iter()
         .filter(|c| c.has_signal && !matches!(c.channel, Channel::Current(_)) && c.gain.is_finite())

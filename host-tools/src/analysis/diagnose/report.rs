@@ -4,9 +4,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::Diagnosis;
+use crate::model::simulate::simulate;
 use crate::plot;
 use crate::session::Session;
-use crate::simulate::simulate;
 
 /// Writes `REPORT.md` and its plots into `dir`.
 pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()> {
@@ -198,7 +198,7 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
         let r = &session.recordings[i];
         let stem = r.name.trim_end_matches(".csv");
         let png = format!("{stem}.png");
-        let elements = crate::fit::FIT_ELEMENTS;
+        let elements = crate::analysis::fit::FIT_ELEMENTS;
         let base = simulate(&r.name, &r.rec, &d.baseline.spec, elements, &mut |_| {})?;
         let fin = simulate(&r.name, &r.rec, &d.final_fit.spec, elements, &mut |_| {})?;
         plot::plot_models(

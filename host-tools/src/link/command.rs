@@ -13,7 +13,7 @@
 //! `finrs wave` accept the same texts and drive the same voltages.
 //!
 //! ```
-//! use finrs::command::wave_command;
+//! use finrs::link::command::wave_command;
 //! use finrs::wave::WaveOptions;
 //! use finrs_frames::Command;
 //!

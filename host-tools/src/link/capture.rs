@@ -11,10 +11,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context};
 
-use crate::probe::{
+use crate::link::probe::{
     self, Bounded, ProbeOptions, ProbeTarget, Target, DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL,
 };
-use crate::stream::{GapSource, Recorder, Setup};
+use crate::link::stream::{GapSource, Recorder, Setup};
 
 /// Where the recording goes and when to stop.
 #[derive(Clone, Debug)]

@@ -6,19 +6,27 @@
 //! the electrics fixed, every deflection and force is proportional to `K`,
 //! so `K` follows by linear least squares.
 
+use super::data::SessionTargets;
+use super::error::FitError;
 use super::space::Space;
-use super::{FitError, Fitter};
-use crate::predict::ModelSpec;
+use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
+use crate::session::Session;
 
-/// A starting model for `space` on `recordings`.
+/// Weighted residuals of a model on one recording, target by target.
+pub type Residuals<'a> = dyn Fn(usize, &ModelSpec) -> Result<Vec<Vec<f64>>, FitError> + 'a;
+
+/// A starting model for `space` on `recordings` of `session`, whose
+/// targets are `targets`; `residuals_of` runs the model on one recording.
 pub fn from_data(
-    fitter: &Fitter<'_>,
+    session: &Session,
+    targets: &SessionTargets,
     recordings: &[usize],
     space: &Space,
+    residuals_of: &Residuals<'_>,
 ) -> Result<ModelSpec, FitError> {
     let mut spec = space.fixed;
-    if let Some((r1, r2, c)) = electrical(fitter, recordings) {
+    if let Some((r1, r2, c)) = electrical(session, recordings) {
         spec.params.r1_ohm = r1;
         spec.params.r2_ohm = r2;
         spec.params.c_f = c;
@@ -26,8 +34,8 @@ pub fn from_data(
     // K by linear least squares over the mechanical channels.
     let (mut num, mut den) = (0.0, 0.0);
     for &i in recordings {
-        let res = fitter.residuals_of(i, &spec)?;
-        for (t, r) in fitter.targets.recordings[i].targets.iter().zip(res) {
+        let res = residuals_of(i, &spec)?;
+        for (t, r) in targets.recordings[i].targets.iter().zip(res) {
             if matches!(t.channel, Channel::Current(_)) {
                 continue;
             }
@@ -46,10 +54,10 @@ pub fn from_data(
 
 /// `(R1, R2, C)` from the first step of every recording that steps from
 /// rest to a held voltage on some segment; medians over all such steps.
-fn electrical(fitter: &Fitter<'_>, recordings: &[usize]) -> Option<(f64, f64, f64)> {
+fn electrical(session: &Session, recordings: &[usize]) -> Option<(f64, f64, f64)> {
     let (mut r1s, mut r2s, mut cs) = (Vec::new(), Vec::new(), Vec::new());
     for &i in recordings {
-        let r = &fitter.session.recordings[i];
+        let r = &session.recordings[i];
         let start = r.rest_rows;
         let rows = r.rec.v_v.len();
         for (k, ch) in r.rec.channels.iter().enumerate() {

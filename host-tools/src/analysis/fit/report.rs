@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use super::data::SessionTargets;
-use super::FitResult;
+use super::fitter::FitResult;
 
 /// Parameters with intervals, information criteria, and fit per channel.
 pub fn text(fit: &FitResult, targets: &SessionTargets) -> String {

@@ -1,38 +1,12 @@
-//! `finrs diagnose`: what the baseline gets wrong in a session, which
-//! effects of the catalogue explain it, and how much they gain on
-//! recordings the fit did not see.
-//!
-//! The session is split: about a third of the recordings (every third,
-//! from the second, keeping each fixture in the training part) are held
-//! out. The baseline is fitted on the rest; then each effect of the
-//! catalogue is added in turn and fitted. An effect is accepted only when
-//! the evidence punishing its extra parameters favours it strongly
-//! (`ΔBIC < −10` on the training part) *and* it lowers the held-out error
-//! (weighted residual sum of squares by at least 1 %) *and* the term that
-//! makes it that effect is significant (its 95 % interval excludes "off":
-//! hydrodynamic loading needs added mass, since its drag alone is
-//! damping; back-relaxation needs the zero below zero). The best accepted
-//! effect joins the model and the search repeats on top of it, so several
-//! causes can be named, strongest first. The verdict:
-//! - `none`: nothing accepted and the held-out residuals are at the noise
-//!   floor (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
-//! - `explained`: effects accepted and the held-out residuals are at the
-//!   noise floor;
-//! - `unexplained`: above the noise floor after the best model, with the
-//!   effects that did pass (possibly none); or the DAQ's channels already
-//!   carry structure while the strip rests before its drive (most
-//!   rests fail a Ljung–Box test): every candidate is driven by the
-//!   voltage, so nothing in the catalogue can account for that.
-
-pub mod analyses;
-pub mod report;
-pub mod whiteness;
+//! The forward search over the catalogue of effects, and the verdict.
 
 use rayon::prelude::*;
-use serde::Serialize;
 
-use crate::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
-use crate::predict::ModelSpec;
+use super::analyses;
+use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Verdict};
+use super::whiteness;
+use crate::analysis::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
+use crate::model::predict::ModelSpec;
 use crate::session::Session;
 
 /// Held-out weighted RSS per residual above which structure remains: the
@@ -51,137 +25,6 @@ pub const INPUT_LAGS: usize = 25;
 /// test before the rest itself is called structured: white noise fails
 /// one in a hundred.
 pub const REST_STRUCTURE_SHARE: f64 = 0.5;
-
-/// How a model does on the two parts of the session.
-#[derive(Clone, Debug, Serialize)]
-pub struct ModelScore {
-    /// Mean NRMSE on the held-out recordings (channels with signal).
-    pub holdout_nrmse: f64,
-    /// Weighted RSS per residual on the held-out recordings.
-    pub holdout_rss_per_residual: f64,
-    /// BIC on the training recordings.
-    pub bic: f64,
-    /// AIC on the training recordings.
-    pub aic: f64,
-    /// Parameters counted.
-    pub parameters: usize,
-}
-
-/// One candidate tried in one round.
-#[derive(Clone, Debug, Serialize)]
-pub struct Candidate {
-    /// The effect's catalogue name.
-    pub name: String,
-    /// Round of the search (0: on top of the baseline).
-    pub round: usize,
-    /// BIC of the extended model minus that of the model it extends.
-    pub delta_bic: f64,
-    /// Reduction of held-out NRMSE, percent.
-    pub holdout_gain_percent: f64,
-    /// Reduction of held-out weighted RSS, percent.
-    pub holdout_rss_gain_percent: f64,
-    /// Whether it passed both tests.
-    pub passed: bool,
-    /// Its fitted extra parameters.
-    pub params: std::collections::BTreeMap<String, f64>,
-}
-
-/// Residual whiteness of one channel of one held-out recording.
-#[derive(Clone, Debug, Serialize)]
-pub struct ResidualTest {
-    /// Recording.
-    pub recording: String,
-    /// Channel.
-    pub channel: String,
-    /// Ljung–Box `Q` over 20 lags, baseline.
-    pub baseline_ljung_box: f64,
-    /// The same for the final model.
-    pub final_ljung_box: f64,
-    /// 99 % threshold of `χ²(20)`.
-    pub threshold: f64,
-    /// Largest normalised cross-correlation of the baseline's residual
-    /// with the input over lags 0..=25 (input leading), as MATLAB's
-    /// `resid`: above the band, the residual still depends on the drive.
-    pub baseline_input_correlation: f64,
-    /// The same for the final model.
-    pub final_input_correlation: f64,
-    /// 99 % band of that correlation for a white residual, `2.58/√n`.
-    pub input_band: f64,
-}
-
-/// The diagnosis, as written to `VERDICT.json`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Verdict {
-    /// Causes named, strongest first.
-    pub causes: Vec<String>,
-    /// `explained`, `none` or `unexplained`.
-    pub verdict: String,
-    /// The baseline.
-    pub baseline: ModelScore,
-    /// The final model (the baseline when nothing was accepted).
-    pub extended: ModelScore,
-    /// Reduction of held-out NRMSE from baseline to final model, percent.
-    pub gain_percent: f64,
-    /// Every candidate tried.
-    pub candidates: Vec<Candidate>,
-    /// The final model's parameters.
-    pub params: std::collections::BTreeMap<String, f64>,
-    /// Recordings fitted.
-    pub training: Vec<String>,
-    /// Recordings held out.
-    pub holdout: Vec<String>,
-    /// Whiteness of the held-out residuals.
-    pub residual_tests: Vec<ResidualTest>,
-    /// Whiteness of the DAQ's channels during the opening rests.
-    pub rest: RestStructure,
-    /// Where the baseline's misfit lives across the session.
-    pub analyses: analyses::Analyses,
-}
-
-/// The verdict as `finrs diagnose` prints it: verdict and causes, the
-/// held-out gain, then every candidate tried, one line each.
-impl std::fmt::Display for Verdict {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let causes = if self.causes.is_empty() {
-            "none".to_string()
-        } else {
-            self.causes.join(", ")
-        };
-        writeln!(f, "verdict: {}; causes: {causes}", self.verdict)?;
-        writeln!(
-            f,
-            "held-out NRMSE {:.4} (baseline) -> {:.4} (final): {:.1} % gain; held-out RSS/m {:.3} -> {:.3}",
-            self.baseline.holdout_nrmse,
-            self.extended.holdout_nrmse,
-            self.gain_percent,
-            self.baseline.holdout_rss_per_residual,
-            self.extended.holdout_rss_per_residual
-        )?;
-        for c in &self.candidates {
-            writeln!(
-                f,
-                "  round {} {:<30} dBIC {:>12.1}  held-out gain {:>7.2} %  {}",
-                c.round + 1,
-                c.name,
-                c.delta_bic,
-                c.holdout_gain_percent,
-                if c.passed { "passed" } else { "-" }
-            )?;
-        }
-        Ok(())
-    }
-}
-
-/// Whether the measured channels carry structure before any drive.
-#[derive(Clone, Debug, Serialize)]
-pub struct RestStructure {
-    /// Opening rests tested (recording × current or force channel).
-    pub tested: usize,
-    /// Those whose Ljung–Box `Q` over 20 lags exceeds the 99 % threshold.
-    pub failing: usize,
-    /// Whether more than [`REST_STRUCTURE_SHARE`] of them fail.
-    pub structured: bool,
-}
 
 /// Tests the opening rest of every DAQ channel (currents, load cell) for
 /// whiteness; camera channels are too short there to test.
@@ -210,20 +53,6 @@ pub fn rest_structure(session: &Session) -> RestStructure {
         failing,
         structured: tested > 0 && failing as f64 > REST_STRUCTURE_SHARE * tested as f64,
     }
-}
-
-/// A diagnosis with the fits behind it, for the report.
-pub struct Diagnosis {
-    /// The verdict.
-    pub verdict: Verdict,
-    /// The baseline's fit.
-    pub baseline: FitResult,
-    /// The final model's fit.
-    pub final_fit: FitResult,
-    /// Held-out scores of baseline and final model.
-    pub holdout_scores: (Score, Score),
-    /// Indices of the held-out recordings.
-    pub holdout: Vec<usize>,
 }
 
 /// Splits a session: every third recording from the second is held out,

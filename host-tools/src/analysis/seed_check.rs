@@ -10,10 +10,11 @@
 //! that the undamped beam's ringing does not stand in for a peak: damping
 //! changes no static value.
 
-use crate::params::{Geometry, ModelFile};
-use crate::predict::{predict, ModelSpec};
+use crate::model::params::ModelFile;
+use crate::model::predict::{predict, ModelSpec};
+use crate::model::synth::{drive_recording, Drive};
 use crate::recording::Fixture;
-use crate::synth::{drive_recording, Drive};
+use crate::recording::Geometry;
 use crate::wave::Wave;
 
 /// Standard gravity, m/s², for the seed's gram-force.

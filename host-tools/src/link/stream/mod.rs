@@ -9,9 +9,9 @@
 //! firmware restart. That account goes into the file's `notes`.
 //!
 //! ```
-//! use finrs::params::Geometry;
+//! use finrs::recording::Geometry;
 //! use finrs::recording::Medium;
-//! use finrs::stream::{Recorder, Setup};
+//! use finrs::link::stream::{Recorder, Setup};
 //! use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, MAX_FRAME_LEN};
 //!
 //! let mut bytes = Vec::new();

@@ -9,7 +9,7 @@
 
 use model_core::{state_len, Fixture as CoreFixture, Strip};
 
-use crate::predict::ModelSpec;
+use crate::model::predict::ModelSpec;
 use crate::recording::{Channel, Fixture};
 use crate::session::Session;
 

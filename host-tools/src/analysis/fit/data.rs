@@ -1,7 +1,7 @@
 //! What a fit compares: per recording, each measured channel at the rows
 //! where it was sampled, its rest offset removed, and its noise level.
 
-use crate::predict::Traces;
+use crate::model::predict::Traces;
 use crate::recording::Channel;
 use crate::session::{Session, SessionRecording};
 

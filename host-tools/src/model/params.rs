@@ -11,28 +11,9 @@ use std::path::Path;
 
 use model_core::{Laminate, Params};
 
-use crate::predict::ModelSpec;
+use crate::model::predict::ModelSpec;
+use crate::recording::Geometry;
 use serde::{Deserialize, Serialize};
-
-/// Geometry of a strip, as a recording's metadata states it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Geometry {
-    /// Free length, m.
-    pub length_m: f64,
-    /// Width, m.
-    pub width_m: f64,
-    /// Total thickness (core and both films), m.
-    pub thickness_m: f64,
-}
-
-impl Geometry {
-    /// The seed's 50 mm strip.
-    pub const THESIS_2006: Geometry = Geometry {
-        length_m: 0.05,
-        width_m: 0.01,
-        thickness_m: 0.000_285_8,
-    };
-}
 
 /// The contents of a parameter file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -261,38 +242,6 @@ impl ModelFile {
     pub fn to_toml(&self) -> String {
         let body = toml::to_string(self).expect("plain numbers always serialise");
         format!("# finrs model parameters, SI units\n{body}")
-    }
-
-    /// The file for a fitted model: the seed's material; `[beam]` when the
-    /// fit freed `EI` (its `ρA` from the laminate of `spec`'s strip);
-    /// `[extensions]` when any effect is on.
-    pub fn from_fit(spec: &ModelSpec, effects: &[crate::fit::Effect]) -> ModelFile {
-        let mut f = ModelFile::thesis_2006();
-        let p = &spec.params;
-        f.electrical = Electrical {
-            r1_ohm: p.r1_ohm,
-            r2_ohm: p.r2_ohm,
-            c_f: p.c_f,
-        };
-        f.relaxation = Relaxation {
-            k_nm_per_c: p.k_nm_per_c,
-            z_per_s: p.z_per_s,
-            p_per_s: p.p_per_s,
-        };
-        if effects.contains(&crate::fit::Effect::BeamStiffness) {
-            f.beam = Some(Beam {
-                ei_nm2: p.ei_nm2,
-                mass_per_length_kg_per_m: p.mass_per_length_kg_per_m,
-            });
-        }
-        if !effects.is_empty() {
-            f.extensions = Some(ExtensionsFile::from_spec(
-                &spec.ext,
-                spec.dehydration_per_s,
-                spec.dehydration_curvature,
-            ));
-        }
-        f
     }
 
     /// The laminate of this material with a recording's geometry.

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode};
 
 use super::clock::{Clock, ClockError};
-use crate::params::Geometry;
+use crate::recording::Geometry;
 use crate::recording::{
     Channel, Fixture, Medium, Metadata, Recording, RecordingError, SAFE_VOLTAGE_LIMIT_V,
 };

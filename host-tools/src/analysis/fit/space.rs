@@ -5,7 +5,7 @@
 use model_core::Extensions;
 
 use super::effect::Effect;
-use crate::predict::ModelSpec;
+use crate::model::predict::ModelSpec;
 
 /// A fitted parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -6,7 +6,7 @@ use finrs_frames::{
 use proptest::prelude::*;
 
 use super::*;
-use crate::params::Geometry;
+use crate::recording::Geometry;
 use crate::recording::{Channel, Fixture, Medium, Recording};
 
 fn setup() -> Setup {

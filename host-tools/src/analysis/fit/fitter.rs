@@ -1,31 +1,18 @@
-//! `finrs fit`: estimates a model's free parameters jointly over the
-//! recordings of a session, by Levenberg–Marquardt on noise-weighted
-//! residuals, and reports what a researcher needs to trust the result:
-//! confidence intervals, fit per channel, AIC and BIC.
-//!
-//! Every channel is weighted by the noise of its sensor, measured on the
-//! opening rest of each recording (FORMAT.md guarantees at least 1 s), so
-//! the weighted residuals are in units of noise and their sum of squares is
-//! `m` when the model explains the data to the noise floor.
-
-mod data;
-mod effect;
-pub mod modal;
-pub mod report;
-mod space;
-mod start;
-mod stats;
+//! The fit itself: a session's targets, the least-squares problem the
+//! optimiser sees, and its restarts.
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 
-pub use data::{Sensor, SessionTargets, Target};
-pub use effect::Effect;
-pub use space::{Knob, Space};
-pub use stats::{nrmse, ChannelFit, Estimate, Score};
-
-use crate::predict::{predict, ModelSpec, PredictError};
+use super::data::SessionTargets;
+use super::effect::Effect;
+use super::error::FitError;
+use super::space::Space;
+use super::start;
+use super::stats::{self, ChannelFit, Estimate, Score};
+use crate::model::params::{Beam, Electrical, ExtensionsFile, ModelFile, Relaxation};
+use crate::model::predict::{predict, ModelSpec};
 use crate::session::Session;
 
 /// Elements per segment the fit uses: the seed's one. The static shape does
@@ -45,25 +32,6 @@ fn pool() -> &'static rayon::ThreadPool {
             .build()
             .expect("threads can be started")
     })
-}
-
-/// Why a fit failed.
-#[derive(Debug, thiserror::Error)]
-pub enum FitError {
-    /// The model refused a parameter set the optimiser reached.
-    #[error("{recording}: {source}")]
-    Model {
-        /// The recording.
-        recording: String,
-        /// Why.
-        source: PredictError,
-    },
-    /// Nothing to fit.
-    #[error("the fit needs at least one recording with a measured channel")]
-    NoData,
-    /// Too few recordings to hold some out.
-    #[error("a diagnosis holds recordings out to test on: it needs at least two, and a second of each fixture it holds out; this session has {0}")]
-    TooFewToHoldOut(usize),
 }
 
 /// A fitted model and how well it fits.
@@ -87,6 +55,40 @@ pub struct FitResult {
     pub evaluations: usize,
     /// Why the optimiser stopped.
     pub termination: String,
+}
+
+impl FitResult {
+    /// The parameter file for this fit: the seed's material; `[beam]` when
+    /// the fit freed `EI` (its `ρA` from the laminate of the fitted
+    /// strip); `[extensions]` when any effect is on.
+    pub fn model_file(&self) -> ModelFile {
+        let mut f = ModelFile::thesis_2006();
+        let p = &self.spec.params;
+        f.electrical = Electrical {
+            r1_ohm: p.r1_ohm,
+            r2_ohm: p.r2_ohm,
+            c_f: p.c_f,
+        };
+        f.relaxation = Relaxation {
+            k_nm_per_c: p.k_nm_per_c,
+            z_per_s: p.z_per_s,
+            p_per_s: p.p_per_s,
+        };
+        if self.effects.contains(&Effect::BeamStiffness) {
+            f.beam = Some(Beam {
+                ei_nm2: p.ei_nm2,
+                mass_per_length_kg_per_m: p.mass_per_length_kg_per_m,
+            });
+        }
+        if !self.effects.is_empty() {
+            f.extensions = Some(ExtensionsFile::from_spec(
+                &self.spec.ext,
+                self.spec.dehydration_per_s,
+                self.spec.dehydration_curvature,
+            ));
+        }
+        f
+    }
 }
 
 /// A session prepared for fitting: its targets and noise levels.
@@ -201,7 +203,13 @@ impl<'a> Fitter<'a> {
         let space = Space::new(effects, fixed);
         let start = match start {
             Some(s) => *s,
-            None => start::from_data(self, recordings, &space)?,
+            None => start::from_data(
+                self.session,
+                &self.targets,
+                recordings,
+                &space,
+                &|i, spec| self.residuals_of(i, spec),
+            )?,
         };
         let theta0 = DVector::from_vec(space.theta(&start));
         let mut problem = Problem {
