@@ -142,6 +142,10 @@ pub struct ProbeArgs {
 impl ProbeArgs {
     /// The library's probe options.
     pub fn options(&self) -> anyhow::Result<finrs::link::probe::ProbeOptions> {
+        if let Some(p) = &self.probe {
+            // Checked now, so the refusal names the flag.
+            finrs::link::probe::parse_selector(p).map_err(|e| anyhow::anyhow!("--probe {e}"))?;
+        }
         Ok(finrs::link::probe::ProbeOptions {
             chip: self.chip.clone(),
             probe: self.probe.clone(),

@@ -7,17 +7,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{bail, Context};
+use anyhow::{anyhow, bail, Context};
 use finrs::analysis::fit::{Effect, Fitter};
 use finrs::link::capture::{self, Firmware, Monitor};
 use finrs::model::params::ModelFile;
 use finrs::model::simulate::simulate as simulate_recording;
-use finrs::model::synth;
+use finrs::model::synth::{self, DriveError};
 use finrs::plot;
 use finrs::recording::Geometry;
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
-use finrs::wave::Wave;
+use finrs::wave::{Wave, WaveError};
+use finrs_drive::MAX_SEGMENTS;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{
@@ -71,7 +72,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
 
 /// The drive of `simulate --wave`, with `simulate`'s defaults.
 fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
-    let wave = Wave::parse(spec).map_err(anyhow::Error::msg)?;
+    let wave = Wave::parse(spec)?;
     let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
         FixtureArg::Free => Fixture::Free,
         FixtureArg::Blocked => Fixture::Blocked,
@@ -85,7 +86,7 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         rate_hz: args.rate_hz.unwrap_or(1000.0),
     };
     let limits = match (args.limit_v, args.slew_v_per_s) {
-        (Some(v), Some(slew)) => Some(synth::limits(v, slew)?),
+        (Some(v), Some(slew)) => Some(synth::limits(v, slew).map_err(drive_flags)?),
         _ => None,
     };
     let shaping = synth::Shaping {
@@ -95,7 +96,50 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         sweep_s: args.shape.sweep_s,
         limits,
     };
-    synth::drive_recording_shaped(&wave, &drive, &shaping)
+    synth::drive_recording_shaped(&wave, &drive, &shaping).map_err(drive_flags)
+}
+
+/// The flag that sets a field of the library's options: `rest_s` is
+/// `--rest-s`.
+fn flag(field: &str) -> String {
+    format!("--{}", field.replace('_', "-"))
+}
+
+/// A refused drive, told with the flags that set it.
+fn drive_flags(e: DriveError) -> anyhow::Error {
+    match e {
+        DriveError::Negative { field, value } => {
+            anyhow!("{} must be zero or positive, got {value}", flag(field))
+        }
+        DriveError::NotPositive { field, value } => {
+            anyhow!("{} must be positive, got {value}", flag(field))
+        }
+        DriveError::RateNotWhole(rate_hz) => anyhow!(
+            "--rate-hz must be a whole number of Hz up to {} (the generator counts ticks), got {rate_hz}",
+            u32::MAX
+        ),
+        DriveError::RampsTooLong {
+            ramp_in_s,
+            ramp_out_s,
+            duration_s,
+        } => anyhow!(
+            "--ramp-in-s + --ramp-out-s must not exceed --duration-s: {ramp_in_s} + {ramp_out_s} > {duration_s}"
+        ),
+        DriveError::Limits { field, value, rule } => anyhow!("{} {value}: {rule}", flag(field)),
+        DriveError::Wave(e) => wave_flags(e),
+        other => other.into(),
+    }
+}
+
+/// A refused wave, told with the flags that set it.
+fn wave_flags(e: WaveError) -> anyhow::Error {
+    match e {
+        WaveError::Segments(n) => anyhow!("--segments must be 1..={MAX_SEGMENTS}, got {n}"),
+        WaveError::Offset { wave } => {
+            anyhow!("--offset-v applies to sine: and standing: waves only, not `{wave}`")
+        }
+        other => other.into(),
+    }
 }
 
 /// `finrs params`.
@@ -293,13 +337,13 @@ pub fn wave(args: WaveArgs) -> anyhow::Result<()> {
     let segments = args.shape.segments.unwrap_or(3);
     // Refused here, before any probe is looked for.
     let command = finrs::link::command::wave_command(&args.wave, segments, &args.options())
-        .map_err(anyhow::Error::msg)?;
+        .map_err(wave_flags)?;
     send(&args.send, &command)
 }
 
 /// `finrs limit`.
 pub fn limit(max_abs_v: f64, args: &SendArgs) -> anyhow::Result<()> {
-    let command = finrs::link::command::limit_command(max_abs_v).map_err(anyhow::Error::msg)?;
+    let command = finrs::link::command::limit_command(max_abs_v)?;
     send(args, &command)
 }
 

@@ -261,17 +261,18 @@ fn simulate_refuses_what_the_firmware_refuses_and_bad_shaping() {
     };
     assert_eq!(
         refuse("sine:2,1,0", ramps, drive(3)),
-        "--ramp-in-s + --ramp-out-s must not exceed --duration-s: 2 + 1.5 > 3"
+        "ramp_in_s + ramp_out_s must not exceed duration_s: 2 + 1.5 > 3"
     );
     let d = Drive {
         rate_hz: 999.5,
         ..drive(3)
     };
-    assert!(refuse("step:1", Shaping::default(), d)
-        .starts_with("--rate-hz must be a whole number of Hz"));
+    assert!(
+        refuse("step:1", Shaping::default(), d).starts_with("rate_hz must be a whole number of Hz")
+    );
     assert_eq!(
         refuse("step:1", Shaping::default(), drive(9)),
-        "--segments must be 1..=8, got 9"
+        "segments must be 1..=8, got 9"
     );
 }
 
@@ -362,5 +363,32 @@ fn the_simulate_command_writes_the_firmware_voltages() {
     ]);
     assert!(String::from_utf8_lossy(&o.stderr)
         .contains("--limit-v 4.5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"));
+    // The library names its fields; the command line names its flags.
+    for (extra, message) in [
+        (
+            &["--wave", "sine:1,1,0", "--rate-hz", "999.5"][..],
+            "--rate-hz must be a whole number of Hz",
+        ),
+        (
+            &[
+                "--wave",
+                "sine:1,1,0",
+                "--ramp-in-s",
+                "2",
+                "--ramp-out-s",
+                "2",
+            ],
+            "--ramp-in-s + --ramp-out-s must not exceed --duration-s: 2 + 2 > 3",
+        ),
+        (
+            &["--wave", "pulses:1,1,1", "--offset-v", "0.5"],
+            "--offset-v applies to sine: and standing: waves only",
+        ),
+    ] {
+        let o = run(extra);
+        assert!(!o.status.success(), "{extra:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(message), "{extra:?}: {err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -10,12 +10,11 @@
 //! that the undamped beam's ringing does not stand in for a peak: damping
 //! changes no static value.
 
-use crate::model::params::ModelFile;
-use crate::model::predict::{predict, ModelSpec};
-use crate::model::synth::{drive_recording, Drive};
-use crate::recording::Fixture;
-use crate::recording::Geometry;
-use crate::wave::Wave;
+use crate::model::params::{ModelFile, ParamsError};
+use crate::model::predict::{predict, ModelSpec, PredictError};
+use crate::model::synth::{drive_recording, Drive, DriveError};
+use crate::recording::{Fixture, Geometry};
+use crate::wave::{Wave, WaveError};
 
 /// Standard gravity, m/s², for the seed's gram-force.
 pub const G_M_PER_S2: f64 = 9.806_65;
@@ -70,6 +69,24 @@ pub struct SeedCheck {
     pub explanations: Vec<String>,
 }
 
+/// Why the check could not run: the model or a drive refused the seed's
+/// own numbers.
+#[derive(Debug, thiserror::Error)]
+pub enum SeedCheckError {
+    /// The preset's parameters for a strip.
+    #[error(transparent)]
+    Params(#[from] ParamsError),
+    /// A step's wave.
+    #[error(transparent)]
+    Wave(#[from] WaveError),
+    /// A step's drive.
+    #[error(transparent)]
+    Drive(#[from] DriveError),
+    /// The engine.
+    #[error(transparent)]
+    Predict(#[from] PredictError),
+}
+
 /// The check as `finrs seed-check` prints it: a table of the seed's facts
 /// beside both models, then the explanations.
 impl std::fmt::Display for SeedCheck {
@@ -101,7 +118,7 @@ fn step_response(
     fixture: Fixture,
     v: f64,
     hold_s: f64,
-) -> anyhow::Result<(f64, f64, f64)> {
+) -> Result<(f64, f64, f64), SeedCheckError> {
     let drive = Drive {
         segments: 3,
         fixture,
@@ -110,10 +127,7 @@ fn step_response(
         off_s: 0.0,
         rate_hz: 1000.0,
     };
-    let mut rec = drive_recording(
-        &Wave::parse(&format!("step:{v}")).map_err(anyhow::Error::msg)?,
-        &drive,
-    )?;
+    let mut rec = drive_recording(&Wave::parse(&format!("step:{v}"))?, &drive)?;
     rec.meta.length_m = g.length_m;
     let mut spec = *spec;
     // Damping only settles the ringing; it moves no static value.
@@ -131,7 +145,7 @@ fn step_response(
 }
 
 /// Runs the check.
-pub fn seed_check() -> anyhow::Result<SeedCheck> {
+pub fn seed_check() -> Result<SeedCheck, SeedCheckError> {
     let file = ModelFile::thesis_2006();
     let base = file.spec_for(&Geometry::THESIS_2006)?;
     let mut arcs = base;

@@ -31,7 +31,7 @@ impl CaptureOptions {
     fn check(&self) -> anyhow::Result<()> {
         if let Some(d) = self.duration_s {
             if !(d.is_finite() && d > 0.0) {
-                bail!("--duration-s must be a positive number of seconds, got {d}");
+                bail!("duration_s must be a positive number of seconds, got {d}");
             }
         }
         Ok(())

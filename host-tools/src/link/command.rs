@@ -25,17 +25,21 @@
 //! assert!(matches!(program, finrs_drive::Program::Travelling { .. }));
 //!
 //! let e = wave_command("sine:2,300,0", 4, &options).unwrap_err();
-//! assert_eq!(e, "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz");
+//! assert_eq!(e.to_string(), "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz");
 //! ```
 
 use finrs_drive::Limits;
 use finrs_frames::{encode_command, Command, MAX_COMMAND_LEN};
 
-use crate::wave::{Wave, WaveOptions};
+use crate::wave::{Wave, WaveError, WaveOptions};
 
 /// The `SetWave` command for the wave `spec` on `segments` segments shaped
 /// by `options`, or the field and rule it breaks.
-pub fn wave_command(spec: &str, segments: usize, options: &WaveOptions) -> Result<Command, String> {
+pub fn wave_command(
+    spec: &str,
+    segments: usize,
+    options: &WaveOptions,
+) -> Result<Command, WaveError> {
     let generator = Wave::parse(spec)?.generator(segments, options)?;
     Ok(Command::SetWave {
         program: generator.program(),
@@ -43,13 +47,23 @@ pub fn wave_command(spec: &str, segments: usize, options: &WaveOptions) -> Resul
     })
 }
 
+/// A voltage limit the firmware would refuse.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("limit {max_abs_v} V: {rule}")]
+pub struct LimitCommandError {
+    /// The limit asked for, V.
+    pub max_abs_v: f64,
+    /// The firmware's rule it breaks.
+    pub rule: finrs_drive::LimitError,
+}
+
 /// The `SetLimit` command, refused unless the limit is one the firmware
 /// accepts (finite, above 0, at most
 /// [`HARD_LIMIT_V`](finrs_drive::HARD_LIMIT_V)).
-pub fn limit_command(max_abs_v: f64) -> Result<Command, String> {
+pub fn limit_command(max_abs_v: f64) -> Result<Command, LimitCommandError> {
     let v = max_abs_v as f32;
     // Any valid slew will do: only the voltage is being checked.
-    Limits::new(v, 1.0).map_err(|e| format!("limit {max_abs_v} V: {e}"))?;
+    Limits::new(v, 1.0).map_err(|rule| LimitCommandError { max_abs_v, rule })?;
     Ok(Command::SetLimit { max_abs_v: v })
 }
 
@@ -89,7 +103,7 @@ mod tests {
         }
     }
 
-    fn request(req: &WaveRequest) -> Result<Command, String> {
+    fn request(req: &WaveRequest) -> Result<Command, WaveError> {
         wave_command(&req.spec, req.segments, &req.options)
     }
 
@@ -152,7 +166,7 @@ mod tests {
 
     #[test]
     fn invalid_waves_are_refused_with_field_and_rule() {
-        let refuse = |req: WaveRequest| request(&req).unwrap_err();
+        let refuse = |req: WaveRequest| request(&req).unwrap_err().to_string();
         assert_eq!(
             refuse(WaveRequest::new("sine:2,300,0", 3)),
             "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz"
@@ -194,13 +208,13 @@ mod tests {
         );
         assert_eq!(
             refuse(WaveRequest::new("sine:1,1,0", 9)),
-            "--segments must be 1..=8, got 9"
+            "segments must be 1..=8, got 9"
         );
         let mut r = WaveRequest::new("pulses:1,1,1", 3);
         r.options.offset_v = 0.5;
         assert_eq!(
             refuse(r),
-            "--offset-v applies to sine: and standing: waves only, not `pulses:1,1,1`"
+            "offset_v applies to sine: and standing: waves only, not `pulses:1,1,1`"
         );
         let mut r = WaveRequest::new("standing:1,1", 3);
         r.options.offset_v = 3.5;
@@ -214,12 +228,16 @@ mod tests {
     fn limits_follow_the_firmware_rules() {
         assert_eq!(limit_command(1.5), Ok(Command::SetLimit { max_abs_v: 1.5 }));
         assert_eq!(
-            limit_command(4.5).unwrap_err(),
+            limit_command(4.5).unwrap_err().to_string(),
             "limit 4.5 V: max_abs_v must not exceed HARD_LIMIT_V (4 V)"
         );
-        assert!(limit_command(0.0).unwrap_err().contains("must be above 0"));
+        assert!(limit_command(0.0)
+            .unwrap_err()
+            .to_string()
+            .contains("must be above 0"));
         assert!(limit_command(f64::NAN)
             .unwrap_err()
+            .to_string()
             .contains("must be finite"));
     }
 

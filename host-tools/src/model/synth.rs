@@ -5,8 +5,59 @@
 //! firmware's controller counts its sample ticks, and, if asked, they pass
 //! through the firmware's [`finrs_drive::Limiter`] on every row.
 
-use crate::recording::{Fixture, Medium, Metadata, Recording};
-use crate::wave::{Wave, WaveOptions};
+use crate::recording::{Fixture, Geometry, Medium, Metadata, Recording};
+use crate::wave::{Wave, WaveError, WaveOptions};
+
+/// Why a drive was refused; each names the field of [`Drive`] or
+/// [`Shaping`] (or the limit) and the rule it breaks.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DriveError {
+    /// A time that must not be negative is.
+    #[error("{field} must be zero or positive, got {value}")]
+    Negative {
+        /// The field, e.g. `rest_s`.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A duration or rate that must be above 0 is not.
+    #[error("{field} must be positive, got {value}")]
+    NotPositive {
+        /// The field, e.g. `duration_s`.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The rate is not a whole number of Hz the generator can count.
+    #[error("rate_hz must be a whole number of Hz up to {max} (the generator counts ticks), got {0}", max = u32::MAX)]
+    RateNotWhole(f64),
+    /// The ramps do not fit in the wave's duration.
+    #[error("ramp_in_s + ramp_out_s must not exceed duration_s: {ramp_in_s} + {ramp_out_s} > {duration_s}")]
+    RampsTooLong {
+        /// Ramp in, s.
+        ramp_in_s: f64,
+        /// Ramp out, s.
+        ramp_out_s: f64,
+        /// The wave's duration, s.
+        duration_s: f64,
+    },
+    /// More rows than this tool writes.
+    #[error("{0} rows is more than this tool writes (50 million)")]
+    TooManyRows(usize),
+    /// The wave is refused for these segments and options.
+    #[error(transparent)]
+    Wave(#[from] WaveError),
+    /// The firmware refuses a limit.
+    #[error("{field} {value}: {rule}")]
+    Limits {
+        /// `limit_v` or `slew_v_per_s`.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The firmware's rule.
+        rule: finrs_drive::LimitError,
+    },
+}
 
 /// When and how a wave is applied.
 #[derive(Clone, Copy, Debug)]
@@ -41,21 +92,27 @@ pub struct Shaping {
     pub limits: Option<finrs_drive::Limits>,
 }
 
-/// The firmware's limits from `--limit-v` and `--slew-v-per-s`, checked by
-/// [`finrs_drive::Limits::new`]; the error names the option and its rule.
-pub fn limits(limit_v: f64, slew_v_per_s: f64) -> anyhow::Result<finrs_drive::Limits> {
+/// The firmware's limits, checked by [`finrs_drive::Limits::new`]; the
+/// error names the value (`limit_v` or `slew_v_per_s`) and its rule.
+pub fn limits(limit_v: f64, slew_v_per_s: f64) -> Result<finrs_drive::Limits, DriveError> {
     use finrs_drive::LimitError as E;
-    finrs_drive::Limits::new(limit_v as f32, slew_v_per_s as f32).map_err(|e| match e {
-        E::SlewNotFinite | E::SlewNotPositive => {
-            anyhow::anyhow!("--slew-v-per-s {slew_v_per_s}: {e}")
-        }
-        _ => anyhow::anyhow!("--limit-v {limit_v}: {e}"),
+    finrs_drive::Limits::new(limit_v as f32, slew_v_per_s as f32).map_err(|rule| match rule {
+        E::SlewNotFinite | E::SlewNotPositive => DriveError::Limits {
+            field: "slew_v_per_s",
+            value: slew_v_per_s,
+            rule,
+        },
+        _ => DriveError::Limits {
+            field: "limit_v",
+            value: limit_v,
+            rule,
+        },
     })
 }
 
 /// A voltage-only recording of the seed's strip driven by `wave`, with no
 /// ramps, offset nor limiter, and chirps sweeping over the whole duration.
-pub fn drive_recording(wave: &Wave, d: &Drive) -> anyhow::Result<Recording> {
+pub fn drive_recording(wave: &Wave, d: &Drive) -> Result<Recording, DriveError> {
     drive_recording_shaped(wave, d, &Shaping::default())
 }
 
@@ -67,39 +124,34 @@ pub fn drive_recording_shaped(
     wave: &Wave,
     d: &Drive,
     shaping: &Shaping,
-) -> anyhow::Result<Recording> {
-    for (name, v) in [
-        ("--rest-s", d.rest_s),
-        ("--off-s", d.off_s),
-        ("--ramp-in-s", shaping.ramp_in_s),
-        ("--ramp-out-s", shaping.ramp_out_s),
+) -> Result<Recording, DriveError> {
+    for (field, value) in [
+        ("rest_s", d.rest_s),
+        ("off_s", d.off_s),
+        ("ramp_in_s", shaping.ramp_in_s),
+        ("ramp_out_s", shaping.ramp_out_s),
     ] {
-        if !(v.is_finite() && v >= 0.0) {
-            anyhow::bail!("{name} must be zero or positive, got {v}");
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(DriveError::Negative { field, value });
         }
     }
-    for (name, v) in [("--duration-s", d.duration_s), ("--rate-hz", d.rate_hz)] {
-        if !(v.is_finite() && v > 0.0) {
-            anyhow::bail!("{name} must be positive, got {v}");
+    for (field, value) in [("duration_s", d.duration_s), ("rate_hz", d.rate_hz)] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(DriveError::NotPositive { field, value });
         }
     }
     // The firmware's generator counts whole ticks of a whole-hertz clock.
     if d.rate_hz.fract() != 0.0 || d.rate_hz > f64::from(u32::MAX) {
-        anyhow::bail!(
-            "--rate-hz must be a whole number of Hz up to {} (the generator counts ticks), got {}",
-            u32::MAX,
-            d.rate_hz
-        );
+        return Err(DriveError::RateNotWhole(d.rate_hz));
     }
     let tick_hz = d.rate_hz as u32;
     let hold_s = d.duration_s - shaping.ramp_in_s - shaping.ramp_out_s;
     if hold_s < 0.0 {
-        anyhow::bail!(
-            "--ramp-in-s + --ramp-out-s must not exceed --duration-s: {} + {} > {}",
-            shaping.ramp_in_s,
-            shaping.ramp_out_s,
-            d.duration_s
-        );
+        return Err(DriveError::RampsTooLong {
+            ramp_in_s: shaping.ramp_in_s,
+            ramp_out_s: shaping.ramp_out_s,
+            duration_s: d.duration_s,
+        });
     }
     let options = WaveOptions {
         offset_v: shaping.offset_v,
@@ -108,13 +160,11 @@ pub fn drive_recording_shaped(
         ramp_out_s: shaping.ramp_out_s,
         sweep_s: shaping.sweep_s.unwrap_or(d.duration_s),
     };
-    let generator = wave
-        .generator(d.segments, &options)
-        .map_err(anyhow::Error::msg)?;
+    let generator = wave.generator(d.segments, &options)?;
     let total_s = d.rest_s + d.duration_s + d.off_s;
     let rows = (total_s * d.rate_hz).round() as usize + 1;
     if rows > 50_000_000 {
-        anyhow::bail!("{rows} rows is more than this tool writes (50 million)");
+        return Err(DriveError::TooManyRows(rows));
     }
     // First row at or after rest_s (the 1e-9 forgives rounding in the
     // product, e.g. 0.1 s × 1000 Hz).
@@ -125,7 +175,7 @@ pub fn drive_recording_shaped(
     // it with the wave gives the same rows.
     v_v.extend(generator.run(wave_rows, tick_hz, shaping.limits));
     let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
-    let g = crate::recording::Geometry::THESIS_2006;
+    let g = Geometry::THESIS_2006;
     Ok(Recording {
         meta: Metadata {
             segments: d.segments,
@@ -150,19 +200,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn limits_name_the_option_and_rule() {
+    fn limits_name_the_value_and_rule() {
         assert_eq!(limits(1.5, 20.0).unwrap().max_abs_v(), 1.5);
         assert_eq!(
             limits(5.0, 20.0).unwrap_err().to_string(),
-            "--limit-v 5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"
+            "limit_v 5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"
         );
         assert_eq!(
             limits(1.0, 0.0).unwrap_err().to_string(),
-            "--slew-v-per-s 0: slew_v_per_s must be above 0"
+            "slew_v_per_s 0: slew_v_per_s must be above 0"
         );
         assert_eq!(
             limits(f64::NAN, 1.0).unwrap_err().to_string(),
-            "--limit-v NaN: max_abs_v must be finite"
+            "limit_v NaN: max_abs_v must be finite"
         );
     }
 }

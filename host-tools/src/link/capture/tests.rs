@@ -226,6 +226,6 @@ fn a_bad_duration_is_refused() {
     let e = capture(&mut link, None, &stop, &options("bad", Some(-1.0)), &Silent).unwrap_err();
     assert_eq!(
         e.to_string(),
-        "--duration-s must be a positive number of seconds, got -1"
+        "duration_s must be a positive number of seconds, got -1"
     );
 }

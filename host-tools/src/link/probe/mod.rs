@@ -96,10 +96,10 @@ fn bounded<T: Send + 'static>(
     })
 }
 
-/// Parses `--probe VID:PID[:SERIAL]`.
+/// Parses a probe selector, `VID:PID[:SERIAL]` in hex.
 pub fn parse_selector(text: &str) -> anyhow::Result<DebugProbeSelector> {
     text.parse::<DebugProbeSelector>()
-        .map_err(|e| anyhow!("--probe {text:?}: expected VID:PID[:SERIAL] in hex: {e}"))
+        .map_err(|e| anyhow!("{text:?}: expected VID:PID[:SERIAL] in hex: {e}"))
 }
 
 fn describe(probes: &[DebugProbeInfo]) -> String {
@@ -230,7 +230,7 @@ mod glue_tests {
         assert_eq!(s.serial_number.as_deref(), Some("066DFF"));
         let e = parse_selector("stlink").unwrap_err().to_string();
         assert!(
-            e.starts_with("--probe \"stlink\": expected VID:PID[:SERIAL]"),
+            e.starts_with("\"stlink\": expected VID:PID[:SERIAL]"),
             "{e}"
         );
     }
