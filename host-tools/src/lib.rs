@@ -2,20 +2,21 @@
 //!
 //! The command line in `main.rs` is a thin layer over this library: every
 //! command is a function here, so that tests call the same code users run.
+//!
+//! The modules are layered; each imports only from layers below it
+//! (`scripts/module-graph` checks this, and `cargo test` runs it):
+//! - [`recording`] (the `ipmc-bench/1` format) and [`wave`] (the `--wave`
+//!   syntax on the firmware's generator), at the bottom;
+//! - [`session`]: the recordings of one sample;
+//! - [`model`] (parameters, prediction, simulation, drives from waves),
+//!   [`link`] (probe, force stream, commands to the firmware) and [`plot`];
+//! - [`analysis`]: fit, diagnosis and the seed's check, on top.
 #![deny(missing_docs)]
 
-pub mod capture;
-pub mod command;
-pub mod diagnose;
-pub mod fit;
-pub mod params;
+pub mod analysis;
+pub mod link;
+pub mod model;
 pub mod plot;
-pub mod predict;
-pub mod probe;
 pub mod recording;
-pub mod seed_check;
 pub mod session;
-pub mod simulate;
-pub mod stream;
-pub mod synth;
 pub mod wave;

@@ -3,9 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::params::Geometry;
-use crate::recording::{Metadata, Recording, RecordingError};
-use crate::simulate::sample_time;
+use crate::recording::{Geometry, Recording, RecordingError};
 
 /// A recording of a session, with what the fit needs to know of it.
 #[derive(Clone, Debug)]
@@ -56,17 +54,6 @@ pub enum SessionError {
         /// The rule broken.
         message: String,
     },
-}
-
-/// `t_session_start_s = …` from a recording's notes, if it says.
-pub fn session_start_s(meta: &Metadata) -> Option<f64> {
-    let notes = meta.notes.as_deref()?;
-    let rest = &notes[notes.find("t_session_start_s")? + "t_session_start_s".len()..];
-    let rest = rest.trim_start().strip_prefix('=')?.trim_start();
-    let end = rest
-        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '-' | '+')))
-        .unwrap_or(rest.len());
-    rest[..end].parse::<f64>().ok().filter(|t| t.is_finite())
 }
 
 impl Session {
@@ -122,7 +109,7 @@ impl Session {
 
     fn prepare(path: &Path, rec: Recording) -> Result<SessionRecording, SessionError> {
         let file = path_name(path);
-        let dt_s = sample_time(&file, &rec.t_s).map_err(|e| SessionError::Rule {
+        let dt_s = rec.sample_time().map_err(|e| SessionError::Rule {
             file: file.clone(),
             message: e.to_string(),
         })?;
@@ -148,7 +135,7 @@ impl Session {
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default(),
-            t_start_s: session_start_s(&rec.meta),
+            t_start_s: rec.meta.session_start_s(),
             rec,
             dt_s,
             rest_rows,
@@ -157,38 +144,10 @@ impl Session {
 
     /// The sample's geometry (all recordings share it).
     pub fn geometry(&self) -> Geometry {
-        let m = &self.recordings[0].rec.meta;
-        Geometry {
-            length_m: m.length_m,
-            width_m: m.width_m,
-            thickness_m: m.thickness_m,
-        }
+        self.recordings[0].rec.meta.geometry()
     }
 }
 
 fn path_name(p: &Path) -> String {
     p.display().to_string()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn session_start_is_read_from_notes() {
-        let mut m = Recording::parse(
-            "x.csv",
-            "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n# thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\nt_s,v1_V\n0,0\n",
-        )
-        .unwrap()
-        .meta;
-        m.notes = Some("t_session_start_s = 97.000; run 5 of 10".into());
-        assert_eq!(session_start_s(&m), Some(97.0));
-        m.notes = Some("run 5, t_session_start_s=12.5".into());
-        assert_eq!(session_start_s(&m), Some(12.5));
-        m.notes = Some("t_session_start_s = soon".into());
-        assert_eq!(session_start_s(&m), None);
-        m.notes = None;
-        assert_eq!(session_start_s(&m), None);
-    }
 }

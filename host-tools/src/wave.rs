@@ -23,12 +23,94 @@
 //!
 //! let e = wave.generator(3, &WaveOptions { offset_v: 2.5, ..WaveOptions::steady(10.0) });
 //! assert_eq!(
-//!     e.unwrap_err(),
+//!     e.unwrap_err().to_string(),
 //!     "wave `sine:2,1,120`: peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V"
 //! );
 //! ```
 
 use finrs_drive::{Envelope, Generator, Program, HARD_LIMIT_V, MAX_SEGMENTS};
+
+/// Why a wave was refused: its text, or the firmware's rules for it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum WaveError {
+    /// No `KIND:` before the values.
+    #[error("wave `{wave}`: expected KIND:VALUES, e.g. step:2.5")]
+    NoKind {
+        /// The wave's text.
+        wave: String,
+    },
+    /// A value is not a finite number.
+    #[error("wave `{wave}`: `{value}` is not a finite number")]
+    NotANumber {
+        /// The wave's text.
+        wave: String,
+        /// The value as written.
+        value: String,
+    },
+    /// The kind takes another number of values.
+    #[error("wave `{wave}`: {kind} takes {usage}, got {got} value(s)")]
+    Count {
+        /// The wave's text.
+        wave: String,
+        /// The kind.
+        kind: String,
+        /// The values it takes.
+        usage: &'static str,
+        /// The values given.
+        got: usize,
+    },
+    /// No such kind.
+    #[error("wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses)")]
+    UnknownKind {
+        /// The wave's text.
+        wave: String,
+        /// The kind given.
+        kind: String,
+    },
+    /// A step names neither one level nor one per segment.
+    #[error("wave `{wave}`: step has {levels} levels for {segments} segments")]
+    Levels {
+        /// The wave's text.
+        wave: String,
+        /// Levels given.
+        levels: usize,
+        /// Segments driven.
+        segments: usize,
+    },
+    /// The segment count is not one the firmware drives.
+    #[error("segments must be 1..={MAX_SEGMENTS}, got {0}")]
+    Segments(usize),
+    /// An offset for a wave that has none.
+    #[error("offset_v applies to sine: and standing: waves only, not `{wave}`")]
+    Offset {
+        /// The wave's text.
+        wave: String,
+    },
+    /// The firmware's generator refuses the program or envelope.
+    #[error("wave `{wave}`: {rule}")]
+    Firmware {
+        /// The wave's text.
+        wave: String,
+        /// The field and rule broken.
+        rule: finrs_drive::WaveError,
+    },
+    /// The firmware's generator refuses a program or envelope (no text
+    /// known: [`SegmentGenerator::new`]).
+    #[error("{0}")]
+    Generator(finrs_drive::WaveError),
+    /// The wave's peak is above the hard limit.
+    #[error(
+        "wave `{wave}`: peak {peak_v} V ({peak_is}) exceeds the hard limit of ±{HARD_LIMIT_V} V"
+    )]
+    Peak {
+        /// The wave's text.
+        wave: String,
+        /// Its peak, V.
+        peak_v: f64,
+        /// What makes the peak.
+        peak_is: &'static str,
+    },
+}
 
 /// A wave as its text gives it: what each segment does, before the options
 /// and the segment count turn it into a drive program.
@@ -117,10 +199,10 @@ impl Wave {
     /// Parses `kind:a,b,c`; the message names the wave, the value and the
     /// rule broken. Only the syntax is checked here: the values' ranges are
     /// the firmware's ([`Wave::generator`]).
-    pub fn parse(spec: &str) -> Result<Wave, String> {
-        let (kind, args) = spec
-            .split_once(':')
-            .ok_or_else(|| format!("wave `{spec}`: expected KIND:VALUES, e.g. step:2.5"))?;
+    pub fn parse(spec: &str) -> Result<Wave, WaveError> {
+        let (kind, args) = spec.split_once(':').ok_or_else(|| WaveError::NoKind {
+            wave: spec.to_string(),
+        })?;
         let values = args
             .split(',')
             .map(|a| {
@@ -128,17 +210,22 @@ impl Wave {
                     .parse::<f64>()
                     .ok()
                     .filter(|v| v.is_finite())
-                    .ok_or_else(|| format!("wave `{spec}`: `{a}` is not a finite number"))
+                    .ok_or_else(|| WaveError::NotANumber {
+                        wave: spec.to_string(),
+                        value: a.to_string(),
+                    })
             })
-            .collect::<Result<Vec<f64>, String>>()?;
-        let need = |n: usize, usage: &str| {
+            .collect::<Result<Vec<f64>, WaveError>>()?;
+        let need = |n: usize, usage: &'static str| {
             if values.len() == n {
                 Ok(())
             } else {
-                Err(format!(
-                    "wave `{spec}`: {kind} takes {usage}, got {} value(s)",
-                    values.len()
-                ))
+                Err(WaveError::Count {
+                    wave: spec.to_string(),
+                    kind: kind.to_string(),
+                    usage,
+                    got: values.len(),
+                })
             }
         };
         let kind = match kind {
@@ -177,9 +264,10 @@ impl Wave {
                 }
             }
             other => {
-                return Err(format!(
-                    "wave `{spec}`: unknown kind `{other}` (step, sine, standing, chirp, pulses)"
-                ))
+                return Err(WaveError::UnknownKind {
+                    wave: spec.to_string(),
+                    kind: other.to_string(),
+                })
             }
         };
         Ok(Wave {
@@ -199,14 +287,14 @@ impl Wave {
     }
 
     /// Checks that a step names one level or one per segment.
-    pub fn check_segments(&self, segments: usize) -> Result<(), String> {
+    pub fn check_segments(&self, segments: usize) -> Result<(), WaveError> {
         match &self.kind {
             WaveKind::Step { levels_v } if levels_v.len() != 1 && levels_v.len() != segments => {
-                Err(format!(
-                    "wave `{}`: step has {} levels for {segments} segments",
-                    self.text,
-                    levels_v.len()
-                ))
+                Err(WaveError::Levels {
+                    wave: self.text.clone(),
+                    levels: levels_v.len(),
+                    segments,
+                })
             }
             _ => Ok(()),
         }
@@ -219,11 +307,9 @@ impl Wave {
         &self,
         segments: usize,
         options: &WaveOptions,
-    ) -> Result<SegmentGenerator, String> {
+    ) -> Result<SegmentGenerator, WaveError> {
         if !(1..=MAX_SEGMENTS).contains(&segments) {
-            return Err(format!(
-                "--segments must be 1..={MAX_SEGMENTS}, got {segments}"
-            ));
+            return Err(WaveError::Segments(segments));
         }
         self.check_segments(segments)?;
         let spec = &self.text;
@@ -231,9 +317,9 @@ impl Wave {
             WaveKind::Sine { .. } | WaveKind::Standing { .. } => options.offset_v,
             _ if options.offset_v == 0.0 => 0.0,
             _ => {
-                return Err(format!(
-                    "--offset-v applies to sine: and standing: waves only, not `{spec}`"
-                ))
+                return Err(WaveError::Offset {
+                    wave: spec.to_string(),
+                })
             }
         };
         let f = |x: f64| x as f32;
@@ -305,13 +391,21 @@ impl Wave {
             hold_s: f(options.hold_s),
             ramp_out_s: f(options.ramp_out_s),
         };
-        let generator = SegmentGenerator::new(segments, program, envelope)
-            .map_err(|e| format!("wave `{spec}`: {e}"))?;
+        let generator =
+            SegmentGenerator::new(segments, program, envelope).map_err(|e| match e {
+                WaveError::Generator(rule) => WaveError::Firmware {
+                    wave: spec.to_string(),
+                    rule,
+                },
+                other => other,
+            })?;
         // The firmware's limiter would clip a larger wave out of shape.
         if peak_v.is_nan() || peak_v > f64::from(HARD_LIMIT_V) {
-            return Err(format!(
-                "wave `{spec}`: peak {peak_v} V ({peak_is}) exceeds the hard limit of ±{HARD_LIMIT_V} V"
-            ));
+            return Err(WaveError::Peak {
+                wave: spec.to_string(),
+                peak_v,
+                peak_is,
+            });
         }
         Ok(generator)
     }
@@ -359,8 +453,8 @@ macro_rules! each_generator {
 impl SegmentGenerator {
     /// `Generator::<segments>::new(program, envelope)`; the error names the
     /// field and rule (or the segment count) broken.
-    pub fn new(segments: usize, program: Program, envelope: Envelope) -> Result<Self, String> {
-        let e = |e: finrs_drive::WaveError| e.to_string();
+    pub fn new(segments: usize, program: Program, envelope: Envelope) -> Result<Self, WaveError> {
+        let e = WaveError::Generator;
         Ok(match segments {
             1 => SegmentGenerator::N1(Generator::new(program, envelope).map_err(e)?),
             2 => SegmentGenerator::N2(Generator::new(program, envelope).map_err(e)?),
@@ -370,7 +464,7 @@ impl SegmentGenerator {
             6 => SegmentGenerator::N6(Generator::new(program, envelope).map_err(e)?),
             7 => SegmentGenerator::N7(Generator::new(program, envelope).map_err(e)?),
             8 => SegmentGenerator::N8(Generator::new(program, envelope).map_err(e)?),
-            n => return Err(format!("--segments must be 1..={MAX_SEGMENTS}, got {n}")),
+            n => return Err(WaveError::Segments(n)),
         })
     }
 
@@ -444,7 +538,7 @@ fn run<const N: usize>(
 mod tests {
     use super::*;
 
-    fn generator(spec: &str, segments: usize) -> Result<SegmentGenerator, String> {
+    fn generator(spec: &str, segments: usize) -> Result<SegmentGenerator, WaveError> {
         Wave::parse(spec)?.generator(segments, &WaveOptions::steady(10.0))
     }
 
@@ -544,7 +638,7 @@ mod tests {
                 "wave `step:1,inf`: `inf` is not a finite number",
             ),
         ] {
-            assert_eq!(Wave::parse(spec).unwrap_err(), message);
+            assert_eq!(Wave::parse(spec).unwrap_err().to_string(), message);
         }
         // Ranges are the firmware's, checked when the program is built.
         for (spec, message) in [
@@ -585,11 +679,11 @@ mod tests {
                 "wave `step:1e40`: Steps.levels_v must be finite",
             ),
         ] {
-            assert_eq!(generator(spec, 3).unwrap_err(), message);
+            assert_eq!(generator(spec, 3).unwrap_err().to_string(), message);
         }
         assert_eq!(
             generator("sine:1,1,0", 0).unwrap_err(),
-            "--segments must be 1..=8, got 0"
+            WaveError::Segments(0)
         );
         let wave = Wave::parse("pulses:1,1,1").unwrap();
         let offset = WaveOptions {
@@ -597,8 +691,8 @@ mod tests {
             ..WaveOptions::steady(10.0)
         };
         assert_eq!(
-            wave.generator(3, &offset).unwrap_err(),
-            "--offset-v applies to sine: and standing: waves only, not `pulses:1,1,1`"
+            wave.generator(3, &offset).unwrap_err().to_string(),
+            "offset_v applies to sine: and standing: waves only, not `pulses:1,1,1`"
         );
     }
 

@@ -5,9 +5,9 @@
 
 mod common;
 
-use finrs::diagnose::diagnose;
-use finrs::params::ModelFile;
-use finrs::predict::ModelSpec;
+use finrs::analysis::diagnose::diagnose;
+use finrs::model::params::ModelFile;
+use finrs::model::predict::ModelSpec;
 use finrs::session::Session;
 use model_core::{Extensions, Params};
 
@@ -28,7 +28,7 @@ fn sample(ext: Extensions) -> ModelSpec {
     }
 }
 
-fn verdict_for(label: &str, spec: &ModelSpec, seed: u64) -> finrs::diagnose::Verdict {
+fn verdict_for(label: &str, spec: &ModelSpec, seed: u64) -> finrs::analysis::diagnose::Verdict {
     verdict_and_report(label, spec, seed, None)
 }
 
@@ -37,7 +37,7 @@ fn verdict_and_report(
     spec: &ModelSpec,
     seed: u64,
     report: Option<&std::path::Path>,
-) -> finrs::diagnose::Verdict {
+) -> finrs::analysis::diagnose::Verdict {
     let dir = std::env::temp_dir().join(format!("finrs-diag-{label}-{}", std::process::id()));
     common::write_session(&dir, spec, &common::short_protocol(), seed);
     let session = Session::read(&dir).unwrap();
@@ -46,7 +46,7 @@ fn verdict_and_report(
         .unwrap();
     let d = diagnose(&session, fixed, &|_| {}).unwrap();
     if let Some(out) = report {
-        finrs::diagnose::report::write(out, &session, &d).unwrap();
+        finrs::analysis::diagnose::report::write(out, &session, &d).unwrap();
     }
     std::fs::remove_dir_all(&dir).ok();
     // docs/diagnosis.md quotes these (`cargo test --test diagnose -- --nocapture`).

@@ -3,9 +3,9 @@
 
 mod common;
 
-use finrs::fit::{Fitter, Knob};
-use finrs::params::ModelFile;
-use finrs::predict::ModelSpec;
+use finrs::analysis::fit::{Fitter, Knob};
+use finrs::model::params::ModelFile;
+use finrs::model::predict::ModelSpec;
 use finrs::session::Session;
 use model_core::Params;
 
@@ -66,7 +66,7 @@ fn baseline_fit_recovers_the_sample_within_its_intervals() {
         );
     }
     // What is written is what simulate reads back.
-    let file = ModelFile::from_fit(&fit.spec, &[]);
+    let file = fit.model_file();
     let back = ModelFile::parse("fit.toml", &file.to_toml()).unwrap();
     assert_eq!(back.spec_for(&session.geometry()).unwrap(), fit.spec);
 }
@@ -80,7 +80,7 @@ fn noise_levels_are_read_off_the_rests() {
     std::fs::remove_dir_all(&dir).ok();
     for (sensor, sigma) in &fitter.targets().sigma {
         let want = match sensor {
-            finrs::fit::Sensor::Current => common::CURRENT_NOISE_A,
+            finrs::analysis::fit::Sensor::Current => common::CURRENT_NOISE_A,
             // Noise plus whole pixels: sqrt(σ² + q²/12).
             _ => (common::CAMERA_NOISE_M.powi(2) + common::PIXEL_M.powi(2) / 12.0).sqrt(),
         };

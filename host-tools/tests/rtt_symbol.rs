@@ -10,7 +10,7 @@ pub static _SEGGER_RTT: [u8; 16] = *b"SEGGER RTT\0\0\0\0\0\0";
 fn the_control_block_address_is_read_from_the_elf() {
     let me = std::env::current_exe().unwrap();
     let image = std::fs::read(&me).unwrap();
-    let at = finrs::probe::rtt_address("rtt_symbol", &image).unwrap();
+    let at = finrs::link::probe::rtt_address("rtt_symbol", &image).unwrap();
     // The link-time address: page-aligned load offsets keep the low 12 bits
     // of the run-time address.
     let runtime = std::ptr::addr_of!(_SEGGER_RTT) as u64;

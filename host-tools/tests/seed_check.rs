@@ -1,7 +1,7 @@
 //! `finrs seed-check`: the seed's facts against the baseline and the
 //! extended model, and the reasons, as numbers that could come out wrong.
 
-use finrs::seed_check::seed_check;
+use finrs::analysis::seed_check::seed_check;
 
 #[test]
 fn the_seed_check_explains_each_fact() {
@@ -32,7 +32,7 @@ fn the_seed_check_explains_each_fact() {
         .iter()
         .filter(|r| r.quantity.starts_with("current"))
         .collect();
-    let err = |f: &dyn Fn(&finrs::seed_check::Row) -> f64| {
+    let err = |f: &dyn Fn(&finrs::analysis::seed_check::Row) -> f64| {
         currents
             .iter()
             .map(|r| (f(r) - r.measured).powi(2))

@@ -3,11 +3,12 @@
 
 use std::path::Path;
 
-use finrs::params::{Geometry, ModelFile};
-use finrs::predict::ModelSpec;
+use finrs::model::params::ModelFile;
+use finrs::model::predict::ModelSpec;
+use finrs::model::simulate::simulate;
+use finrs::model::synth::{drive_recording, Drive};
+use finrs::recording::Geometry;
 use finrs::recording::{Channel, Fixture, Recording};
-use finrs::simulate::simulate;
-use finrs::synth::{drive_recording, Drive};
 use finrs::wave::Wave;
 
 fn seed_params() -> model_core::Params {

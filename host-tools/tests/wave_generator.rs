@@ -4,10 +4,10 @@
 //! (as the controller calls it), for every kind of wave and N = 1, 3, 8;
 //! and `finrs wave` sends the same program for the same text.
 
-use finrs::command::{wave_command, WaveRequest};
+use finrs::link::command::wave_command;
+use finrs::model::synth::{drive_recording, drive_recording_shaped, Drive, Shaping};
 use finrs::recording::Fixture;
-use finrs::synth::{drive_recording, drive_recording_shaped, Drive, Shaping};
-use finrs::wave::Wave;
+use finrs::wave::{Wave, WaveOptions};
 use finrs_drive::{Envelope, Generator, Limiter, Limits, Program, SINE_MAX_ERROR};
 use finrs_frames::Command;
 
@@ -153,14 +153,12 @@ fn simulate_and_the_firmware_generator_agree_sample_by_sample() {
                 .flatten()
                 .all(|&v| v == 0.0));
             // `finrs wave` sends that very program for the same text.
-            let req = WaveRequest {
-                ramp_in_s: 0.0,
+            let options = WaveOptions {
                 hold_s: DURATION_S,
-                sweep_s: DURATION_S,
-                ..WaveRequest::new(&text, n)
+                ..WaveOptions::steady(DURATION_S)
             };
             assert_eq!(
-                wave_command(&req).unwrap(),
+                wave_command(&text, n, &options).unwrap(),
                 Command::SetWave { program, envelope },
                 "{what}"
             );
@@ -263,17 +261,18 @@ fn simulate_refuses_what_the_firmware_refuses_and_bad_shaping() {
     };
     assert_eq!(
         refuse("sine:2,1,0", ramps, drive(3)),
-        "--ramp-in-s + --ramp-out-s must not exceed --duration-s: 2 + 1.5 > 3"
+        "ramp_in_s + ramp_out_s must not exceed duration_s: 2 + 1.5 > 3"
     );
     let d = Drive {
         rate_hz: 999.5,
         ..drive(3)
     };
-    assert!(refuse("step:1", Shaping::default(), d)
-        .starts_with("--rate-hz must be a whole number of Hz"));
+    assert!(
+        refuse("step:1", Shaping::default(), d).starts_with("rate_hz must be a whole number of Hz")
+    );
     assert_eq!(
         refuse("step:1", Shaping::default(), drive(9)),
-        "--segments must be 1..=8, got 9"
+        "segments must be 1..=8, got 9"
     );
 }
 
@@ -335,24 +334,23 @@ fn the_simulate_command_writes_the_firmware_voltages() {
     // Without wave options, a recording simulates.
     let o = run_input(&[]);
     assert!(o.status.success(), "{o:?}");
-    let o = run_input(&["--limit-v", "1", "--slew-v-per-s", "5"]);
-    assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr)
-        .contains("--limit-v describes a --wave; it does not apply to --input"));
-    // So do the drive's segments, fixture and timing: a recording has its own.
-    for (option, value) in [
-        ("--segments", "3"),
-        ("--rate-hz", "500"),
-        ("--fixture", "blocked"),
+    // Every option that describes a wave is refused by name: a recording
+    // has its own drive, segments, fixture and timing.
+    for extra in [
+        &["--limit-v", "1", "--slew-v-per-s", "5"][..],
+        &["--segments", "3"],
+        &["--rate-hz", "500"],
+        &["--fixture", "blocked"],
+        &["--offset-v", "0.5"],
+        &["--sweep-s", "2"],
     ] {
-        let o = run_input(&[option, value]);
-        assert!(!o.status.success(), "{option} with --input was accepted");
+        let o = run_input(extra);
+        assert!(!o.status.success(), "{extra:?} with --input was accepted");
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
-            err.contains(&format!(
-                "{option} describes a --wave; it does not apply to --input"
-            )),
-            "{option}: {err}"
+            err.contains("the argument '--input <INPUT>' cannot be used with")
+                && err.contains(extra[0]),
+            "{extra:?}: {err}"
         );
     }
     let o = run(&[
@@ -365,5 +363,32 @@ fn the_simulate_command_writes_the_firmware_voltages() {
     ]);
     assert!(String::from_utf8_lossy(&o.stderr)
         .contains("--limit-v 4.5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"));
+    // The library names its fields; the command line names its flags.
+    for (extra, message) in [
+        (
+            &["--wave", "sine:1,1,0", "--rate-hz", "999.5"][..],
+            "--rate-hz must be a whole number of Hz",
+        ),
+        (
+            &[
+                "--wave",
+                "sine:1,1,0",
+                "--ramp-in-s",
+                "2",
+                "--ramp-out-s",
+                "2",
+            ],
+            "--ramp-in-s + --ramp-out-s must not exceed --duration-s: 2 + 2 > 3",
+        ),
+        (
+            &["--wave", "pulses:1,1,1", "--offset-v", "0.5"],
+            "--offset-v applies to sine: and standing: waves only",
+        ),
+    ] {
+        let o = run(extra);
+        assert!(!o.status.success(), "{extra:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(message), "{extra:?}: {err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -8,9 +8,9 @@
 
 use std::path::Path;
 
-use finrs::predict::{predict, ModelSpec};
+use finrs::model::predict::{predict, ModelSpec};
+use finrs::model::synth::{drive_recording, Drive};
 use finrs::recording::{Channel, Fixture, Recording};
-use finrs::synth::{drive_recording, Drive};
 use finrs::wave::Wave;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
@@ -87,7 +87,7 @@ pub fn write_session(dir: &Path, spec: &ModelSpec, runs: &[Run], seed: u64) {
     }
 }
 
-fn measure(rec: &mut Recording, t: &finrs::predict::Traces, rng: &mut impl Rng) {
+fn measure(rec: &mut Recording, t: &finrs::model::predict::Traces, rng: &mut impl Rng) {
     let noise = |sigma: f64| Normal::new(0.0, sigma).unwrap();
     let rows = rec.t_s.len();
     for (k, c) in t.currents_a.iter().enumerate() {

@@ -4,8 +4,8 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use finrs::model::synth::{drive_recording, Drive};
 use finrs::recording::{Channel, Fixture, Medium, Recording};
-use finrs::synth::{drive_recording, Drive};
 use finrs::wave::Wave;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};

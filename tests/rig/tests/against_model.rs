@@ -3,9 +3,9 @@
 //! effect hidden, the rig must depart from the model the way the effect
 //! says.
 
-use finrs::predict::{predict, ModelSpec};
+use finrs::model::predict::{predict, ModelSpec};
+use finrs::model::synth::{drive_recording, Drive};
 use finrs::recording::Fixture;
-use finrs::synth::{drive_recording, Drive};
 use finrs::wave::Wave;
 use finrs_rig::strip::{run, Mesh, Truth, BLOCKED_MESH, MESH};
 use finrs_rig::{Hidden, Sample};
@@ -30,7 +30,7 @@ fn spec(s: &Sample) -> ModelSpec {
     })
 }
 
-fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::predict::Traces) {
+fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::model::predict::Traces) {
     let s = sample();
     let drive = Drive {
         segments: 3,

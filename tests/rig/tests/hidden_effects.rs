@@ -6,8 +6,8 @@
 //! Seeds are fixed so that CI is repeatable; `FINRS_RIG_SEED=n` draws
 //! other strips and strengths (`scripts/rig-sweep` runs many).
 
-use finrs::diagnose::{diagnose, Verdict};
-use finrs::params::ModelFile;
+use finrs::analysis::diagnose::{diagnose, Verdict};
+use finrs::model::params::ModelFile;
 use finrs::session::Session;
 use finrs_rig::{short_protocol, write_session, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE};
 use rand::{Rng, SeedableRng};

@@ -1,0 +1,37 @@
+//! `finrs diagnose`: what the baseline gets wrong in a session, which
+//! effects of the catalogue explain it, and how much they gain on
+//! recordings the fit did not see.
+//!
+//! The session is split: about a third of the recordings (every third,
+//! from the second, keeping each fixture in the training part) are held
+//! out. The baseline is fitted on the rest; then each effect of the
+//! catalogue is added in turn and fitted. An effect is accepted only when
+//! the evidence punishing its extra parameters favours it strongly
+//! (`ΔBIC < −10` on the training part) *and* it lowers the held-out error
+//! (weighted residual sum of squares by at least 1 %) *and* the term that
+//! makes it that effect is significant (its 95 % interval excludes "off":
+//! hydrodynamic loading needs added mass, since its drag alone is
+//! damping; back-relaxation needs the zero below zero). The best accepted
+//! effect joins the model and the search repeats on top of it, so several
+//! causes can be named, strongest first. The verdict:
+//! - `none`: nothing accepted and the held-out residuals are at the noise
+//!   floor (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
+//! - `explained`: effects accepted and the held-out residuals are at the
+//!   noise floor;
+//! - `unexplained`: above the noise floor after the best model, with the
+//!   effects that did pass (possibly none); or the DAQ's channels already
+//!   carry structure while the strip rests before its drive (most
+//!   rests fail a Ljung–Box test): every candidate is driven by the
+//!   voltage, so nothing in the catalogue can account for that.
+
+pub mod analyses;
+pub mod report;
+mod search;
+mod verdict;
+pub mod whiteness;
+
+pub use search::{
+    diagnose, rest_structure, split, tested_channels, DELTA_BIC, HOLDOUT_RSS_GAIN, INPUT_LAGS,
+    MAX_CAUSES, NOISE_FLOOR_RATIO, REST_STRUCTURE_SHARE,
+};
+pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Verdict};

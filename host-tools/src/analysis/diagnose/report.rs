@@ -1,0 +1,250 @@
+//! The human report of a diagnosis: Markdown, with PNG plots beside it.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::Diagnosis;
+use crate::model::simulate::simulate;
+use crate::plot;
+use crate::session::Session;
+
+/// Writes `REPORT.md` and its plots into `dir`.
+pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let v = &d.verdict;
+    let mut s = String::new();
+    let _ = writeln!(s, "# Diagnosis of `{}`\n", session.dir.display());
+    let causes = if v.causes.is_empty() {
+        "none".to_string()
+    } else {
+        v.causes.join(", ")
+    };
+    let _ = writeln!(s, "**Verdict: {}**; causes: {causes}.\n", v.verdict);
+    let _ = writeln!(
+        s,
+        "Fitted on {} recordings ({}); scored on {} held out ({}).\n",
+        v.training.len(),
+        v.training.join(", "),
+        v.holdout.len(),
+        v.holdout.join(", ")
+    );
+    let _ = writeln!(
+        s,
+        "| model | held-out NRMSE | held-out RSS/m | BIC (training) | parameters |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for (label, m) in [("baseline", &v.baseline), ("final", &v.extended)] {
+        let _ = writeln!(
+            s,
+            "| {label} | {:.4} | {:.3} | {:.1} | {} |",
+            m.holdout_nrmse, m.holdout_rss_per_residual, m.bic, m.parameters
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nHeld-out error falls by {:.1} % from the baseline to the final model. \
+         RSS/m is the weighted residual sum of squares per residual: 1 is the \
+         noise floor measured on the recordings' opening rests.\n",
+        v.gain_percent
+    );
+    let _ = writeln!(
+        s,
+        "Opening rests (currents, load cell): {} of {} fail a Ljung–Box test at 99 %{}.\n",
+        v.rest.failing,
+        v.rest.tested,
+        if v.rest.structured {
+            ": the channels carry structure before any drive, which no \
+             voltage-driven candidate can explain"
+        } else {
+            " (white noise fails one in a hundred)"
+        }
+    );
+    let a = &v.analyses;
+    let _ = writeln!(s, "## Where the baseline misses\n");
+    let _ = writeln!(
+        s,
+        "The baseline's weighted RSS per residual in every recording (1 is the noise floor) \
+         and its gain, the scale from its motion to the measured one (median over the \
+         mechanical channels; 1 is right). A gain falling over the session suggests drying, \
+         one changing with the amplitude a nonlinearity or large deflection, one differing \
+         between segments driven alone crosstalk.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| recording | session time, s | max V | driven | fixture | RSS/m | gain |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for m in &a.recordings {
+        let t = m.t_session_s.map_or("-".to_string(), |t| format!("{t:.0}"));
+        let driven: Vec<String> = m.driven.iter().map(|d| d.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {t} | {:.2} | {} | {} | {:.2} | {} |",
+            m.recording,
+            m.max_abs_v,
+            driven.join(","),
+            m.fixture,
+            m.rss_per_residual,
+            m.gain.map_or("-".to_string(), |g| format!("{g:.3}"))
+        );
+    }
+    let dep = |d: &Option<super::analyses::Dependence>| {
+        d.as_ref().map_or("not enough recordings".to_string(), |d| {
+            format!(
+                "Spearman ρ = {:.2} over {} recordings",
+                d.spearman, d.recordings
+            )
+        })
+    };
+    let _ = writeln!(s, "\n- Against session time: {}.", dep(&a.trend));
+    let _ = writeln!(
+        s,
+        "- Against amplitude (free steps of all segments): {}.",
+        dep(&a.amplitude)
+    );
+    if !a.single_segments.is_empty() {
+        let segs: Vec<String> = a
+            .single_segments
+            .iter()
+            .map(|(k, r, g)| {
+                let g = g.map_or("-".to_string(), |g| format!("{g:.3}"));
+                format!("segment {k}: RSS/m {r:.2}, gain {g}")
+            })
+            .collect();
+        let _ = writeln!(s, "- Each segment alone: {}.", segs.join(", "));
+    }
+    if a.immovable.is_empty() {
+        let _ = writeln!(
+            s,
+            "- Every channel with signal is one the baseline can move.\n"
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "- Channels with signal that the baseline cannot move at all: {}.\n",
+            a.immovable.join(", ")
+        );
+    }
+    let _ = writeln!(s, "## Candidates\n");
+    let _ = writeln!(
+        s,
+        "An effect is accepted when ΔBIC < {} on the training recordings and the \
+         held-out weighted RSS falls by more than {:.0} %.\n",
+        super::DELTA_BIC,
+        100.0 * super::HOLDOUT_RSS_GAIN
+    );
+    let _ = writeln!(s, "| round | effect | ΔBIC | held-out NRMSE gain % | held-out RSS gain % | passed | fitted terms |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for c in &v.candidates {
+        let terms: Vec<String> = c
+            .params
+            .iter()
+            .map(|(k, x)| format!("{k} = {x:.4e}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.1} | {:.2} | {:.2} | {} | {} |",
+            c.round + 1,
+            c.name,
+            c.delta_bic,
+            c.holdout_gain_percent,
+            c.holdout_rss_gain_percent,
+            if c.passed { "yes" } else { "no" },
+            terms.join(", ")
+        );
+    }
+    let _ = writeln!(s, "\n## Final model's parameters (95 % intervals)\n");
+    let _ = writeln!(s, "| parameter | estimate | interval |");
+    let _ = writeln!(s, "|---|---|---|");
+    for e in &d.final_fit.estimates {
+        let _ = writeln!(
+            s,
+            "| {} | {:.5e} | [{:.4e}, {:.4e}] |",
+            e.knob.name(),
+            e.value,
+            e.low,
+            e.high
+        );
+    }
+    let _ = writeln!(s, "\n## Held-out channels\n");
+    let _ = writeln!(s, "| recording | channel | baseline fit % | final fit % | Ljung–Box Q baseline | final | 99 % threshold | input correlation baseline | final | 99 % band |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
+    let (b, f) = &d.holdout_scores;
+    let tested: Vec<_> = super::tested_channels(b, f)
+        .zip(&v.residual_tests)
+        .collect();
+    for &((cb, cf), t) in &tested {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} |",
+            cb.recording,
+            cb.channel.name(),
+            cb.fit_percent,
+            cf.fit_percent,
+            t.baseline_ljung_box,
+            t.final_ljung_box,
+            t.threshold,
+            t.baseline_input_correlation,
+            t.final_input_correlation,
+            t.input_band
+        );
+    }
+    let _ = writeln!(s, "\n## Plots\n");
+    let _ = writeln!(
+        s,
+        "Held-out recordings: measured, the baseline and the final model (both fitted on the other recordings).\n"
+    );
+    for &i in &d.holdout {
+        let r = &session.recordings[i];
+        let stem = r.name.trim_end_matches(".csv");
+        let png = format!("{stem}.png");
+        let elements = crate::analysis::fit::FIT_ELEMENTS;
+        let base = simulate(&r.name, &r.rec, &d.baseline.spec, elements, &mut |_| {})?;
+        let fin = simulate(&r.name, &r.rec, &d.final_fit.spec, elements, &mut |_| {})?;
+        plot::plot_models(
+            &dir.join(&png),
+            &format!("{} (held out)", r.name),
+            Some(&r.rec),
+            &[("baseline", &base), ("final", &fin)],
+        )?;
+        let _ = writeln!(s, "![{}]({png})\n", r.name);
+    }
+    // The held-out channel whose baseline residuals are least white.
+    let worst = tested
+        .iter()
+        .max_by(|x, y| x.1.baseline_ljung_box.total_cmp(&y.1.baseline_ljung_box));
+    if let Some(&((cb, cf), _)) = worst {
+        let lags = 60.min(cb.residuals.len().saturating_sub(1));
+        let band = 2.58 / (cb.residuals.len().max(1) as f64).sqrt();
+        let png = "residual_autocorrelation.png";
+        plot::plot_autocorrelation(
+            &dir.join(png),
+            &format!(
+                "residual autocorrelation, {} {} (held out)",
+                cb.recording,
+                cb.channel.name()
+            ),
+            &[
+                (
+                    "baseline",
+                    super::whiteness::autocorrelation(&cb.residuals, lags),
+                ),
+                (
+                    "final",
+                    super::whiteness::autocorrelation(&cf.residuals, lags),
+                ),
+            ],
+            band,
+        )?;
+        let _ = writeln!(
+            s,
+            "The least white held-out channel under the baseline, {} of {}: residual \
+             autocorrelation of baseline and final model, with the band white noise \
+             stays inside 99 % of the time.\n\n![residual autocorrelation]({png})\n",
+            cb.channel.name(),
+            cb.recording
+        );
+    }
+    std::fs::write(dir.join("REPORT.md"), s)?;
+    Ok(())
+}

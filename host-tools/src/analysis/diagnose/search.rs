@@ -1,0 +1,321 @@
+//! The forward search over the catalogue of effects, and the verdict.
+
+use rayon::prelude::*;
+
+use super::analyses;
+use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Verdict};
+use super::whiteness;
+use crate::analysis::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
+use crate::model::predict::ModelSpec;
+use crate::session::Session;
+
+/// Held-out weighted RSS per residual above which structure remains: the
+/// noise levels come from about a second of rest per recording, so they
+/// are known to some ten percent; the camera's whole pixels add a little.
+pub const NOISE_FLOOR_RATIO: f64 = 1.5;
+/// BIC improvement an effect must reach on the training recordings.
+pub const DELTA_BIC: f64 = -10.0;
+/// Relative drop of held-out weighted RSS an effect must reach.
+pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
+/// Effects accepted at most (rounds of the forward search).
+pub const MAX_CAUSES: usize = 3;
+/// Lags of the residual–input correlation, as MATLAB's `resid` default.
+pub const INPUT_LAGS: usize = 25;
+/// Share of the opening rests (DAQ channels) that may fail the whiteness
+/// test before the rest itself is called structured: white noise fails
+/// one in a hundred.
+pub const REST_STRUCTURE_SHARE: f64 = 0.5;
+
+/// Tests the opening rest of every DAQ channel (currents, load cell) for
+/// whiteness; camera channels are too short there to test.
+pub fn rest_structure(session: &Session) -> RestStructure {
+    let (mut tested, mut failing) = (0, 0);
+    for r in &session.recordings {
+        for (ch, values) in &r.rec.channels {
+            if ch.is_camera() {
+                continue;
+            }
+            let rest: Option<Vec<f64>> = values[..r.rest_rows.min(values.len())]
+                .iter()
+                .copied()
+                .collect();
+            let Some(rest) = rest.filter(|v| v.len() >= 200) else {
+                continue;
+            };
+            tested += 1;
+            if whiteness::ljung_box(&rest, 20) > whiteness::chi2_99(20) {
+                failing += 1;
+            }
+        }
+    }
+    RestStructure {
+        tested,
+        failing,
+        structured: tested > 0 && failing as f64 > REST_STRUCTURE_SHARE * tested as f64,
+    }
+}
+
+/// Splits a session: every third recording from the second is held out,
+/// unless that would leave its fixture without a training recording.
+pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
+    let n = session.recordings.len();
+    let fixture = |i: usize| session.recordings[i].rec.meta.fixture;
+    let mut hold = Vec::new();
+    for i in (1..n).step_by(3) {
+        let left = (0..n)
+            .filter(|&j| j != i && !hold.contains(&j) && fixture(j) == fixture(i))
+            .count();
+        if left > 0 {
+            hold.push(i);
+        }
+    }
+    let train = (0..n).filter(|i| !hold.contains(i)).collect();
+    (train, hold)
+}
+
+/// Diagnoses `session`; `progress` hears what is being fitted.
+pub fn diagnose(
+    session: &Session,
+    fixed: ModelSpec,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Diagnosis, FitError> {
+    let fitter = Fitter::new(session);
+    let (train, hold) = split(session);
+    let all: Vec<usize> = (0..session.recordings.len()).collect();
+    if hold.is_empty() {
+        return Err(FitError::TooFewToHoldOut(session.recordings.len()));
+    }
+    let name = |i: &usize| session.recordings[i.to_owned()].name.clone();
+    let has_clock = session.recordings.iter().all(|r| r.t_start_s.is_some());
+    progress("baseline");
+    let baseline = fitter.fit(&train, &[], None, fixed)?;
+    let base_hold = fitter.score(&hold, &baseline.spec)?;
+    let mut current = baseline.clone();
+    let mut current_hold = base_hold.clone();
+    let mut candidates = Vec::new();
+    let mut accepted: Vec<Effect> = Vec::new();
+    for round in 0..MAX_CAUSES {
+        let untried: Vec<Effect> = Effect::ALL
+            .into_iter()
+            .filter(|e| !current.effects.contains(e))
+            .filter(|e| *e != Effect::Dehydration || has_clock)
+            .collect();
+        if untried.is_empty() {
+            break;
+        }
+        progress(&format!(
+            "round {}: {} candidates",
+            round + 1,
+            untried.len()
+        ));
+        // The model's and the load cell's blocked frequencies, once a round:
+        // every frequency-moving candidate of the round starts from them.
+        let frequencies = untried
+            .iter()
+            .any(|e| moves_frequency(*e))
+            .then(|| blocked_frequencies(session, &train, &current.spec))
+            .flatten();
+        let results: Vec<Result<(Effect, FitResult, Score), FitError>> = untried
+            .par_iter()
+            .map(|&e| {
+                let mut effects = current.effects.clone();
+                effects.push(e);
+                let start = frequency_start(e, &current.spec, frequencies);
+                let fit = fitter.fit(&train, &effects, Some(&start), fixed)?;
+                let score = fitter.score(&hold, &fit.spec)?;
+                Ok((e, fit, score))
+            })
+            .collect();
+        let mut best: Option<(f64, Effect, FitResult, Score)> = None;
+        for r in results {
+            let (e, fit, score) = r?;
+            let delta_bic = fit.bic - current.bic;
+            let gain = gain_percent(current_hold.nrmse, score.nrmse);
+            let rss_gain = 1.0 - score.rss / current_hold.rss;
+            let passed = delta_bic < DELTA_BIC
+                && rss_gain > HOLDOUT_RSS_GAIN
+                && signature_is_significant(e, &fit, &fixed);
+            candidates.push(Candidate {
+                name: e.name().to_string(),
+                round,
+                delta_bic,
+                holdout_gain_percent: gain,
+                holdout_rss_gain_percent: 100.0 * rss_gain,
+                passed,
+                params: fit
+                    .estimates
+                    .iter()
+                    .filter(|est| !est.knob.is_baseline())
+                    .map(|est| (est.knob.name().to_string(), est.value))
+                    .collect(),
+            });
+            if passed && best.as_ref().is_none_or(|(b, ..)| delta_bic < *b) {
+                best = Some((delta_bic, e, fit, score));
+            }
+        }
+        match best {
+            Some((_, e, fit, score)) => {
+                accepted.push(e);
+                current = fit;
+                current_hold = score;
+            }
+            None => break,
+        }
+    }
+    let per = |s: &Score| s.rss / s.m.max(1) as f64;
+    let at_floor = per(&current_hold) < NOISE_FLOOR_RATIO;
+    let causes: Vec<String> = accepted.iter().map(|e| e.name().to_string()).collect();
+    let rest = rest_structure(session);
+    let verdict = match (causes.is_empty(), at_floor && !rest.structured) {
+        (true, true) => "none",
+        (false, true) => "explained",
+        (_, false) => "unexplained",
+    };
+    let score_of = |fit: &FitResult, hold: &Score| ModelScore {
+        holdout_nrmse: hold.nrmse,
+        holdout_rss_per_residual: per(hold),
+        bic: fit.bic,
+        aic: fit.aic,
+        parameters: fit.parameters,
+    };
+    let residual_tests = tested_channels(&base_hold, &current_hold)
+        .map(|(b, f)| ResidualTest {
+            recording: b.recording.clone(),
+            channel: b.channel.name(),
+            baseline_ljung_box: whiteness::ljung_box(&b.residuals, 20),
+            final_ljung_box: whiteness::ljung_box(&f.residuals, 20),
+            threshold: whiteness::chi2_99(20),
+            baseline_input_correlation: whiteness::input_correlation(
+                &b.residuals,
+                &b.input_v,
+                INPUT_LAGS,
+            )
+            .0,
+            final_input_correlation: whiteness::input_correlation(
+                &f.residuals,
+                &f.input_v,
+                INPUT_LAGS,
+            )
+            .0,
+            input_band: whiteness::input_correlation(&f.residuals, &f.input_v, INPUT_LAGS).1,
+        })
+        .collect();
+    let verdict = Verdict {
+        causes,
+        verdict: verdict.to_string(),
+        baseline: score_of(&baseline, &base_hold),
+        extended: score_of(&current, &current_hold),
+        gain_percent: gain_percent(base_hold.nrmse, current_hold.nrmse),
+        candidates,
+        params: current
+            .estimates
+            .iter()
+            .map(|e| (e.knob.name().to_string(), e.value))
+            .collect(),
+        training: train.iter().map(name).collect(),
+        holdout: hold.iter().map(name).collect(),
+        residual_tests,
+        rest,
+        analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
+    };
+    Ok(Diagnosis {
+        verdict,
+        baseline,
+        final_fit: current,
+        holdout_scores: (base_hold, current_hold),
+        holdout: hold,
+    })
+}
+
+/// The held-out channels whose residuals are tested for whiteness (those
+/// with signal, and the camera's, where motion along the strip shows),
+/// baseline and final model side by side. `Verdict::residual_tests` and
+/// the report's table follow this order.
+pub fn tested_channels<'a>(
+    baseline: &'a Score,
+    last: &'a Score,
+) -> impl Iterator<Item = (&'a ChannelFit, &'a ChannelFit)> {
+    baseline
+        .channels
+        .iter()
+        .zip(&last.channels)
+        .filter(|(b, _)| b.has_signal || b.channel.is_camera())
+}
+
+/// Whether a candidate moves the beam's natural frequencies.
+fn moves_frequency(e: Effect) -> bool {
+    matches!(e, Effect::BeamStiffness | Effect::HydrodynamicLoading)
+}
+
+/// `(model, measured)` first blocked frequency, Hz, the measurement
+/// searched between 0.2 and 3 times the model's.
+fn blocked_frequencies(
+    session: &Session,
+    train: &[usize],
+    current: &ModelSpec,
+) -> Option<(f64, f64)> {
+    let model_hz = modal::model_blocked_hz(current)?;
+    let data_hz = modal::measured_blocked_hz(session, train, 0.2 * model_hz, 3.0 * model_hz)?;
+    Some((model_hz, data_hz))
+}
+
+/// Where a candidate that moves the beam's frequency starts: where the
+/// model's first blocked mode rings at the measured frequency (`EI` for
+/// beam-stiffness, added mass for hydrodynamic loading). Others start at
+/// the current model, their own terms off.
+fn frequency_start(e: Effect, current: &ModelSpec, frequencies: Option<(f64, f64)>) -> ModelSpec {
+    let mut start = *current;
+    if !moves_frequency(e) {
+        return start;
+    }
+    let Some((model_hz, data_hz)) = frequencies else {
+        return start;
+    };
+    // f ∝ √(EI / mass per length).
+    let ratio2 = (data_hz / model_hz).powi(2);
+    match e {
+        Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
+        _ => {
+            let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
+            start.ext.added_mass_kg_per_m =
+                (mass / ratio2 - start.params.mass_per_length_kg_per_m).max(0.0);
+        }
+    }
+    start
+}
+
+/// Whether the term that makes `e` what it is differs from "off" beyond
+/// its 95 % interval. Without this, an effect that contains another (linear
+/// drag is mass-proportional damping) could be named for the other's work.
+fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bool {
+    let excludes = |knob: Knob, off: f64| {
+        fit.estimates
+            .iter()
+            .any(|est| est.knob == knob && (est.low > off || est.high < off))
+    };
+    match e {
+        Effect::LargeDeflection => true,
+        Effect::BeamStiffness => excludes(Knob::Ei, fixed.params.ei_nm2),
+        Effect::Damping => excludes(Knob::Alpha, 0.0) || excludes(Knob::Beta, 0.0),
+        // Added mass is what water adds; its drag alone is damping.
+        Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
+        Effect::ElectrochemicalNonlinearity => {
+            excludes(Knob::ChargeCubic, 0.0) || excludes(Knob::LeakCubic, 0.0)
+        }
+        // The zero below zero is what makes the bending relax past the start.
+        Effect::BackRelaxation => fit
+            .estimates
+            .iter()
+            .any(|est| est.knob == Knob::Z && est.high < 0.0),
+        Effect::Dehydration => excludes(Knob::Dehydration, 0.0),
+        Effect::SegmentCrosstalk => excludes(Knob::Crosstalk, 0.0),
+    }
+}
+
+fn gain_percent(before: f64, after: f64) -> f64 {
+    if before > 0.0 {
+        100.0 * (before - after) / before
+    } else {
+        0.0
+    }
+}

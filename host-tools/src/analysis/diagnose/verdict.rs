@@ -1,0 +1,152 @@
+//! What a diagnosis finds: the verdict as `VERDICT.json` holds it, and the
+//! fits behind it.
+
+use serde::Serialize;
+
+use super::analyses;
+use crate::analysis::fit::{FitResult, Score};
+
+/// How a model does on the two parts of the session.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelScore {
+    /// Mean NRMSE on the held-out recordings (channels with signal).
+    pub holdout_nrmse: f64,
+    /// Weighted RSS per residual on the held-out recordings.
+    pub holdout_rss_per_residual: f64,
+    /// BIC on the training recordings.
+    pub bic: f64,
+    /// AIC on the training recordings.
+    pub aic: f64,
+    /// Parameters counted.
+    pub parameters: usize,
+}
+
+/// One candidate tried in one round.
+#[derive(Clone, Debug, Serialize)]
+pub struct Candidate {
+    /// The effect's catalogue name.
+    pub name: String,
+    /// Round of the search (0: on top of the baseline).
+    pub round: usize,
+    /// BIC of the extended model minus that of the model it extends.
+    pub delta_bic: f64,
+    /// Reduction of held-out NRMSE, percent.
+    pub holdout_gain_percent: f64,
+    /// Reduction of held-out weighted RSS, percent.
+    pub holdout_rss_gain_percent: f64,
+    /// Whether it passed both tests.
+    pub passed: bool,
+    /// Its fitted extra parameters.
+    pub params: std::collections::BTreeMap<String, f64>,
+}
+
+/// Residual whiteness of one channel of one held-out recording.
+#[derive(Clone, Debug, Serialize)]
+pub struct ResidualTest {
+    /// Recording.
+    pub recording: String,
+    /// Channel.
+    pub channel: String,
+    /// Ljung–Box `Q` over 20 lags, baseline.
+    pub baseline_ljung_box: f64,
+    /// The same for the final model.
+    pub final_ljung_box: f64,
+    /// 99 % threshold of `χ²(20)`.
+    pub threshold: f64,
+    /// Largest normalised cross-correlation of the baseline's residual
+    /// with the input over lags 0..=25 (input leading), as MATLAB's
+    /// `resid`: above the band, the residual still depends on the drive.
+    pub baseline_input_correlation: f64,
+    /// The same for the final model.
+    pub final_input_correlation: f64,
+    /// 99 % band of that correlation for a white residual, `2.58/√n`.
+    pub input_band: f64,
+}
+
+/// The diagnosis, as written to `VERDICT.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Causes named, strongest first.
+    pub causes: Vec<String>,
+    /// `explained`, `none` or `unexplained`.
+    pub verdict: String,
+    /// The baseline.
+    pub baseline: ModelScore,
+    /// The final model (the baseline when nothing was accepted).
+    pub extended: ModelScore,
+    /// Reduction of held-out NRMSE from baseline to final model, percent.
+    pub gain_percent: f64,
+    /// Every candidate tried.
+    pub candidates: Vec<Candidate>,
+    /// The final model's parameters.
+    pub params: std::collections::BTreeMap<String, f64>,
+    /// Recordings fitted.
+    pub training: Vec<String>,
+    /// Recordings held out.
+    pub holdout: Vec<String>,
+    /// Whiteness of the held-out residuals.
+    pub residual_tests: Vec<ResidualTest>,
+    /// Whiteness of the DAQ's channels during the opening rests.
+    pub rest: RestStructure,
+    /// Where the baseline's misfit lives across the session.
+    pub analyses: analyses::Analyses,
+}
+
+/// The verdict as `finrs diagnose` prints it: verdict and causes, the
+/// held-out gain, then every candidate tried, one line each.
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let causes = if self.causes.is_empty() {
+            "none".to_string()
+        } else {
+            self.causes.join(", ")
+        };
+        writeln!(f, "verdict: {}; causes: {causes}", self.verdict)?;
+        writeln!(
+            f,
+            "held-out NRMSE {:.4} (baseline) -> {:.4} (final): {:.1} % gain; held-out RSS/m {:.3} -> {:.3}",
+            self.baseline.holdout_nrmse,
+            self.extended.holdout_nrmse,
+            self.gain_percent,
+            self.baseline.holdout_rss_per_residual,
+            self.extended.holdout_rss_per_residual
+        )?;
+        for c in &self.candidates {
+            writeln!(
+                f,
+                "  round {} {:<30} dBIC {:>12.1}  held-out gain {:>7.2} %  {}",
+                c.round + 1,
+                c.name,
+                c.delta_bic,
+                c.holdout_gain_percent,
+                if c.passed { "passed" } else { "-" }
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Whether the measured channels carry structure before any drive.
+#[derive(Clone, Debug, Serialize)]
+pub struct RestStructure {
+    /// Opening rests tested (recording × current or force channel).
+    pub tested: usize,
+    /// Those whose Ljung–Box `Q` over 20 lags exceeds the 99 % threshold.
+    pub failing: usize,
+    /// Whether more than [`REST_STRUCTURE_SHARE`](super::REST_STRUCTURE_SHARE) of them fail.
+    pub structured: bool,
+}
+
+/// A diagnosis with the fits behind it, for the report.
+pub struct Diagnosis {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The baseline's fit.
+    pub baseline: FitResult,
+    /// The final model's fit.
+    pub final_fit: FitResult,
+    /// Held-out scores of baseline and final model.
+    pub holdout_scores: (Score, Score),
+    /// Indices of the held-out recordings.
+    pub holdout: Vec<usize>,
+}

@@ -1,0 +1,177 @@
+//! What a fit compares: per recording, each measured channel at the rows
+//! where it was sampled, its rest offset removed, and its noise level.
+
+use crate::model::predict::Traces;
+use crate::recording::Channel;
+use crate::session::{Session, SessionRecording};
+
+/// Noise classes: channels of one class share a sensor and its noise.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Sensor {
+    /// DAQ current channels.
+    Current,
+    /// Camera, across the strip.
+    CameraY,
+    /// Camera, along the strip.
+    CameraX,
+    /// Load cell.
+    Force,
+}
+
+impl Sensor {
+    /// The sensor of a channel.
+    pub fn of(ch: Channel) -> Sensor {
+        match ch {
+            Channel::Current(_) => Sensor::Current,
+            Channel::TipY | Channel::DotY(_) => Sensor::CameraY,
+            Channel::TipX | Channel::DotX(_) => Sensor::CameraX,
+            Channel::Force => Sensor::Force,
+        }
+    }
+
+    const ALL: [Sensor; 4] = [
+        Sensor::Current,
+        Sensor::CameraY,
+        Sensor::CameraX,
+        Sensor::Force,
+    ];
+}
+
+/// One channel of one recording, as the fit sees it.
+#[derive(Clone, Debug)]
+pub struct Target {
+    /// The channel.
+    pub channel: Channel,
+    /// Rows where it was sampled.
+    pub rows: Vec<usize>,
+    /// Its values there, minus the rest offset for camera channels.
+    pub values: Vec<f64>,
+    /// Noise level of its sensor (pooled over the session), in its unit.
+    pub sigma: f64,
+}
+
+impl Target {
+    /// The model's values at this target's rows.
+    pub fn model<'a>(&'a self, t: &'a Traces) -> impl Iterator<Item = f64> + 'a {
+        let series: &[f64] = match self.channel {
+            Channel::Current(k) => &t.currents_a[k],
+            Channel::TipY => &t.tip_y_m,
+            Channel::TipX => &t.tip_x_m,
+            Channel::DotY(j) => &t.dots_y_m[j],
+            Channel::DotX(j) => &t.dots_x_m[j],
+            Channel::Force => &t.force_n,
+        };
+        self.rows.iter().map(move |&r| series[r])
+    }
+}
+
+/// The targets of one recording.
+#[derive(Clone, Debug)]
+pub struct RecordingTargets {
+    /// Index of the recording in its session.
+    pub index: usize,
+    /// Its channels.
+    pub targets: Vec<Target>,
+    /// Rows where any camera channel was sampled.
+    pub camera_rows: Vec<bool>,
+}
+
+/// Targets of every recording of a session, with noise pooled per sensor.
+#[derive(Clone, Debug)]
+pub struct SessionTargets {
+    /// Per recording, in session order.
+    pub recordings: Vec<RecordingTargets>,
+    /// Noise level per sensor (median over recordings of the rest's spread).
+    pub sigma: Vec<(Sensor, f64)>,
+}
+
+impl SessionTargets {
+    /// Collects the targets of `session`.
+    pub fn new(session: &Session) -> SessionTargets {
+        let mut spreads: Vec<(Sensor, Vec<f64>)> =
+            Sensor::ALL.iter().map(|&s| (s, Vec::new())).collect();
+        let mut recordings = Vec::new();
+        for (index, r) in session.recordings.iter().enumerate() {
+            let (targets, camera_rows) = targets_of(r, &mut spreads);
+            recordings.push(RecordingTargets {
+                index,
+                targets,
+                camera_rows,
+            });
+        }
+        let mut sigma = Vec::new();
+        for (sensor, mut s) in spreads {
+            if s.is_empty() {
+                continue;
+            }
+            s.sort_by(f64::total_cmp);
+            sigma.push((sensor, s[s.len() / 2]));
+        }
+        for rt in &mut recordings {
+            for t in &mut rt.targets {
+                let sensor = Sensor::of(t.channel);
+                let raw = sigma
+                    .iter()
+                    .find(|(s, _)| *s == sensor)
+                    .map_or(0.0, |(_, v)| *v);
+                // A noise-free channel still needs a scale: a millionth of
+                // its range keeps the weights finite without inventing noise.
+                let range = t.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                t.sigma = raw.max(1e-6 * range).max(f64::MIN_POSITIVE);
+            }
+        }
+        SessionTargets { recordings, sigma }
+    }
+}
+
+fn targets_of(
+    r: &SessionRecording,
+    spreads: &mut [(Sensor, Vec<f64>)],
+) -> (Vec<Target>, Vec<bool>) {
+    let rows_total = r.rec.t_s.len();
+    let mut camera_rows = vec![false; rows_total];
+    let mut targets = Vec::new();
+    for (ch, values) in &r.rec.channels {
+        let rows: Vec<usize> = (0..rows_total).filter(|&i| values[i].is_some()).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let mut vals: Vec<f64> = rows.iter().map(|&i| values[i].unwrap_or(0.0)).collect();
+        let rest: Vec<f64> = rows
+            .iter()
+            .zip(&vals)
+            .filter(|(&i, _)| i < r.rest_rows)
+            .map(|(_, &v)| v)
+            .collect();
+        let mean = if rest.is_empty() {
+            0.0
+        } else {
+            rest.iter().sum::<f64>() / rest.len() as f64
+        };
+        if ch.is_camera() {
+            // The camera measures from a rest shape that brushing can leave
+            // off by a fraction of a millimetre: the opening rest shows it.
+            for v in &mut vals {
+                *v -= mean;
+            }
+            for &i in &rows {
+                camera_rows[i] = true;
+            }
+        }
+        if rest.len() >= 2 {
+            let var =
+                rest.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (rest.len() - 1) as f64;
+            let sensor = Sensor::of(*ch);
+            if let Some((_, s)) = spreads.iter_mut().find(|(s, _)| *s == sensor) {
+                s.push(var.sqrt());
+            }
+        }
+        targets.push(Target {
+            channel: *ch,
+            rows,
+            values: vals,
+            sigma: 0.0,
+        });
+    }
+    (targets, camera_rows)
+}

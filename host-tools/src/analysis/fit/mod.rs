@@ -1,0 +1,26 @@
+//! `finrs fit`: estimates a model's free parameters jointly over the
+//! recordings of a session, by Levenberg–Marquardt on noise-weighted
+//! residuals, and reports what a researcher needs to trust the result:
+//! confidence intervals, fit per channel, AIC and BIC.
+//!
+//! Every channel is weighted by the noise of its sensor, measured on the
+//! opening rest of each recording (FORMAT.md guarantees at least 1 s), so
+//! the weighted residuals are in units of noise and their sum of squares is
+//! `m` when the model explains the data to the noise floor.
+
+mod data;
+mod effect;
+mod error;
+mod fitter;
+pub mod modal;
+pub mod report;
+mod space;
+mod start;
+mod stats;
+
+pub use data::{Sensor, SessionTargets, Target};
+pub use effect::Effect;
+pub use error::FitError;
+pub use fitter::{FitResult, Fitter, FIT_ELEMENTS};
+pub use space::{Knob, Space};
+pub use stats::{nrmse, ChannelFit, Estimate, Score};

@@ -1,0 +1,270 @@
+//! The fitted parameters of a model structure and the transforms that keep
+//! them physical: the optimiser moves freely in `θ`, the model sees values
+//! inside their bounds.
+
+use model_core::Extensions;
+
+use super::effect::Effect;
+use crate::model::predict::ModelSpec;
+
+/// A fitted parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Knob {
+    /// `R1`, Ω.
+    R1,
+    /// `R2`, Ω.
+    R2,
+    /// `C`, F.
+    C,
+    /// `K`, N·m/C.
+    K,
+    /// `z`, 1/s (as a fraction of `p`, or below `p` with back-relaxation).
+    Z,
+    /// `p`, 1/s.
+    P,
+    /// `EI`, N·m² (beam-stiffness).
+    Ei,
+    /// Rayleigh `α`, 1/s (damping).
+    Alpha,
+    /// Rayleigh `β`, s (damping).
+    Beta,
+    /// Added mass per length, kg/m (hydrodynamic loading).
+    AddedMass,
+    /// Linear drag per length, N·s/m² (hydrodynamic loading).
+    Drag,
+    /// `a` of `v (1 + a v²)`, 1/V² (electrochemical nonlinearity).
+    ChargeCubic,
+    /// `b` of `v/R2 (1 + b v²)`, 1/V² (electrochemical nonlinearity).
+    LeakCubic,
+    /// `κ` (segment crosstalk).
+    Crosstalk,
+    /// Dehydration rate, 1/s.
+    Dehydration,
+    /// Dehydration curvature (0: constant rate).
+    DryingCurvature,
+}
+
+impl Knob {
+    /// Whether the baseline fits it.
+    pub fn is_baseline(&self) -> bool {
+        BASELINE.contains(self)
+    }
+
+    /// Whether the parameter is positive by its nature (its interval is
+    /// then reported on a log scale).
+    pub fn positive(&self) -> bool {
+        matches!(
+            self,
+            Knob::R1 | Knob::R2 | Knob::C | Knob::K | Knob::P | Knob::Ei
+        )
+    }
+
+    /// Name and unit, as reports and the TOML file say them.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Knob::R1 => "r1_ohm",
+            Knob::R2 => "r2_ohm",
+            Knob::C => "c_f",
+            Knob::K => "k_nm_per_c",
+            Knob::Z => "z_per_s",
+            Knob::P => "p_per_s",
+            Knob::Ei => "ei_nm2",
+            Knob::Alpha => "damping_mass_per_s",
+            Knob::Beta => "damping_stiffness_s",
+            Knob::AddedMass => "added_mass_kg_per_m",
+            Knob::Drag => "drag_n_s_per_m2",
+            Knob::ChargeCubic => "charge_cubic_per_v2",
+            Knob::LeakCubic => "leak_cubic_per_v2",
+            Knob::Crosstalk => "crosstalk",
+            Knob::Dehydration => "dehydration_per_s",
+            Knob::DryingCurvature => "dehydration_curvature",
+        }
+    }
+}
+
+/// The knobs of the baseline: the seed's electrical and relaxation parameters.
+pub const BASELINE: [Knob; 6] = [Knob::R1, Knob::R2, Knob::C, Knob::K, Knob::Z, Knob::P];
+
+/// Lowest value of the cubic terms: `v (1 + a v²)` must rise up to 4 V.
+const CUBIC_MIN: f64 = -1.0 / 48.0;
+
+// The effects' knobs are linear in θ, with θ = 0 the term switched off, so
+// that an extended fit starts exactly where the model it extends stands
+// (a logarithm could not start at zero, and any other start moves the
+// undamped beam's ringing out of phase). Each scale is the term's typical
+// size, so that θ is of order one.
+/// Rayleigh `α`, 1/s.
+const ALPHA_SCALE: f64 = 1.0;
+/// Rayleigh `β`, s (`β ω₁²` is about 0.03/s at this scale).
+const BETA_SCALE: f64 = 1e-6;
+/// Added mass, kg/m (the strip itself is about 8e-3).
+const ADDED_MASS_SCALE: f64 = 1e-2;
+/// Drag, N·s/m².
+const DRAG_SCALE: f64 = 1e-2;
+/// Cubic electrochemical terms, 1/V².
+const CUBIC_SCALE: f64 = 1e-2;
+/// Crosstalk fraction.
+const CROSSTALK_SCALE: f64 = 0.1;
+/// Dehydration rate, 1/s.
+const DEHYDRATION_SCALE: f64 = 1e-3;
+
+/// A non-negative term: `s θ` above zero, zero below (the optimiser sees
+/// a flat floor, and steps back from it).
+fn ramp(t: f64, scale: f64) -> f64 {
+    (t * scale).max(0.0)
+}
+
+/// A model structure (baseline plus effects) and its parameter space.
+#[derive(Clone, Debug)]
+pub struct Space {
+    /// The fitted knobs, in `θ` order.
+    pub knobs: Vec<Knob>,
+    /// The effects on top of the baseline.
+    pub effects: Vec<Effect>,
+    /// Parameters held fixed (geometry, beam unless freed).
+    pub fixed: ModelSpec,
+}
+
+impl Space {
+    /// The space of the baseline plus `effects`, around the fixed parts of `fixed`.
+    pub fn new(effects: &[Effect], fixed: ModelSpec) -> Space {
+        let mut knobs = BASELINE.to_vec();
+        let mut effects = effects.to_vec();
+        effects.sort();
+        effects.dedup();
+        for e in &effects {
+            knobs.extend_from_slice(match e {
+                Effect::LargeDeflection | Effect::BackRelaxation => &[],
+                Effect::BeamStiffness => &[Knob::Ei],
+                Effect::Damping => &[Knob::Alpha, Knob::Beta],
+                Effect::HydrodynamicLoading => &[Knob::AddedMass, Knob::Drag],
+                Effect::ElectrochemicalNonlinearity => &[Knob::ChargeCubic, Knob::LeakCubic],
+                Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
+                Effect::SegmentCrosstalk => &[Knob::Crosstalk],
+            });
+        }
+        Space {
+            knobs,
+            effects,
+            fixed,
+        }
+    }
+
+    /// Whether the structure includes `e`.
+    pub fn has(&self, e: Effect) -> bool {
+        self.effects.contains(&e)
+    }
+
+    /// Parameters the information criteria count: the knobs, plus one for
+    /// back-relaxation, which frees `z`'s bound rather than adding a knob.
+    pub fn counted_parameters(&self) -> usize {
+        self.knobs.len() + usize::from(self.has(Effect::BackRelaxation))
+    }
+
+    /// The model at `θ`.
+    pub fn spec(&self, theta: &[f64]) -> ModelSpec {
+        let mut spec = self.fixed;
+        spec.ext = Extensions {
+            back_relaxation: self.has(Effect::BackRelaxation),
+            large_deflection: self.has(Effect::LargeDeflection),
+            ..Extensions::NONE
+        };
+        spec.dehydration_per_s = 0.0;
+        spec.dehydration_curvature = 0.0;
+        let p = &mut spec.params;
+        // p first: z is relative to it.
+        let mut z_theta = None;
+        for (knob, &t) in self.knobs.iter().zip(theta) {
+            match knob {
+                Knob::R1 => p.r1_ohm = t.exp(),
+                Knob::R2 => p.r2_ohm = t.exp(),
+                Knob::C => p.c_f = t.exp(),
+                Knob::K => p.k_nm_per_c = t.exp(),
+                Knob::Z => z_theta = Some(t),
+                Knob::P => p.p_per_s = t.exp(),
+                Knob::Ei => p.ei_nm2 = t.exp(),
+                Knob::Alpha => spec.ext.damping_mass_per_s = ramp(t, ALPHA_SCALE),
+                Knob::Beta => spec.ext.damping_stiffness_s = ramp(t, BETA_SCALE),
+                Knob::AddedMass => spec.ext.added_mass_kg_per_m = ramp(t, ADDED_MASS_SCALE),
+                Knob::Drag => spec.ext.drag_n_s_per_m2 = ramp(t, DRAG_SCALE),
+                Knob::ChargeCubic => {
+                    spec.ext.charge_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
+                }
+                Knob::LeakCubic => {
+                    spec.ext.leak_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
+                }
+                Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
+                Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
+                Knob::DryingCurvature => spec.dehydration_curvature = ramp(t, 1.0),
+            }
+        }
+        if let Some(t) = z_theta {
+            p.z_per_s = if self.has(Effect::BackRelaxation) {
+                // Any z below p.
+                p.p_per_s * (1.0 - t.exp())
+            } else {
+                // 0 < z < p, the seed's lead network.
+                p.p_per_s / (1.0 + (-t).exp())
+            };
+        }
+        spec
+    }
+
+    /// `θ` for a model (values outside a knob's range are pulled inside).
+    pub fn theta(&self, spec: &ModelSpec) -> Vec<f64> {
+        let p = &spec.params;
+        let ln = |x: f64, floor: f64| x.max(floor).ln();
+        self.knobs
+            .iter()
+            .map(|knob| match knob {
+                Knob::R1 => ln(p.r1_ohm, 1e-9),
+                Knob::R2 => ln(p.r2_ohm, 1e-9),
+                Knob::C => ln(p.c_f, 1e-15),
+                Knob::K => ln(p.k_nm_per_c, 1e-15),
+                Knob::Z => {
+                    let ratio = p.z_per_s / p.p_per_s;
+                    if self.has(Effect::BackRelaxation) {
+                        ln(1.0 - ratio, 1e-9)
+                    } else {
+                        let r = ratio.clamp(1e-6, 1.0 - 1e-6);
+                        (r / (1.0 - r)).ln()
+                    }
+                }
+                Knob::P => ln(p.p_per_s, 1e-9),
+                Knob::Ei => ln(p.ei_nm2, 1e-15),
+                Knob::Alpha => spec.ext.damping_mass_per_s / ALPHA_SCALE,
+                Knob::Beta => spec.ext.damping_stiffness_s / BETA_SCALE,
+                Knob::AddedMass => spec.ext.added_mass_kg_per_m / ADDED_MASS_SCALE,
+                Knob::Drag => spec.ext.drag_n_s_per_m2 / DRAG_SCALE,
+                Knob::ChargeCubic => spec.ext.charge_cubic_per_v2 / CUBIC_SCALE,
+                Knob::LeakCubic => spec.ext.leak_cubic_per_v2 / CUBIC_SCALE,
+                Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
+                Knob::Dehydration => spec.dehydration_per_s / DEHYDRATION_SCALE,
+                Knob::DryingCurvature => spec.dehydration_curvature,
+            })
+            .collect()
+    }
+
+    /// The value of `knob` in a model, in its own unit.
+    pub fn value(knob: Knob, spec: &ModelSpec) -> f64 {
+        let p = &spec.params;
+        match knob {
+            Knob::R1 => p.r1_ohm,
+            Knob::R2 => p.r2_ohm,
+            Knob::C => p.c_f,
+            Knob::K => p.k_nm_per_c,
+            Knob::Z => p.z_per_s,
+            Knob::P => p.p_per_s,
+            Knob::Ei => p.ei_nm2,
+            Knob::Alpha => spec.ext.damping_mass_per_s,
+            Knob::Beta => spec.ext.damping_stiffness_s,
+            Knob::AddedMass => spec.ext.added_mass_kg_per_m,
+            Knob::Drag => spec.ext.drag_n_s_per_m2,
+            Knob::ChargeCubic => spec.ext.charge_cubic_per_v2,
+            Knob::LeakCubic => spec.ext.leak_cubic_per_v2,
+            Knob::Crosstalk => spec.ext.crosstalk,
+            Knob::Dehydration => spec.dehydration_per_s,
+            Knob::DryingCurvature => spec.dehydration_curvature,
+        }
+    }
+}

@@ -1,0 +1,8 @@
+//! What the data say about the model: the joint fit over a session
+//! ([`fit`]), the search for the effects the baseline misses
+//! ([`diagnose`]) and the seed's own measurements beside both models
+//! ([`seed_check`]).
+
+pub mod diagnose;
+pub mod fit;
+pub mod seed_check;

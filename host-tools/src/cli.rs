@@ -1,0 +1,369 @@
+//! The command line's shape: every command, its options and their help,
+//! and how an option becomes a library value. Refusals of a value name the
+//! flag here; the library names only its own fields.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::bail;
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use finrs::recording::Geometry;
+use finrs::recording::Medium;
+
+/// Tools for segmented IPMC fins.
+#[derive(Parser)]
+#[command(name = "finrs", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Predict what the model does for a recording's drive, or for a wave.
+    Simulate(SimulateArgs),
+    /// Print a parameter file (the `thesis_2006` preset) to edit.
+    Params,
+    /// Fit the model's free parameters jointly over a session's recordings.
+    Fit(FitArgs),
+    /// Find what the baseline gets wrong in a session and name the cause.
+    Diagnose(DiagnoseArgs),
+    /// Set the seed's own measurements beside the baseline and the extended model.
+    SeedCheck {
+        /// Also write the check as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Record the firmware's force stream (RTT up channel 1) through a probe,
+    /// or from a raw byte dump with --from-bytes.
+    Log(LogArgs),
+    /// Flash an ELF, reset and run it, print its defmt log and record its
+    /// force stream.
+    Run(RunArgs),
+    /// Send a new wave to the running firmware (RTT down channel 0).
+    Wave(WaveArgs),
+    /// Ask the firmware to measure the load cell's zero again.
+    Tare(SendArgs),
+    /// Bring every output to 0 V through the slew limit.
+    Stop(SendArgs),
+    /// Lower the firmware's voltage limit to V volts (a raise is refused).
+    Limit {
+        /// The new limit on |V|, V (above 0, at most 4).
+        max_abs_v: f64,
+        #[command(flatten)]
+        send: SendArgs,
+    },
+    /// Clear a latched fault (outputs stay at 0 V until the next wave).
+    ClearFault(SendArgs),
+}
+
+/// How a wave is shaped beyond its text: `finrs wave` and
+/// `finrs simulate --wave` share these. Each is an `Option` so that each
+/// command applies its own default, and `simulate` can refuse them with
+/// `--input`.
+#[derive(Args)]
+pub struct ShapeArgs {
+    /// Segments of the fin (the firmware's N; default 3).
+    #[arg(long)]
+    pub segments: Option<usize>,
+    /// Constant added to a sine: or standing: wave, V (default 0).
+    #[arg(long, allow_negative_numbers = true)]
+    pub offset_v: Option<f64>,
+    /// Raised-cosine ramp to full amplitude, s (default: 1 for `wave`; 0
+    /// for `simulate`, within its --duration-s).
+    #[arg(long)]
+    pub ramp_in_s: Option<f64>,
+    /// Raised-cosine ramp from full amplitude to zero, s (default 0; for
+    /// `simulate` within its --duration-s).
+    #[arg(long)]
+    pub ramp_out_s: Option<f64>,
+    /// Length of one chirp: sweep, s (default: 10 for `wave`; --duration-s
+    /// for `simulate`).
+    #[arg(long)]
+    pub sweep_s: Option<f64>,
+}
+
+/// The probe and the firmware a command is sent to.
+#[derive(Args)]
+pub struct SendArgs {
+    /// The running firmware's ELF, for its `_SEGGER_RTT` (default: scan RAM).
+    #[arg(long)]
+    pub elf: Option<PathBuf>,
+    #[command(flatten)]
+    pub probe: ProbeArgs,
+}
+
+/// `finrs wave`.
+#[derive(Args)]
+pub struct WaveArgs {
+    /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
+    /// pulses:AMP,ON_S,OFF_S or standing:AMP,HZ.
+    pub wave: String,
+    #[command(flatten)]
+    pub shape: ShapeArgs,
+    /// Time at full amplitude, s (default: for ever).
+    #[arg(long, default_value_t = f64::INFINITY)]
+    pub hold_s: f64,
+    #[command(flatten)]
+    pub send: SendArgs,
+}
+
+impl WaveArgs {
+    /// The wave's shaping with `finrs wave`'s defaults: no offset, 1 s ramp
+    /// in, no ramp out, 10 s sweeps.
+    pub fn options(&self) -> finrs::wave::WaveOptions {
+        let s = &self.shape;
+        finrs::wave::WaveOptions {
+            offset_v: s.offset_v.unwrap_or(0.0),
+            ramp_in_s: s.ramp_in_s.unwrap_or(1.0),
+            hold_s: self.hold_s,
+            ramp_out_s: s.ramp_out_s.unwrap_or(0.0),
+            sweep_s: s.sweep_s.unwrap_or(10.0),
+        }
+    }
+}
+
+/// Which debug probe and chip, and how long to wait for them.
+#[derive(Args)]
+pub struct ProbeArgs {
+    /// probe-rs chip name.
+    #[arg(long, default_value = finrs::link::probe::DEFAULT_CHIP)]
+    pub chip: String,
+    /// Debug probe as VID:PID[:SERIAL] (hex), when more than one is attached.
+    #[arg(long)]
+    pub probe: Option<String>,
+    /// Longest wait for the probe search, the attach and each later probe call (reset, RTT read or write), s.
+    #[arg(long, default_value_t = 5.0)]
+    pub probe_timeout_s: f64,
+}
+
+impl ProbeArgs {
+    /// The library's probe options.
+    pub fn options(&self) -> anyhow::Result<finrs::link::probe::ProbeOptions> {
+        if let Some(p) = &self.probe {
+            // Checked now, so the refusal names the flag.
+            finrs::link::probe::parse_selector(p).map_err(|e| anyhow::anyhow!("--probe {e}"))?;
+        }
+        Ok(finrs::link::probe::ProbeOptions {
+            chip: self.chip.clone(),
+            probe: self.probe.clone(),
+            timeout: timeout("--probe-timeout-s", self.probe_timeout_s)?,
+            flash_timeout: finrs::link::probe::DEFAULT_FLASH_TIMEOUT,
+        })
+    }
+}
+
+/// A bound given in seconds on the command line.
+pub fn timeout(flag: &str, s: f64) -> anyhow::Result<Duration> {
+    match Duration::try_from_secs_f64(s) {
+        Ok(d) if s > 0.0 => Ok(d),
+        _ => bail!("{flag} must be a positive number of seconds, got {s:?}"),
+    }
+}
+
+/// What surrounds the strip.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MediumArg {
+    /// Air.
+    Air,
+    /// Water.
+    Water,
+}
+
+/// Where a recording from the firmware goes, and the strip it comes from.
+#[derive(Args)]
+pub struct RecordArgs {
+    /// Where to write the recording (CSV, ipmc-bench/1, fixture "blocked").
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Stop after this long, s (default: until Ctrl-C; the file is written either way).
+    #[arg(long = "duration-s", visible_alias = "duration")]
+    pub duration_s: Option<f64>,
+    /// Free length of the strip, m (default: the seed's 50 mm strip).
+    #[arg(long)]
+    pub length_m: Option<f64>,
+    /// Width of the strip, m.
+    #[arg(long)]
+    pub width_m: Option<f64>,
+    /// Thickness of the strip, m.
+    #[arg(long)]
+    pub thickness_m: Option<f64>,
+    /// What surrounds the strip.
+    #[arg(long, value_enum, default_value_t = MediumArg::Air)]
+    pub medium: MediumArg,
+    /// Sample id, for the metadata.
+    #[arg(long)]
+    pub sample: Option<String>,
+}
+
+impl RecordArgs {
+    /// The library's capture options; `source` says where the bytes come from.
+    pub fn options(&self, source: String) -> anyhow::Result<finrs::link::capture::CaptureOptions> {
+        let g = Geometry::THESIS_2006;
+        let geometry = Geometry {
+            length_m: self.length_m.unwrap_or(g.length_m),
+            width_m: self.width_m.unwrap_or(g.width_m),
+            thickness_m: self.thickness_m.unwrap_or(g.thickness_m),
+        };
+        for (name, v) in [
+            ("--length-m", geometry.length_m),
+            ("--width-m", geometry.width_m),
+            ("--thickness-m", geometry.thickness_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{name} must be a positive length in metres, got {v}");
+            }
+        }
+        if let Some(d) = self.duration_s {
+            if !(d.is_finite() && d > 0.0) {
+                bail!("--duration-s must be a positive number of seconds, got {d}");
+            }
+        }
+        Ok(finrs::link::capture::CaptureOptions {
+            out: self.out.clone(),
+            duration_s: self.duration_s,
+            setup: finrs::link::stream::Setup {
+                geometry,
+                medium: match self.medium {
+                    MediumArg::Air => Medium::Air,
+                    MediumArg::Water => Medium::Water,
+                },
+                sample: self.sample.clone(),
+                source,
+            },
+        })
+    }
+}
+
+/// `finrs log`.
+#[derive(Args)]
+pub struct LogArgs {
+    /// The running firmware's ELF: its `_SEGGER_RTT` symbol and defmt table.
+    #[arg(long, conflicts_with = "from_bytes")]
+    pub elf: Option<PathBuf>,
+    /// Read a raw byte dump of the up channel instead of a probe (`-`: stdin).
+    #[arg(long)]
+    pub from_bytes: Option<PathBuf>,
+    #[command(flatten)]
+    pub probe: ProbeArgs,
+    #[command(flatten)]
+    pub record: RecordArgs,
+}
+
+/// `finrs run`.
+#[derive(Args)]
+pub struct RunArgs {
+    /// The firmware to flash (ELF with `_SEGGER_RTT` and a defmt table).
+    pub elf: PathBuf,
+    #[command(flatten)]
+    pub probe: ProbeArgs,
+    /// Longest wait for flashing the ELF, s.
+    #[arg(long, default_value_t = finrs::link::probe::DEFAULT_FLASH_TIMEOUT.as_secs_f64())]
+    pub flash_timeout_s: f64,
+    #[command(flatten)]
+    pub record: RecordArgs,
+}
+
+/// `finrs diagnose`.
+#[derive(Args)]
+pub struct DiagnoseArgs {
+    /// Folder of recordings of one sample (ipmc-bench/1).
+    pub session: PathBuf,
+    /// Where to write the verdict (JSON).
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Folder for the human report (REPORT.md and plots).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+/// `finrs fit`.
+#[derive(Args)]
+pub struct FitArgs {
+    /// Folder of recordings of one sample (ipmc-bench/1).
+    pub session: PathBuf,
+    /// Effects to add to the baseline, comma separated (e.g. damping,large-deflection).
+    #[arg(long, value_delimiter = ',')]
+    pub effects: Vec<String>,
+    /// Where to write the fitted parameters (TOML, as `simulate --params` reads).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// How the tip is held.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum FixtureArg {
+    /// Tip free.
+    Free,
+    /// Tip held by the load cell.
+    Blocked,
+}
+
+/// `finrs simulate`.
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// Recording whose voltage columns drive the model (ipmc-bench/1).
+    // A recording brings its own segments, fixture, timing and voltages:
+    // every option that describes a --wave conflicts with it.
+    #[arg(
+        long,
+        conflicts_with_all = [
+            "wave", "segments", "offset_v", "ramp_in_s", "ramp_out_s", "sweep_s",
+            "fixture", "rest_s", "duration_s", "off_s", "rate_hz", "limit_v", "slew_v_per_s",
+        ],
+        required_unless_present = "wave"
+    )]
+    pub input: Option<PathBuf>,
+    /// A wave instead of a recording: step:V[,V..], sine:AMP,HZ,LAG_DEG,
+    /// standing:AMP,HZ, chirp:AMP,HZ0,HZ1 or pulses:AMP,ON_S,OFF_S (as
+    /// `finrs wave`, evaluated by the firmware's generator).
+    #[arg(long)]
+    pub wave: Option<String>,
+    #[command(flatten)]
+    pub drive: SimWaveArgs,
+    /// Parameter file (TOML); default: the thesis_2006 preset.
+    #[arg(long)]
+    pub params: Option<PathBuf>,
+    /// Finite elements per segment (1, 2 or 4).
+    #[arg(long, default_value_t = 1)]
+    pub elements: usize,
+    /// Where to write the simulated recording (CSV).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also write a PNG plot here.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+/// The options of `finrs simulate` that describe a --wave (defaults
+/// applied in [`SimWaveArgs::drive`] and [`SimWaveArgs::shaping`]).
+#[derive(Args)]
+pub struct SimWaveArgs {
+    #[command(flatten)]
+    pub shape: ShapeArgs,
+    /// Fixture, with --wave (default free).
+    #[arg(long, value_enum)]
+    pub fixture: Option<FixtureArg>,
+    /// Rest at 0 V before the wave, s (default 1).
+    #[arg(long)]
+    pub rest_s: Option<f64>,
+    /// Duration of the wave, s (default 10).
+    #[arg(long)]
+    pub duration_s: Option<f64>,
+    /// Rest at 0 V after the wave, s (default 0).
+    #[arg(long)]
+    pub off_s: Option<f64>,
+    /// Sample rate, Hz, with --wave (whole: the generator's tick rate;
+    /// default 1000).
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Pass the wave through the firmware's limiter at this voltage limit,
+    /// V (with --slew-v-per-s).
+    #[arg(long, requires = "slew_v_per_s")]
+    pub limit_v: Option<f64>,
+    /// The limiter's slew limit, V/s (with --limit-v).
+    #[arg(long, requires = "limit_v")]
+    pub slew_v_per_s: Option<f64>,
+}

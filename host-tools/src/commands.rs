@@ -1,0 +1,375 @@
+//! One function per command: calls the library, shows progress, writes
+//! the files asked for. Progress bars and Ctrl-C live here, not in the
+//! library.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context};
+use finrs::analysis::fit::{Effect, Fitter};
+use finrs::link::capture::{self, Firmware, Monitor};
+use finrs::model::params::ModelFile;
+use finrs::model::simulate::simulate as simulate_recording;
+use finrs::model::synth::{self, DriveError};
+use finrs::plot;
+use finrs::recording::Geometry;
+use finrs::recording::{Fixture, Recording};
+use finrs::session::Session;
+use finrs::wave::{Wave, WaveError};
+use finrs_drive::MAX_SEGMENTS;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::cli::{
+    timeout, DiagnoseArgs, FitArgs, FixtureArg, LogArgs, RunArgs, SendArgs, SimWaveArgs,
+    SimulateArgs, WaveArgs,
+};
+
+/// `finrs simulate`.
+pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
+    let model = match &args.params {
+        Some(p) => ModelFile::read(p)?,
+        None => ModelFile::thesis_2006(),
+    };
+    // clap refuses the wave's options with --input, and requires one of
+    // --input and --wave.
+    let (name, input) = match (&args.input, &args.wave) {
+        (Some(path), _) => (path.display().to_string(), Recording::read(path)?),
+        (None, Some(spec)) => (spec.clone(), wave_recording(spec, &args.drive)?),
+        (None, None) => bail!("give --input REC.csv or --wave SPEC"),
+    };
+    let geometry = Geometry {
+        length_m: input.meta.length_m,
+        width_m: input.meta.width_m,
+        thickness_m: input.meta.thickness_m,
+    };
+    let spec = model.spec_for(&geometry).with_context(|| name.clone())?;
+
+    let bar = ProgressBar::new(input.t_s.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows ({eta})")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_message("simulating");
+    let sim = simulate_recording(&name, &input, &spec, args.elements, &mut |n| {
+        bar.set_position(n)
+    })?;
+    bar.finish_and_clear();
+
+    create_parent(&args.out)?;
+    sim.write(&args.out)?;
+    eprintln!("wrote {} ({} rows)", args.out.display(), sim.t_s.len());
+    if let Some(png) = &args.plot {
+        let measured = args.input.as_ref().map(|_| &input);
+        plot::plot(png, &format!("finrs simulate: {name}"), measured, &sim)
+            .with_context(|| png.display().to_string())?;
+        eprintln!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+/// The drive of `simulate --wave`, with `simulate`'s defaults.
+fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
+    let wave = Wave::parse(spec)?;
+    let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
+        FixtureArg::Free => Fixture::Free,
+        FixtureArg::Blocked => Fixture::Blocked,
+    };
+    let drive = synth::Drive {
+        segments: args.shape.segments.unwrap_or(3),
+        fixture,
+        rest_s: args.rest_s.unwrap_or(1.0),
+        duration_s: args.duration_s.unwrap_or(10.0),
+        off_s: args.off_s.unwrap_or(0.0),
+        rate_hz: args.rate_hz.unwrap_or(1000.0),
+    };
+    let limits = match (args.limit_v, args.slew_v_per_s) {
+        (Some(v), Some(slew)) => Some(synth::limits(v, slew).map_err(drive_flags)?),
+        _ => None,
+    };
+    let shaping = synth::Shaping {
+        offset_v: args.shape.offset_v.unwrap_or(0.0),
+        ramp_in_s: args.shape.ramp_in_s.unwrap_or(0.0),
+        ramp_out_s: args.shape.ramp_out_s.unwrap_or(0.0),
+        sweep_s: args.shape.sweep_s,
+        limits,
+    };
+    synth::drive_recording_shaped(&wave, &drive, &shaping).map_err(drive_flags)
+}
+
+/// The flag that sets a field of the library's options: `rest_s` is
+/// `--rest-s`.
+fn flag(field: &str) -> String {
+    format!("--{}", field.replace('_', "-"))
+}
+
+/// A refused drive, told with the flags that set it.
+fn drive_flags(e: DriveError) -> anyhow::Error {
+    match e {
+        DriveError::Negative { field, value } => {
+            anyhow!("{} must be zero or positive, got {value}", flag(field))
+        }
+        DriveError::NotPositive { field, value } => {
+            anyhow!("{} must be positive, got {value}", flag(field))
+        }
+        DriveError::RateNotWhole(rate_hz) => anyhow!(
+            "--rate-hz must be a whole number of Hz up to {} (the generator counts ticks), got {rate_hz}",
+            u32::MAX
+        ),
+        DriveError::RampsTooLong {
+            ramp_in_s,
+            ramp_out_s,
+            duration_s,
+        } => anyhow!(
+            "--ramp-in-s + --ramp-out-s must not exceed --duration-s: {ramp_in_s} + {ramp_out_s} > {duration_s}"
+        ),
+        DriveError::Limits { field, value, rule } => anyhow!("{} {value}: {rule}", flag(field)),
+        DriveError::Wave(e) => wave_flags(e),
+        other => other.into(),
+    }
+}
+
+/// A refused wave, told with the flags that set it.
+fn wave_flags(e: WaveError) -> anyhow::Error {
+    match e {
+        WaveError::Segments(n) => anyhow!("--segments must be 1..={MAX_SEGMENTS}, got {n}"),
+        WaveError::Offset { wave } => {
+            anyhow!("--offset-v applies to sine: and standing: waves only, not `{wave}`")
+        }
+        other => other.into(),
+    }
+}
+
+/// `finrs params`.
+pub fn params() -> anyhow::Result<()> {
+    print!("{}", ModelFile::thesis_2006().to_toml());
+    Ok(())
+}
+
+/// `finrs fit`.
+pub fn fit(args: FitArgs) -> anyhow::Result<()> {
+    let effects = args
+        .effects
+        .iter()
+        .map(|name| {
+            Effect::parse(name).with_context(|| {
+                let known: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+                format!(
+                    "--effects: unknown effect {name:?}; known: {}",
+                    known.join(", ")
+                )
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let session = Session::read(&args.session)?;
+    let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
+    let fitter = Fitter::new(&session);
+    let all: Vec<usize> = (0..session.recordings.len()).collect();
+    let bar = spinner("fitting");
+    let started = Instant::now();
+    let fit = fitter.fit(&all, &effects, None, fixed)?;
+    bar.finish_and_clear();
+    print!(
+        "{}",
+        finrs::analysis::fit::report::text(&fit, fitter.targets())
+    );
+    eprintln!(
+        "fitted {} recordings in {:.1} s ({} model evaluations, {})",
+        all.len(),
+        started.elapsed().as_secs_f64(),
+        fit.evaluations,
+        fit.termination
+    );
+    if let Some(out) = &args.out {
+        let file = fit.model_file();
+        std::fs::write(out, file.to_toml()).with_context(|| out.display().to_string())?;
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+/// `finrs diagnose`.
+pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
+    let session = Session::read(&args.session)?;
+    let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
+    let bar = spinner("diagnosing");
+    let started = Instant::now();
+    let d = finrs::analysis::diagnose::diagnose(&session, fixed, &|msg| {
+        bar.set_message(msg.to_string())
+    })?;
+    bar.finish_and_clear();
+    print!("{}", d.verdict);
+    eprintln!("diagnosed in {:.1} s", started.elapsed().as_secs_f64());
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&d.verdict)?;
+        create_parent(path)?;
+        std::fs::write(path, text + "\n").with_context(|| path.display().to_string())?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(dir) = &args.report {
+        finrs::analysis::diagnose::report::write(dir, &session, &d)
+            .with_context(|| dir.display().to_string())?;
+        eprintln!("wrote {}", dir.join("REPORT.md").display());
+    }
+    Ok(())
+}
+
+/// `finrs seed-check`.
+pub fn seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
+    let c = finrs::analysis::seed_check::seed_check()?;
+    print!("{c}");
+    if let Some(path) = json {
+        std::fs::write(&path, serde_json::to_string_pretty(&c)? + "\n")
+            .with_context(|| path.display().to_string())?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// `finrs log`.
+pub fn log(args: LogArgs) -> anyhow::Result<()> {
+    let report = match &args.from_bytes {
+        Some(path) => {
+            let opts = args
+                .record
+                .options(format!("the byte dump {}", path.display()))?;
+            capture::from_bytes(path, &opts)?
+        }
+        None => {
+            let probe = args.probe.options()?;
+            let opts = args.record.options(format!(
+                "RTT up channel {} on {}",
+                finrs::link::probe::FORCE_UP_CHANNEL,
+                probe.chip
+            ))?;
+            record(&probe, &Firmware::Running(args.elf.clone()), &opts)?
+        }
+    };
+    eprint!("{report}");
+    Ok(())
+}
+
+/// `finrs run`.
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let mut probe = args.probe.options()?;
+    probe.flash_timeout = timeout("--flash-timeout-s", args.flash_timeout_s)?;
+    let opts = args.record.options(format!(
+        "RTT up channel {} on {} running {}",
+        finrs::link::probe::FORCE_UP_CHANNEL,
+        probe.chip,
+        args.elf.display()
+    ))?;
+    eprint!(
+        "{}",
+        record(&probe, &Firmware::Flash(args.elf.clone()), &opts)?
+    );
+    Ok(())
+}
+
+/// Connects through the probe, then records until Ctrl-C or the duration,
+/// with a live status line. Returns the report.
+fn record(
+    probe: &finrs::link::probe::ProbeOptions,
+    firmware: &Firmware,
+    opts: &capture::CaptureOptions,
+) -> anyhow::Result<String> {
+    let status = StatusLine::new();
+    let mut connected = capture::connect(probe, firmware, &status)?;
+    // Armed only now: until here Ctrl-C ends the process as usual.
+    let stop = interrupted()?;
+    capture::capture(
+        &mut connected.link,
+        connected.table.as_ref(),
+        &stop,
+        opts,
+        &status,
+    )
+}
+
+/// A flag that Ctrl-C sets (the handler is installed once per process).
+/// A second Ctrl-C exits at once, for when the loop cannot see the flag
+/// soon enough (each probe call is bounded, but by seconds).
+fn interrupted() -> anyhow::Result<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            eprintln!("second Ctrl-C: exiting without writing the recording");
+            std::process::exit(130);
+        }
+    })
+    .context("cannot install the Ctrl-C handler")?;
+    Ok(flag)
+}
+
+/// The recording's status on one terminal line, log lines above it.
+struct StatusLine(ProgressBar);
+
+impl StatusLine {
+    fn new() -> Self {
+        let bar = ProgressBar::new_spinner();
+        bar.set_style(ProgressStyle::with_template("{spinner} {msg}").expect("static template"));
+        StatusLine(bar)
+    }
+}
+
+impl Monitor for StatusLine {
+    fn line(&self, text: &str) {
+        self.0.println(text);
+    }
+
+    fn status(&self, text: &str) {
+        self.0.set_message(text.to_string());
+        self.0.tick();
+    }
+}
+
+impl Drop for StatusLine {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}
+
+/// `finrs wave`.
+pub fn wave(args: WaveArgs) -> anyhow::Result<()> {
+    let segments = args.shape.segments.unwrap_or(3);
+    // Refused here, before any probe is looked for.
+    let command = finrs::link::command::wave_command(&args.wave, segments, &args.options())
+        .map_err(wave_flags)?;
+    send(&args.send, &command)
+}
+
+/// `finrs limit`.
+pub fn limit(max_abs_v: f64, args: &SendArgs) -> anyhow::Result<()> {
+    let command = finrs::link::command::limit_command(max_abs_v)?;
+    send(args, &command)
+}
+
+/// Sends `command` down the firmware's command channel.
+pub fn send(args: &SendArgs, command: &finrs_frames::Command) -> anyhow::Result<()> {
+    let probe = args.probe.options()?;
+    let bytes = finrs::link::command::encode(command);
+    finrs::link::probe::send(&probe, args.elf.as_deref(), &bytes)?;
+    eprintln!("sent {command:?}");
+    Ok(())
+}
+
+fn spinner(msg: &'static str) -> ProgressBar {
+    let bar = ProgressBar::new_spinner();
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("static template"),
+    );
+    bar.set_message(msg);
+    bar.enable_steady_tick(Duration::from_millis(200));
+    bar
+}
+
+/// Creates the folder a file goes into.
+fn create_parent(path: &Path) -> anyhow::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,8 @@
+//! What the model predicts: its parameter file ([`params`]), the engine's
+//! traces for a recording's drive ([`predict`]), those traces as a
+//! recording ([`simulate`]) and drives made from waves ([`synth`]).
+
+pub mod params;
+pub mod predict;
+pub mod simulate;
+pub mod synth;

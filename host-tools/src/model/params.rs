@@ -1,0 +1,374 @@
+//! Model parameters as a TOML file: what `finrs fit` writes and
+//! `finrs simulate --params` reads.
+//!
+//! The file holds the sample's material and the fitted electrical and
+//! relaxation parameters; the geometry (length, width, thickness) comes from
+//! each recording's metadata, so one file serves a whole session. The beam's
+//! `EI` and `ρA` follow from geometry and material by the seed's laminate
+//! formula unless the optional `[beam]` section overrides them.
+
+use std::path::Path;
+
+use model_core::{Laminate, Params};
+
+use crate::model::predict::ModelSpec;
+use crate::recording::Geometry;
+use serde::{Deserialize, Serialize};
+
+/// The contents of a parameter file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// RC circuit, eq. 2.1–2.2.
+    pub electrical: Electrical,
+    /// Lead network, eq. 2.3.
+    pub relaxation: Relaxation,
+    /// Laminate materials, Appendix B.
+    pub material: Material,
+    /// Optional override of the laminate formula.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beam: Option<Beam>,
+    /// Optional model terms beyond the seed's (all off when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extensions: Option<ExtensionsFile>,
+}
+
+/// The `[extensions]` section: the terms of [`model_core::Extensions`] and
+/// the dehydration rate, each off when omitted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExtensionsFile {
+    /// Rayleigh mass-proportional damping `α`, 1/s.
+    pub damping_mass_per_s: f64,
+    /// Rayleigh stiffness-proportional damping `β`, s.
+    pub damping_stiffness_s: f64,
+    /// Added fluid mass per length, kg/m.
+    pub added_mass_kg_per_m: f64,
+    /// Linear fluid drag per length, N·s/m².
+    pub drag_n_s_per_m2: f64,
+    /// `a` of the double layer's `v (1 + a v²)`, 1/V².
+    pub charge_cubic_per_v2: f64,
+    /// `b` of the leak's `v/R2 (1 + b v²)`, 1/V².
+    pub leak_cubic_per_v2: f64,
+    /// Fraction of a segment's moment on each neighbour.
+    pub crosstalk: f64,
+    /// Lets the relaxation zero lie at or below 0.
+    pub back_relaxation: bool,
+    /// Arc kinematics for positions along the strip.
+    pub large_deflection: bool,
+    /// Initial drying rate `r` of the moment gain over session time, 1/s.
+    pub dehydration_per_s: f64,
+    /// Drying curvature `c` (`≥ 0`): the gain is `(1 + c r t)^(−1/c)`,
+    /// `e^{−r t}` at 0.
+    pub dehydration_curvature: f64,
+}
+
+impl ExtensionsFile {
+    /// The core's terms (the dehydration rate is the caller's).
+    pub fn core(&self) -> model_core::Extensions {
+        model_core::Extensions {
+            damping_mass_per_s: self.damping_mass_per_s,
+            damping_stiffness_s: self.damping_stiffness_s,
+            added_mass_kg_per_m: self.added_mass_kg_per_m,
+            drag_n_s_per_m2: self.drag_n_s_per_m2,
+            charge_cubic_per_v2: self.charge_cubic_per_v2,
+            leak_cubic_per_v2: self.leak_cubic_per_v2,
+            crosstalk: self.crosstalk,
+            back_relaxation: self.back_relaxation,
+            large_deflection: self.large_deflection,
+        }
+    }
+
+    /// The section for a model's terms and dehydration rate.
+    pub fn from_spec(
+        ext: &model_core::Extensions,
+        dehydration_per_s: f64,
+        dehydration_curvature: f64,
+    ) -> ExtensionsFile {
+        ExtensionsFile {
+            damping_mass_per_s: ext.damping_mass_per_s,
+            damping_stiffness_s: ext.damping_stiffness_s,
+            added_mass_kg_per_m: ext.added_mass_kg_per_m,
+            drag_n_s_per_m2: ext.drag_n_s_per_m2,
+            charge_cubic_per_v2: ext.charge_cubic_per_v2,
+            leak_cubic_per_v2: ext.leak_cubic_per_v2,
+            crosstalk: ext.crosstalk,
+            back_relaxation: ext.back_relaxation,
+            large_deflection: ext.large_deflection,
+            dehydration_per_s,
+            dehydration_curvature,
+        }
+    }
+}
+
+/// `R1`, `R2`, `C`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Electrical {
+    /// Series resistance, Ω.
+    pub r1_ohm: f64,
+    /// Parallel resistance, Ω.
+    pub r2_ohm: f64,
+    /// Double-layer capacitance, F.
+    pub c_f: f64,
+}
+
+/// `K`, `z`, `p` of `u/Q = K (s+z)/(s+p)`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Relaxation {
+    /// Gain, N·m/C.
+    pub k_nm_per_c: f64,
+    /// Zero, 1/s.
+    pub z_per_s: f64,
+    /// Pole, 1/s.
+    pub p_per_s: f64,
+}
+
+/// Core and film materials; the film's thickness is a material property of
+/// the plating, the core's follows from the recording's total thickness.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Core (Nafion) Young's modulus, Pa.
+    pub core_modulus_pa: f64,
+    /// Film (platinum) Young's modulus, Pa.
+    pub film_modulus_pa: f64,
+    /// Core density, kg/m³.
+    pub core_density_kg_per_m3: f64,
+    /// Film density, kg/m³.
+    pub film_density_kg_per_m3: f64,
+    /// Thickness of each film, m.
+    pub film_thickness_m: f64,
+}
+
+/// Beam properties that replace the laminate formula.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Beam {
+    /// Bending stiffness, N·m².
+    pub ei_nm2: f64,
+    /// Mass per length, kg/m.
+    pub mass_per_length_kg_per_m: f64,
+}
+
+/// Why a parameter file or its combination with a geometry was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamsError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML or misses or misnames a field.
+    #[error("{path}: {message}")]
+    Syntax {
+        /// The file.
+        path: String,
+        /// The parser's message, with line and column.
+        message: String,
+    },
+    /// A value is not physical.
+    #[error("{context}: {source}")]
+    Invalid {
+        /// Where the values came from.
+        context: String,
+        /// The rule broken.
+        source: model_core::ParamError,
+    },
+}
+
+impl ModelFile {
+    /// The seed's preset (`Params::thesis_2006`).
+    pub fn thesis_2006() -> ModelFile {
+        let p = Params::thesis_2006();
+        let lam = Laminate::THESIS_2006;
+        ModelFile {
+            electrical: Electrical {
+                r1_ohm: p.r1_ohm,
+                r2_ohm: p.r2_ohm,
+                c_f: p.c_f,
+            },
+            relaxation: Relaxation {
+                k_nm_per_c: p.k_nm_per_c,
+                z_per_s: p.z_per_s,
+                p_per_s: p.p_per_s,
+            },
+            material: Material {
+                core_modulus_pa: lam.core_modulus_pa,
+                film_modulus_pa: lam.film_modulus_pa,
+                core_density_kg_per_m3: lam.core_density_kg_per_m3,
+                film_density_kg_per_m3: lam.film_density_kg_per_m3,
+                film_thickness_m: lam.film_thickness_m,
+            },
+            beam: None,
+            extensions: None,
+        }
+    }
+
+    /// Reads and checks a parameter file.
+    pub fn read(path: &Path) -> Result<ModelFile, ParamsError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ParamsError::Io {
+            path: name.clone(),
+            source,
+        })?;
+        Self::parse(&name, &text)
+    }
+
+    /// Parses and checks the text of a parameter file.
+    pub fn parse(name: &str, text: &str) -> Result<ModelFile, ParamsError> {
+        let file: ModelFile = toml::from_str(text).map_err(|e| ParamsError::Syntax {
+            path: name.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        // Check against the preset's geometry so that a bad value is named
+        // now, not at the first recording.
+        file.params_for(&Geometry::THESIS_2006)
+            .map_err(|e| match e {
+                ParamsError::Invalid { source, .. } => ParamsError::Invalid {
+                    context: name.to_string(),
+                    source,
+                },
+                other => other,
+            })?;
+        Ok(file)
+    }
+
+    /// The file's TOML text.
+    pub fn to_toml(&self) -> String {
+        let body = toml::to_string(self).expect("plain numbers always serialise");
+        format!("# finrs model parameters, SI units\n{body}")
+    }
+
+    /// The laminate of this material with a recording's geometry.
+    pub fn laminate(&self, g: &Geometry) -> Laminate {
+        Laminate {
+            width_m: g.width_m,
+            core_thickness_m: g.thickness_m - 2.0 * self.material.film_thickness_m,
+            film_thickness_m: self.material.film_thickness_m,
+            core_modulus_pa: self.material.core_modulus_pa,
+            film_modulus_pa: self.material.film_modulus_pa,
+            core_density_kg_per_m3: self.material.core_density_kg_per_m3,
+            film_density_kg_per_m3: self.material.film_density_kg_per_m3,
+        }
+    }
+
+    /// The model's parameters for a strip of geometry `g`, validated.
+    pub fn params_for(&self, g: &Geometry) -> Result<Params, ParamsError> {
+        let invalid = |source| ParamsError::Invalid {
+            context: format!(
+                "strip of length {} m, width {} m, thickness {} m",
+                g.length_m, g.width_m, g.thickness_m
+            ),
+            source,
+        };
+        let lam = self.laminate(g);
+        lam.validate().map_err(invalid)?;
+        let (ei_nm2, mass_per_length_kg_per_m) = match self.beam {
+            Some(b) => (b.ei_nm2, b.mass_per_length_kg_per_m),
+            None => (lam.ei_nm2(), lam.mass_per_length_kg_per_m()),
+        };
+        let p = Params {
+            r1_ohm: self.electrical.r1_ohm,
+            r2_ohm: self.electrical.r2_ohm,
+            c_f: self.electrical.c_f,
+            k_nm_per_c: self.relaxation.k_nm_per_c,
+            z_per_s: self.relaxation.z_per_s,
+            p_per_s: self.relaxation.p_per_s,
+            length_m: g.length_m,
+            ei_nm2,
+            mass_per_length_kg_per_m,
+        };
+        let ext = self.extensions.unwrap_or_default();
+        p.validate_relaxation(ext.back_relaxation)
+            .map_err(invalid)?;
+        ext.core().validate().map_err(invalid)?;
+        for (field, value) in [
+            ("dehydration_per_s", ext.dehydration_per_s),
+            ("dehydration_curvature", ext.dehydration_curvature),
+        ] {
+            if !value.is_finite() {
+                return Err(invalid(model_core::ParamError::NotFinite { field, value }));
+            }
+            if value < 0.0 {
+                return Err(invalid(model_core::ParamError::OutOfRange {
+                    field,
+                    value,
+                    min: 0.0,
+                    max: f64::INFINITY,
+                }));
+            }
+        }
+        Ok(p)
+    }
+
+    /// The whole model for a strip of geometry `g`: parameters, optional
+    /// terms and dehydration rate, validated.
+    pub fn spec_for(&self, g: &Geometry) -> Result<ModelSpec, ParamsError> {
+        let params = self.params_for(g)?;
+        let ext = self.extensions.unwrap_or_default();
+        Ok(ModelSpec {
+            params,
+            ext: ext.core(),
+            dehydration_per_s: ext.dehydration_per_s,
+            dehydration_curvature: ext.dehydration_curvature,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn preset_round_trips_and_matches_the_core() {
+        let f = ModelFile::thesis_2006();
+        let back = ModelFile::parse("preset.toml", &f.to_toml()).unwrap();
+        assert_eq!(back, f);
+        let p = back.params_for(&Geometry::THESIS_2006).unwrap();
+        let core = Params::thesis_2006();
+        assert!((p.ei_nm2 / core.ei_nm2 - 1.0).abs() < 1e-12);
+        assert!((p.mass_per_length_kg_per_m / core.mass_per_length_kg_per_m - 1.0).abs() < 1e-12);
+        assert_eq!(p.k_nm_per_c, core.k_nm_per_c);
+    }
+
+    #[test]
+    fn unknown_and_missing_fields_are_named() {
+        let text = ModelFile::thesis_2006()
+            .to_toml()
+            .replace("r1_ohm", "r1_ohms");
+        let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
+        assert!(
+            err.starts_with("p.toml:") && err.contains("r1_ohms"),
+            "{err}"
+        );
+        let text = ModelFile::thesis_2006()
+            .to_toml()
+            .replace("c_f = 0.0001\n", "");
+        let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
+        assert!(err.contains("c_f"), "{err}");
+    }
+
+    #[test]
+    fn non_physical_values_are_refused_by_name() {
+        let text = ModelFile::thesis_2006()
+            .to_toml()
+            .replace("z_per_s = 0.077", "z_per_s = 0.5");
+        let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
+        assert!(
+            err.starts_with("p.toml: relaxation needs its zero below its pole, z < p"),
+            "{err}"
+        );
+        let f = ModelFile::thesis_2006();
+        let thin = Geometry {
+            thickness_m: 3e-6,
+            ..Geometry::THESIS_2006
+        };
+        let err = f.params_for(&thin).unwrap_err().to_string();
+        assert!(err.contains("core_thickness_m must be positive"), "{err}");
+    }
+}

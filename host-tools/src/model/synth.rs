@@ -1,0 +1,218 @@
+//! Recordings made from a wave: the drive only, ready to simulate.
+//!
+//! The voltages are the firmware's: the wave's [`finrs_drive::Generator`]
+//! counts ticks of the sample rate from the first row of the wave, as the
+//! firmware's controller counts its sample ticks, and, if asked, they pass
+//! through the firmware's [`finrs_drive::Limiter`] on every row.
+
+use crate::recording::{Fixture, Geometry, Medium, Metadata, Recording};
+use crate::wave::{Wave, WaveError, WaveOptions};
+
+/// Why a drive was refused; each names the field of [`Drive`] or
+/// [`Shaping`] (or the limit) and the rule it breaks.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DriveError {
+    /// A time that must not be negative is.
+    #[error("{field} must be zero or positive, got {value}")]
+    Negative {
+        /// The field, e.g. `rest_s`.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A duration or rate that must be above 0 is not.
+    #[error("{field} must be positive, got {value}")]
+    NotPositive {
+        /// The field, e.g. `duration_s`.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The rate is not a whole number of Hz the generator can count.
+    #[error("rate_hz must be a whole number of Hz up to {max} (the generator counts ticks), got {0}", max = u32::MAX)]
+    RateNotWhole(f64),
+    /// The ramps do not fit in the wave's duration.
+    #[error("ramp_in_s + ramp_out_s must not exceed duration_s: {ramp_in_s} + {ramp_out_s} > {duration_s}")]
+    RampsTooLong {
+        /// Ramp in, s.
+        ramp_in_s: f64,
+        /// Ramp out, s.
+        ramp_out_s: f64,
+        /// The wave's duration, s.
+        duration_s: f64,
+    },
+    /// More rows than this tool writes.
+    #[error("{0} rows is more than this tool writes (50 million)")]
+    TooManyRows(usize),
+    /// The wave is refused for these segments and options.
+    #[error(transparent)]
+    Wave(#[from] WaveError),
+    /// The firmware refuses a limit.
+    #[error("{field} {value}: {rule}")]
+    Limits {
+        /// `limit_v` or `slew_v_per_s`.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The firmware's rule.
+        rule: finrs_drive::LimitError,
+    },
+}
+
+/// When and how a wave is applied.
+#[derive(Clone, Copy, Debug)]
+pub struct Drive {
+    /// Segments driven.
+    pub segments: usize,
+    /// How the tip is held.
+    pub fixture: Fixture,
+    /// Rest at 0 V before the wave, s.
+    pub rest_s: f64,
+    /// Duration of the wave, s (ramps included).
+    pub duration_s: f64,
+    /// Rest at 0 V after the wave, s.
+    pub off_s: f64,
+    /// Sample rate, Hz: a whole number, the generator's tick rate.
+    pub rate_hz: f64,
+}
+
+/// How the wave is shaped and limited beyond its text.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shaping {
+    /// Constant added to a `sine:` or `standing:` wave, V.
+    pub offset_v: f64,
+    /// Ramp in at the start of the wave, s (within its duration).
+    pub ramp_in_s: f64,
+    /// Ramp out at the end of the wave, s (within its duration).
+    pub ramp_out_s: f64,
+    /// Length of one `chirp:` sweep, s; `None`: the wave's duration.
+    pub sweep_s: Option<f64>,
+    /// The firmware's limiter (voltage and slew limits) on every row;
+    /// `None`: the generator's voltages as they are (within the hard limit).
+    pub limits: Option<finrs_drive::Limits>,
+}
+
+/// The firmware's limits, checked by [`finrs_drive::Limits::new`]; the
+/// error names the value (`limit_v` or `slew_v_per_s`) and its rule.
+pub fn limits(limit_v: f64, slew_v_per_s: f64) -> Result<finrs_drive::Limits, DriveError> {
+    use finrs_drive::LimitError as E;
+    finrs_drive::Limits::new(limit_v as f32, slew_v_per_s as f32).map_err(|rule| match rule {
+        E::SlewNotFinite | E::SlewNotPositive => DriveError::Limits {
+            field: "slew_v_per_s",
+            value: slew_v_per_s,
+            rule,
+        },
+        _ => DriveError::Limits {
+            field: "limit_v",
+            value: limit_v,
+            rule,
+        },
+    })
+}
+
+/// A voltage-only recording of the seed's strip driven by `wave`, with no
+/// ramps, offset nor limiter, and chirps sweeping over the whole duration.
+pub fn drive_recording(wave: &Wave, d: &Drive) -> Result<Recording, DriveError> {
+    drive_recording_shaped(wave, d, &Shaping::default())
+}
+
+/// A voltage-only recording of the seed's strip driven by `wave`, shaped by
+/// `shaping`. The wave starts on the first row at or after `rest_s` and
+/// its envelope (ramp in, hold, ramp out) lasts `duration_s`; every row's
+/// voltages are the firmware generator's at that row's tick.
+pub fn drive_recording_shaped(
+    wave: &Wave,
+    d: &Drive,
+    shaping: &Shaping,
+) -> Result<Recording, DriveError> {
+    for (field, value) in [
+        ("rest_s", d.rest_s),
+        ("off_s", d.off_s),
+        ("ramp_in_s", shaping.ramp_in_s),
+        ("ramp_out_s", shaping.ramp_out_s),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(DriveError::Negative { field, value });
+        }
+    }
+    for (field, value) in [("duration_s", d.duration_s), ("rate_hz", d.rate_hz)] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(DriveError::NotPositive { field, value });
+        }
+    }
+    // The firmware's generator counts whole ticks of a whole-hertz clock.
+    if d.rate_hz.fract() != 0.0 || d.rate_hz > f64::from(u32::MAX) {
+        return Err(DriveError::RateNotWhole(d.rate_hz));
+    }
+    let tick_hz = d.rate_hz as u32;
+    let hold_s = d.duration_s - shaping.ramp_in_s - shaping.ramp_out_s;
+    if hold_s < 0.0 {
+        return Err(DriveError::RampsTooLong {
+            ramp_in_s: shaping.ramp_in_s,
+            ramp_out_s: shaping.ramp_out_s,
+            duration_s: d.duration_s,
+        });
+    }
+    let options = WaveOptions {
+        offset_v: shaping.offset_v,
+        ramp_in_s: shaping.ramp_in_s,
+        hold_s,
+        ramp_out_s: shaping.ramp_out_s,
+        sweep_s: shaping.sweep_s.unwrap_or(d.duration_s),
+    };
+    let generator = wave.generator(d.segments, &options)?;
+    let total_s = d.rest_s + d.duration_s + d.off_s;
+    let rows = (total_s * d.rate_hz).round() as usize + 1;
+    if rows > 50_000_000 {
+        return Err(DriveError::TooManyRows(rows));
+    }
+    // First row at or after rest_s (the 1e-9 forgives rounding in the
+    // product, e.g. 0.1 s × 1000 Hz).
+    let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
+    let mut v_v = vec![vec![0.0; d.segments]; start_row];
+    let wave_rows = (rows - start_row) as u64;
+    // A limiter through the rest would hold its outputs at 0 V: starting
+    // it with the wave gives the same rows.
+    v_v.extend(generator.run(wave_rows, tick_hz, shaping.limits));
+    let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
+    let g = Geometry::THESIS_2006;
+    Ok(Recording {
+        meta: Metadata {
+            segments: d.segments,
+            length_m: g.length_m,
+            width_m: g.width_m,
+            thickness_m: g.thickness_m,
+            fixture: d.fixture,
+            medium: Medium::Air,
+            sample: Some("thesis_2006".to_string()),
+            cation: None,
+            dots_s_m: None,
+            notes: None,
+        },
+        t_s,
+        v_v,
+        channels: Vec::new(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limits_name_the_value_and_rule() {
+        assert_eq!(limits(1.5, 20.0).unwrap().max_abs_v(), 1.5);
+        assert_eq!(
+            limits(5.0, 20.0).unwrap_err().to_string(),
+            "limit_v 5: max_abs_v must not exceed HARD_LIMIT_V (4 V)"
+        );
+        assert_eq!(
+            limits(1.0, 0.0).unwrap_err().to_string(),
+            "slew_v_per_s 0: slew_v_per_s must be above 0"
+        );
+        assert_eq!(
+            limits(f64::NAN, 1.0).unwrap_err().to_string(),
+            "limit_v NaN: max_abs_v must be finite"
+        );
+    }
+}
