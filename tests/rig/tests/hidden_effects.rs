@@ -9,7 +9,9 @@
 use finrs::diagnose::{diagnose, Verdict};
 use finrs::params::ModelFile;
 use finrs::session::Session;
-use finrs_rig::{short_protocol, write_session, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE};
+use finrs_rig::{
+    short_protocol, write_session, Bench, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE,
+};
 use rand::{Rng, SeedableRng};
 
 fn seed(default: u64) -> u64 {
@@ -33,6 +35,7 @@ fn hide(names: &[&str], default_seed: u64) -> Verdict {
         &sample,
         &hidden,
         &sensors,
+        &Bench::default(),
         &short_protocol(0.6),
         &label,
         &mut rng,
