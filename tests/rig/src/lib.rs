@@ -36,9 +36,11 @@
 pub mod beam;
 pub mod bench;
 pub mod expect;
+pub mod heatmap;
 pub mod sample;
 pub mod session;
 pub mod strip;
+pub mod sweep;
 
 pub use beam::Tip;
 pub use bench::{Bench, IMPERFECTIONS};

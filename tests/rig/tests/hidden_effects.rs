@@ -4,7 +4,7 @@
 //! outside it, which must come out `unexplained` and not as a wrong cause.
 //!
 //! Seeds are fixed so that CI is repeatable; `FINRS_RIG_SEED=n` draws
-//! other strips and strengths (`scripts/rig-sweep` runs many).
+//! other strips and strengths (`scripts/rig-sweep-ideal` runs many).
 
 use finrs::diagnose::{diagnose, Verdict};
 use finrs::params::ModelFile;
