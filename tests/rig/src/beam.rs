@@ -1,11 +1,31 @@
 //! The rig's cantilever: a finer Hermite-cubic mesh than any fitted model,
 //! its modes, and the shape it takes.
 //!
-//! Freedoms are `(w, θ)` of nodes 1..=n (node 0 is clamped). The blocked
-//! fixture pins the tip's deflection; the load cell reads the support's
-//! reaction, from the pinned freedom's row of the full matrices.
+//! Freedoms are `(w, θ)` of nodes 1..=n (node 0 is clamped). A rigid load
+//! cell ([`Tip::Pinned`]) pins the tip's deflection and reads the support's
+//! reaction, from the pinned freedom's row of the full matrices; a load
+//! cell that gives ([`Tip::Spring`]) is a spring on the tip's deflection
+//! and reads its own extension.
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
+
+/// How the tip is held.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tip {
+    /// Free: the camera watches the strip.
+    Free,
+    /// Held at rest by a rigid load cell.
+    Pinned,
+    /// Held by a load cell that gives: a spring of this stiffness, N/m.
+    Spring(f64),
+}
+
+impl Tip {
+    /// Whether a load cell holds the tip (and the camera sees nothing).
+    pub fn is_held(self) -> bool {
+        self != Tip::Free
+    }
+}
 
 /// Mesh, matrices and modes.
 pub struct Beam {
@@ -21,8 +41,10 @@ pub struct Beam {
     pub forcing: DMatrix<f64>,
     /// Pinned tip: the full stiffness and mass rows of the tip's deflection
     /// over the remaining freedoms, and its load per unit moment of each
-    /// segment (`None` for a free tip).
+    /// segment (`None` unless pinned).
     pub reaction: Option<Reaction>,
+    /// The load cell's spring at the tip, N/m ([`Tip::Spring`]).
+    pub spring_n_per_m: Option<f64>,
 }
 
 /// What the pinned tip's support carries.
@@ -38,15 +60,16 @@ pub struct Reaction {
 impl Beam {
     /// Builds the beam of `segments` segments, `per_segment` elements each,
     /// bending stiffness `ei`, mass per length `mass` (the fluid's added mass
-    /// included), and the load cell at the tip when `blocked`.
+    /// included), its tip held as `tip` says.
     pub fn new(
         length_m: f64,
         segments: usize,
         per_segment: usize,
         ei_nm2: f64,
         mass_kg_per_m: f64,
-        blocked: bool,
+        tip: Tip,
     ) -> Beam {
+        let blocked = tip == Tip::Pinned;
         let elements = segments * per_segment;
         let le = length_m / elements as f64;
         let n = 2 * elements;
@@ -87,6 +110,13 @@ impl Beam {
             }
             forcing_dof[(dof(3).expect("end node is free"), seg)] += 1.0;
         }
+        let spring_n_per_m = match tip {
+            Tip::Spring(k_s) => {
+                k[(n - 2, n - 2)] += k_s;
+                Some(k_s)
+            }
+            _ => None,
+        };
         // Pinned: the tip's deflection (freedom n − 2) leaves the system;
         // its rows stay to give the reaction.
         let keep: Vec<usize> = (0..n).filter(|&d| !(blocked && d == n - 2)).collect();
@@ -126,7 +156,42 @@ impl Beam {
             omega,
             forcing,
             reaction,
+            spring_n_per_m,
         }
+    }
+
+    /// The spring that puts the first mode of this beam, its tip on a
+    /// spring, at `f_hz`, N/m, by bisection on the logarithm of the
+    /// stiffness: the first mode rises from the free cantilever's towards
+    /// the pinned beam's as the spring stiffens. `None` unless `f_hz` lies
+    /// strictly between those two.
+    pub fn spring_for_first_mode(
+        length_m: f64,
+        segments: usize,
+        per_segment: usize,
+        ei_nm2: f64,
+        mass_kg_per_m: f64,
+        f_hz: f64,
+    ) -> Option<f64> {
+        let first = |tip: Tip| {
+            Beam::new(length_m, segments, per_segment, ei_nm2, mass_kg_per_m, tip).omega[0]
+                / (2.0 * std::f64::consts::PI)
+        };
+        if !(first(Tip::Free) < f_hz && f_hz < first(Tip::Pinned)) {
+            return None;
+        }
+        // Bracket: the tip's own bending stiffness 3EI/L³ is the scale.
+        let scale = 3.0 * ei_nm2 / length_m.powi(3);
+        let (mut lo, mut hi) = ((scale * 1e-6).ln(), (scale * 1e6).ln());
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if first(Tip::Spring(mid.exp())) < f_hz {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some((0.5 * (lo + hi)).exp())
     }
 
     /// Nodal freedoms `q` from modal coordinates `η`, the pinned tip's

@@ -12,6 +12,14 @@
 //! sensors are the example session's: noise, 30 frames/s in whole pixels of
 //! 0.109 mm against a 1 kHz DAQ, rest offsets.
 //!
+//! That is the *ideal* rig, the baseline's own class. The *off-class* rig
+//! ([`Sample::draw_off_class`], [`Hidden::draw_off_class`]) is what real
+//! strips are: always damped, softer than the laminate, relaxing or
+//! creeping, with segments that may differ and crosstalk through a lag; and
+//! a [`Bench`] adds what real benches have: hum, 1/f noise, a load cell
+//! that gives, camera exposure. [`expect`] says, for each, what a right
+//! diagnosis names, written from the contract before any tuning.
+//!
 //! ```no_run
 //! use rand::SeedableRng;
 //! let mut rng = rand::rngs::StdRng::seed_from_u64(7);
@@ -20,15 +28,25 @@
 //! let sensors = finrs_rig::Sensors::draw(&mut rng);
 //! finrs_rig::write_session(
 //!     std::path::Path::new("out/rig"), &sample, &hidden, &sensors,
-//!     &finrs_rig::protocol(), "RIG-7", &mut rng,
+//!     &finrs_rig::Bench::default(), &finrs_rig::protocol(), "RIG-7", &mut rng,
 //! ).unwrap();
 //! ```
 #![deny(missing_docs)]
 
 pub mod beam;
+pub mod bench;
+pub mod expect;
+pub mod heatmap;
 pub mod sample;
 pub mod session;
 pub mod strip;
+pub mod sweep;
 
-pub use sample::{Hidden, Sample, Water, CATALOGUE, OUTSIDE};
-pub use session::{protocol, short_protocol, write as write_session, Run, Sensors};
+pub use beam::Tip;
+pub use bench::{Bench, IMPERFECTIONS};
+pub use expect::{expected, score, Expected, Protocol, Score};
+pub use sample::{
+    Hidden, Sample, SegmentFactors, Water, CATALOGUE, OFF_CLASS_DEPARTURES, OUTSIDE,
+    SEGMENT_VARIATION,
+};
+pub use session::{board_protocol, protocol, short_protocol, write as write_session, Run, Sensors};

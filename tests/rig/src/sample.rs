@@ -1,6 +1,13 @@
 //! What the rig's strip is: its true parameters, drawn at random around the
 //! seed's, and the effects hidden in it, each in a form the fitted models
 //! do not have.
+//!
+//! Two base strips. The *ideal* one ([`Sample::draw`], [`Hidden::draw`]) is
+//! the baseline's own class: undamped, the laminate's `EI`, `0 < z < p`,
+//! identical segments. The *off-class* one ([`Sample::draw_off_class`],
+//! [`Hidden::draw_off_class`]) is what real strips are: always damped
+//! (a ratio per mode), 0.15 to 1.0 of the laminate's `EI`, `z/p` from 0.5
+//! to 2.5 (relaxing or creeping), and its crosstalk arrives through a lag.
 
 use rand::Rng;
 
@@ -55,6 +62,16 @@ impl Sample {
         }
     }
 
+    /// An off-class strip's parameters: as [`Sample::draw`], but the lead
+    /// network's zero anywhere from half to two and a half times its pole,
+    /// so that about two strips in three creep (`z > p`, the seed's own
+    /// Table 4-2) instead of relaxing.
+    pub fn draw_off_class(rng: &mut impl Rng) -> Sample {
+        let mut s = Sample::draw(rng);
+        s.z_per_s = s.p_per_s * rng.gen_range(0.5..2.5);
+        s
+    }
+
     /// Thickness as the metadata gives it (core and both films), m.
     pub fn thickness_m(&self) -> f64 {
         self.core_m + 2.0 * self.film_m
@@ -95,6 +112,9 @@ pub struct Hidden {
     pub ei_factor: Option<f64>,
     /// `damping`: one modal damping ratio for every mode (not Rayleigh).
     pub damping_ratio: Option<f64>,
+    /// `damping`, off-class: a ratio of its own for each mode, the last
+    /// one for every higher mode (overrides [`Hidden::damping_ratio`]).
+    pub modal_damping: Option<Vec<f64>>,
     /// `hydrodynamic-loading`: added mass and quadratic drag.
     pub water: Option<Water>,
     /// `electrochemical-nonlinearity`: the leak is `(V₀/R2) sinh(V/V₀)`
@@ -111,13 +131,48 @@ pub struct Hidden {
     /// `κ K q`, without the relaxation its own moment has (the fitted term
     /// passes on a fraction of the whole relaxing moment).
     pub crosstalk: Option<f64>,
+    /// `segment-crosstalk`, off-class: the neighbours' charge reaches a
+    /// segment through a first-order lag of this time constant, s.
+    pub crosstalk_lag_s: Option<f64>,
+    /// `segment-variation`: each segment's `R1`, `C` and `K` times its own
+    /// factor (the first segment is the reference, all ones).
+    pub segment_factors: Option<Vec<SegmentFactors>>,
     /// Outside the catalogue: mains pickup at 50 Hz and its third harmonic
     /// on the DAQ's analogue channels (currents, load cell), with this
     /// amplitude in units of each channel's noise.
     pub mains_pickup: Option<f64>,
 }
 
-/// The names a rig can hide: FORMAT.md's catalogue and one outside it.
+/// One segment's departures from the strip's own `R1`, `C` and `K`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentFactors {
+    /// Factor on `R1`.
+    pub r1: f64,
+    /// Factor on `C`.
+    pub c: f64,
+    /// Factor on `K`.
+    pub k: f64,
+}
+
+impl SegmentFactors {
+    /// No departure.
+    pub const ONE: SegmentFactors = SegmentFactors {
+        r1: 1.0,
+        c: 1.0,
+        k: 1.0,
+    };
+}
+
+/// Segments of every rig session.
+pub const SEGMENTS: usize = 3;
+
+/// Modes that get a damping ratio of their own on the off-class strip;
+/// higher ones share the last (they barely move).
+pub const DAMPED_MODES: usize = 8;
+
+/// The names the ideal rig hides: FORMAT.md's catalogue as it stood
+/// before `segment-variation` joined it, and the tests' random draw picks
+/// from these.
 pub const CATALOGUE: [&str; 8] = [
     "large-deflection",
     "beam-stiffness",
@@ -127,6 +182,21 @@ pub const CATALOGUE: [&str; 8] = [
     "back-relaxation",
     "dehydration",
     "segment-crosstalk",
+];
+
+/// The catalogue's newest name, hidden by both rigs.
+pub const SEGMENT_VARIATION: &str = "segment-variation";
+
+/// What the off-class rig can hide on top of its base strip (whose
+/// `damping` and `beam-stiffness` are always there).
+pub const OFF_CLASS_DEPARTURES: [&str; 7] = [
+    "large-deflection",
+    "hydrodynamic-loading",
+    "electrochemical-nonlinearity",
+    "back-relaxation",
+    "dehydration",
+    "segment-crosstalk",
+    SEGMENT_VARIATION,
 ];
 
 /// The effect outside the catalogue.
@@ -162,19 +232,98 @@ impl Hidden {
                     h.back_branch = Some((rng.gen_range(1.3..2.0), rng.gen_range(2.0..5.0)))
                 }
                 "dehydration" => h.drying_s = Some(rng.gen_range(150.0..500.0)),
-                // Not lagged: the beam is undamped, so a neighbour's moment
-                // arriving even 20 ms late rings differently for ever, and
-                // the instantaneous fitted term cannot follow it (measured:
-                // κ fitted 0.01 for 0.16, RSS/m 6.4, at a 23 ms lag).
+                // Instantaneous on the ideal rig, lagged on the off-class
+                // one (`draw_off_class`): the real strip's form, which the
+                // fitted instantaneous term only approximates (measured on
+                // the undamped ideal beam: κ fitted 0.01 for 0.16, RSS/m
+                // 6.4, at a 23 ms lag).
                 "segment-crosstalk" => h.crosstalk = Some(rng.gen_range(0.15..0.35)),
+                SEGMENT_VARIATION => h.segment_factors = Some(segment_factors(rng)),
                 OUTSIDE => h.mains_pickup = Some(rng.gen_range(1.5..3.0)),
                 other => {
                     return Err(format!(
-                        "unknown effect `{other}`: the rig hides {CATALOGUE:?} and `{OUTSIDE}`"
+                        "unknown effect `{other}`: the rig hides {CATALOGUE:?}, `{SEGMENT_VARIATION}` and `{OUTSIDE}`"
                     ))
                 }
             }
         }
         Ok(h)
     }
+
+    /// The off-class base strip's departures, always present: a damping
+    /// ratio per mode in 0.02..0.1 and `EI` at 0.15..1.0 of the laminate's
+    /// (chapter 1's 0.1 to 0.8 GPa against the formula's ~6 GPa effective).
+    /// Then `names` from [`OFF_CLASS_DEPARTURES`] (or [`OUTSIDE`]), in their
+    /// off-class forms: crosstalk through a 10 to 30 ms lag. `damping` and
+    /// `beam-stiffness` are refused: the base has them already.
+    pub fn draw_off_class(names: &[&str], rng: &mut impl Rng) -> Result<Hidden, String> {
+        let mut h = Hidden {
+            modal_damping: Some(
+                (0..DAMPED_MODES)
+                    .map(|_| rng.gen_range(0.02..0.1))
+                    .collect(),
+            ),
+            ei_factor: Some(rng.gen_range(0.15..1.0)),
+            ..Hidden::default()
+        };
+        for &name in names {
+            if !OFF_CLASS_DEPARTURES.contains(&name) && name != OUTSIDE {
+                return Err(format!(
+                    "the off-class rig hides {OFF_CLASS_DEPARTURES:?} and `{OUTSIDE}` on its base strip, which is always damped and soft; `{name}` is not one of them"
+                ));
+            }
+            let one = Hidden::draw(&[name], rng)?;
+            h.arcs |= one.arcs;
+            h.water = h.water.or(one.water);
+            h.electrochemistry = h.electrochemistry.or(one.electrochemistry);
+            h.back_branch = h.back_branch.or(one.back_branch);
+            h.drying_s = h.drying_s.or(one.drying_s);
+            h.segment_factors = h.segment_factors.clone().or(one.segment_factors);
+            h.mains_pickup = h.mains_pickup.or(one.mains_pickup);
+            if one.crosstalk.is_some() {
+                h.crosstalk = one.crosstalk;
+                h.crosstalk_lag_s = Some(rng.gen_range(0.01..0.03));
+            }
+        }
+        Ok(h)
+    }
+
+    /// Damping ratio of mode `k` (0: undamped).
+    pub fn damping_of_mode(&self, k: usize) -> f64 {
+        match &self.modal_damping {
+            Some(z) if !z.is_empty() => z[k.min(z.len() - 1)],
+            _ => self.damping_ratio.unwrap_or(0.0),
+        }
+    }
+
+    /// Segment `i`'s factors (all ones without `segment-variation`).
+    pub fn segment(&self, i: usize) -> SegmentFactors {
+        self.segment_factors
+            .as_ref()
+            .and_then(|f| f.get(i).copied())
+            .unwrap_or(SegmentFactors::ONE)
+    }
+}
+
+/// Per-segment factors for `segment-variation`: the first segment is the
+/// reference; each other one departs by 5 to 15 % in each of `R1`, `C`
+/// and `K`, up or down.
+fn segment_factors(rng: &mut impl Rng) -> Vec<SegmentFactors> {
+    let mut f = || {
+        let d = rng.gen_range(0.05..0.15);
+        if rng.gen_bool(0.5) {
+            1.0 + d
+        } else {
+            1.0 - d
+        }
+    };
+    let mut out = vec![SegmentFactors::ONE];
+    for _ in 1..SEGMENTS {
+        out.push(SegmentFactors {
+            r1: f(),
+            c: f(),
+            k: f(),
+        });
+    }
+    out
 }

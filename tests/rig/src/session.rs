@@ -10,14 +10,16 @@ use finrs::wave::Wave;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::sample::{Hidden, Sample};
-use crate::strip::{run, Truth, BLOCKED_MESH, MESH};
+use crate::beam::{Beam, Tip};
+use crate::bench::{self, Bench};
+use crate::sample::{Hidden, Sample, WATER_KG_M3};
+use crate::strip::{run, Mesh, Truth, BLOCKED_MESH, MESH};
 
 /// One recording of a protocol.
 #[derive(Clone, Debug)]
 pub struct Run {
     /// File name without `.csv`.
-    pub name: &'static str,
+    pub name: String,
     /// Wave as `finrs simulate --wave` takes it.
     pub wave: &'static str,
     /// How the tip is held.
@@ -29,7 +31,7 @@ pub struct Run {
     /// Rest after, s.
     pub off_s: f64,
     /// What the notes say.
-    pub description: &'static str,
+    pub description: String,
 }
 
 /// The example session's ten kinds (`shared/bench/examples`), with holds
@@ -51,15 +53,31 @@ pub fn short_protocol(hold_scale: f64) -> Vec<Run> {
         .collect()
 }
 
+/// A session the board records alone: the same kinds, every one with the
+/// tip on the load cell and no camera (no positions, so neither
+/// `large-deflection` nor the free strip's ringing can be seen), holds
+/// scaled by `hold_scale` as in [`short_protocol`].
+pub fn board_protocol(hold_scale: f64) -> Vec<Run> {
+    short_protocol(hold_scale)
+        .into_iter()
+        .map(|r| Run {
+            name: r.name.replace("free", "blocked"),
+            description: r.description.replace("free", "blocked"),
+            fixture: Fixture::Blocked,
+            ..r
+        })
+        .collect()
+}
+
 fn protocol_scaled(scale: f64) -> Vec<Run> {
-    let run = |name, wave, fixture, hold_s: f64, description| Run {
-        name,
+    let run = |name: &str, wave, fixture, hold_s: f64, description: &str| Run {
+        name: name.to_string(),
         wave,
         fixture,
         rest_s: 1.5,
         hold_s: hold_s * scale,
         off_s: 2.5,
-        description,
+        description: description.to_string(),
     };
     use Fixture::{Blocked, Free};
     vec![
@@ -172,13 +190,15 @@ pub const CAMERA_HZ: f64 = 30.0;
 /// Pause between recordings, s.
 pub const PAUSE_S: f64 = 10.0;
 
-/// Writes the session of `runs` from `sample` with `hidden` into `dir`;
-/// `label` goes into each file's notes.
+/// Writes the session of `runs` from `sample` with `hidden`, measured on
+/// `bench`, into `dir`; `label` goes into each file's notes.
+#[allow(clippy::too_many_arguments)]
 pub fn write(
     dir: &Path,
     sample: &Sample,
     hidden: &Hidden,
     sensors: &Sensors,
+    bench: &Bench,
     runs: &[Run],
     label: &str,
     rng: &mut impl Rng,
@@ -217,26 +237,86 @@ pub fn write(
         ));
         let rows = rec.t_s.len();
         let camera: Vec<bool> = camera_rows(rows);
-        let truth = run(
+        let exposure_rows = bench
+            .exposure_s
+            .map_or(1, |e| ((e * DAQ_HZ).round() as usize).max(1));
+        let (mesh, tip) = if r.fixture == Fixture::Blocked {
+            (BLOCKED_MESH, load_cell(sample, hidden, bench))
+        } else {
+            (MESH, Tip::Free)
+        };
+        let mut truth = run(
             sample,
             hidden,
-            if r.fixture == Fixture::Blocked {
-                BLOCKED_MESH
-            } else {
-                MESH
-            },
-            r.fixture == Fixture::Blocked,
+            mesh,
+            tip,
             &rec.v_v,
             1.0 / DAQ_HZ,
             t_session,
-            &camera,
+            &exposed_rows(&camera, exposure_rows),
             &DOTS_S_M,
         );
-        measure(&mut rec, &truth, &camera, hidden, sensors, rng);
+        if exposure_rows > 1 {
+            expose(&mut truth, &camera, exposure_rows);
+        }
+        measure(&mut rec, &truth, &camera, hidden, sensors, bench, rng);
         rec.write(&dir.join(format!("{}.csv", r.name)))?;
         t_session += rec.t_s.last().copied().unwrap_or(0.0) + PAUSE_S;
     }
     Ok(())
+}
+
+/// The load cell for a blocked run: rigid, or on a compliant bench a
+/// spring that puts the held strip's first mode at the bench's fraction
+/// of the rigid one's.
+fn load_cell(sample: &Sample, hidden: &Hidden, bench: &Bench) -> Tip {
+    let Some(ratio) = bench.load_cell_mode_ratio else {
+        return Tip::Pinned;
+    };
+    let width = sample.width_m;
+    let added = hidden.water.map_or(0.0, |w| {
+        w.added_mass_factor * WATER_KG_M3 * PI * width * width / 4.0
+    });
+    let ei = sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0);
+    let mass = sample.mass_kg_per_m() + added;
+    let Mesh { per_segment, .. } = BLOCKED_MESH;
+    let beam = |tip| Beam::new(sample.length_m, 3, per_segment, ei, mass, tip);
+    let pinned_hz = beam(Tip::Pinned).omega[0] / (2.0 * PI);
+    Beam::spring_for_first_mode(sample.length_m, 3, per_segment, ei, mass, ratio * pinned_hz)
+        .map_or(Tip::Pinned, Tip::Spring)
+}
+
+/// Rows whose positions a camera exposing for `window` rows up to each
+/// frame needs.
+fn exposed_rows(camera: &[bool], window: usize) -> Vec<bool> {
+    let mut need = vec![false; camera.len()];
+    for (r, _) in camera.iter().enumerate().filter(|(_, &f)| f) {
+        for n in &mut need[r + 1 - window.min(r + 1)..=r] {
+            *n = true;
+        }
+    }
+    need
+}
+
+/// Each frame's positions become the mean over its exposure window; the
+/// other rows go back to "not sampled".
+fn expose(truth: &mut Truth, camera: &[bool], window: usize) {
+    for series in &mut truth.points_m {
+        let exposed: Vec<(f64, f64)> = (0..series.len())
+            .map(|r| {
+                if !camera[r] {
+                    return (f64::NAN, f64::NAN);
+                }
+                let w = &series[r + 1 - window.min(r + 1)..=r];
+                let n = w.len() as f64;
+                (
+                    w.iter().map(|p| p.0).sum::<f64>() / n,
+                    w.iter().map(|p| p.1).sum::<f64>() / n,
+                )
+            })
+            .collect();
+        *series = exposed;
+    }
 }
 
 /// Camera frames at 30/s, each on the nearest DAQ row.
@@ -258,6 +338,7 @@ fn measure(
     camera: &[bool],
     hidden: &Hidden,
     sensors: &Sensors,
+    bench: &Bench,
     rng: &mut impl Rng,
 ) {
     let rows = rec.t_s.len();
@@ -275,32 +356,65 @@ fn measure(
             })
             .collect()
     };
+    // White noise keeps what the bench's 1/f noise leaves of the power.
+    let white = |sigma: f64| {
+        let f = bench.pink_fraction.unwrap_or(0.0);
+        Normal::new(0.0, sigma * (1.0 - f).sqrt()).expect("positive noise")
+    };
+    // The bench's own additions to a DAQ channel: hum and 1/f noise.
+    let daq_extra = |sigma: f64, rng: &mut dyn rand::RngCore| -> Option<Vec<f64>> {
+        if bench.hum.is_none() && bench.pink_fraction.is_none() {
+            return None;
+        }
+        let mut extra = vec![0.0; rows];
+        if let Some(a) = bench.hum {
+            for (e, h) in extra.iter_mut().zip(bench::hum(&rec.t_s, a * sigma, rng)) {
+                *e += h;
+            }
+        }
+        if let Some(f) = bench.pink_fraction {
+            let pink = bench::pink(rows, sigma * f.sqrt(), DAQ_HZ, rng);
+            for (e, p) in extra.iter_mut().zip(pink) {
+                *e += p;
+            }
+        }
+        Some(extra)
+    };
     let mut channels = Vec::new();
     for (k, c) in truth.currents_a.iter().enumerate() {
-        let n = Normal::new(0.0, sensors.current_a).expect("positive noise");
+        let n = white(sensors.current_a);
         let pickup = hum(sensors.current_a, rng);
-        let v = c
+        let raw: Vec<f64> = c
             .iter()
             .zip(&pickup)
-            .map(|(x, p)| Some(round(x + p + n.sample(rng), 1e-6)))
+            .map(|(x, p)| x + p + n.sample(rng))
             .collect();
-        channels.push((Channel::Current(k), v));
+        channels.push((
+            Channel::Current(k),
+            daq_channel(raw, daq_extra(sensors.current_a, rng)),
+        ));
     }
     if truth.force_n.is_empty() {
-        let n = Normal::new(0.0, sensors.camera_m).expect("positive noise");
+        let n = white(sensors.camera_m);
+        let frames = camera.iter().filter(|&&f| f).count();
         let camera_channel = |series: &[(f64, f64)], along: bool, rng: &mut dyn rand::RngCore| {
             // The rest shape is found to a fraction of a millimetre.
             let offset = rng.gen_range(-2e-4..2e-4);
-            (0..rows)
+            let raw: Vec<Option<f64>> = (0..rows)
                 .map(|r| {
                     camera[r].then(|| {
                         let (x, y) = series[r];
-                        round(
-                            if along { x } else { y } + offset + n.sample(rng),
-                            sensors.pixel_m,
-                        )
+                        (if along { x } else { y }) + offset + n.sample(rng)
                     })
                 })
+                .collect();
+            let mut pink = bench
+                .pink_fraction
+                .map(|f| bench::pink(frames, sensors.camera_m * f.sqrt(), CAMERA_HZ, rng))
+                .unwrap_or_default()
+                .into_iter();
+            raw.into_iter()
+                .map(|v| v.map(|v| round(pink.next().map_or(v, |p| v + p), sensors.pixel_m)))
                 .collect::<Vec<_>>()
         };
         let tip = truth.points_m.last().expect("the tip is tracked");
@@ -311,19 +425,61 @@ fn measure(
             channels.push((Channel::DotX(j), camera_channel(p, true, rng)));
         }
     } else {
-        let n = Normal::new(0.0, sensors.force_n).expect("positive noise");
+        let n = white(sensors.force_n);
         let pickup = hum(sensors.force_n, rng);
-        let v = truth
+        let raw: Vec<f64> = truth
             .force_n
             .iter()
             .zip(&pickup)
-            .map(|(x, p)| Some(round(x + p + n.sample(rng), 1e-6)))
+            .map(|(x, p)| x + p + n.sample(rng))
             .collect();
-        channels.push((Channel::Force, v));
+        channels.push((
+            Channel::Force,
+            daq_channel(raw, daq_extra(sensors.force_n, rng)),
+        ));
     }
     rec.channels = channels;
 }
 
+/// A DAQ channel's samples: the value with its noise and the bench's
+/// additions, in the DAQ's microunit steps.
+fn daq_channel(raw: Vec<f64>, extra: Option<Vec<f64>>) -> Vec<Option<f64>> {
+    match extra {
+        None => raw.into_iter().map(|v| Some(round(v, 1e-6))).collect(),
+        Some(extra) => raw
+            .into_iter()
+            .zip(extra)
+            .map(|(v, e)| Some(round(v + e, 1e-6)))
+            .collect(),
+    }
+}
+
 fn round(x: f64, q: f64) -> f64 {
     (x / q).round() * q
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_exposed_frame_is_the_mean_over_its_window() {
+        let rows = 100;
+        let camera = camera_rows(rows);
+        let need = exposed_rows(&camera, 10);
+        // Frame 0 at row 0 needs only itself; frame 1 (row 33) rows 24..=33.
+        assert!(need[0] && !need[1] && !need[23] && need[24] && need[33] && !need[34]);
+        // A point moving linearly: the mean over rows 24..=33 is row 28.5's.
+        let ramp: Vec<(f64, f64)> = (0..rows).map(|r| (0.0, r as f64)).collect();
+        let mut truth = Truth {
+            currents_a: Vec::new(),
+            points_m: vec![ramp],
+            force_n: Vec::new(),
+        };
+        expose(&mut truth, &camera, 10);
+        let p = &truth.points_m[0];
+        assert_eq!(p[0], (0.0, 0.0));
+        assert_eq!(p[33], (0.0, 28.5));
+        assert!(p[32].1.is_nan());
+    }
 }

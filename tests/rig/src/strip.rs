@@ -7,7 +7,7 @@
 
 use nalgebra::{DVector, Matrix4};
 
-use crate::beam::Beam;
+use crate::beam::{Beam, Tip};
 use crate::sample::{Hidden, Sample, WATER_KG_M3};
 
 /// Sub-steps per DAQ row.
@@ -58,12 +58,14 @@ pub struct Truth {
 }
 
 /// Per-segment electrical state: charge, the lead network's state, the
-/// back-relaxation branch.
+/// back-relaxation branch, the lagged charge its neighbours feel.
 #[derive(Clone, Copy, Default)]
 struct Elec {
     q: f64,
     r: f64,
     b: f64,
+    /// The charge as the neighbours see it through the crosstalk's lag.
+    l: f64,
     /// The double layer's voltage, kept as Newton's start.
     v: f64,
 }
@@ -74,9 +76,20 @@ struct Electrics<'a> {
 }
 
 impl Electrics<'_> {
-    /// Double-layer voltage from charge, `q = C (v + c₂ v³/3)`, by Newton.
-    fn voltage(&self, q: f64, guess: f64) -> f64 {
-        let c = self.s.c_f;
+    /// Segment `i`'s capacitance, F.
+    fn c_f(&self, i: usize) -> f64 {
+        self.s.c_f * self.h.segment(i).c
+    }
+
+    /// Segment `i`'s series resistance, Ω.
+    fn r1_ohm(&self, i: usize) -> f64 {
+        self.s.r1_ohm * self.h.segment(i).r1
+    }
+
+    /// Double-layer voltage of segment `i` from charge,
+    /// `q = C (v + c₂ v³/3)`, by Newton.
+    fn voltage(&self, i: usize, q: f64, guess: f64) -> f64 {
+        let c = self.c_f(i);
         let Some((_, c2)) = self.h.electrochemistry else {
             return q / c;
         };
@@ -95,12 +108,13 @@ impl Electrics<'_> {
         }
     }
 
-    /// A segment's own moment, N·m.
-    fn own_moment(&self, e: &Elec) -> f64 {
+    /// Segment `i`'s own moment, N·m.
+    fn own_moment(&self, i: usize, e: &Elec) -> f64 {
         let s = self.s;
-        let lead = s.k_nm_per_c * (e.q + (s.z_per_s - s.p_per_s) * e.r);
+        let k = s.k_nm_per_c * self.h.segment(i).k;
+        let lead = k * (e.q + (s.z_per_s - s.p_per_s) * e.r);
         match self.h.back_branch {
-            Some((beta, _)) => lead - beta * s.k_nm_per_c * s.z_per_s / s.p_per_s * e.b,
+            Some((beta, _)) => lead - beta * k * s.z_per_s / s.p_per_s * e.b,
             None => lead,
         }
     }
@@ -109,18 +123,26 @@ impl Electrics<'_> {
     fn moments(&self, x: &[Elec], out: &mut [f64]) {
         let kappa = self.h.crosstalk.unwrap_or(0.0);
         let k = self.s.k_nm_per_c;
+        // What a neighbour passes on: its charge now, or through the lag.
+        let felt = |e: &Elec| {
+            if self.h.crosstalk_lag_s.is_some() {
+                e.l
+            } else {
+                e.q
+            }
+        };
         for (i, o) in out.iter_mut().enumerate() {
-            let before = if i > 0 { x[i - 1].q } else { 0.0 };
-            let after = x.get(i + 1).map_or(0.0, |e| e.q);
-            *o = self.own_moment(&x[i]) + kappa * k * (before + after);
+            let before = if i > 0 { felt(&x[i - 1]) } else { 0.0 };
+            let after = x.get(i + 1).map_or(0.0, felt);
+            *o = self.own_moment(i, &x[i]) + kappa * k * (before + after);
         }
     }
 
     fn derivative(&self, x: &[Elec], volts: &[f64], dx: &mut [Elec]) {
         let s = self.s;
         for i in 0..x.len() {
-            let v = self.voltage(x[i].q, x[i].v);
-            let dq = (volts[i] - v) / s.r1_ohm;
+            let v = self.voltage(i, x[i].q, x[i].v);
+            let dq = (volts[i] - v) / self.r1_ohm(i);
             let tau_b = self.h.back_branch.map_or(1.0, |(_, t)| t);
             dx[i] = Elec {
                 q: dq,
@@ -130,6 +152,10 @@ impl Electrics<'_> {
                 } else {
                     0.0
                 },
+                l: self
+                    .h
+                    .crosstalk_lag_s
+                    .map_or(0.0, |tau| (x[i].q - x[i].l) / tau),
                 v: 0.0,
             };
         }
@@ -149,6 +175,7 @@ impl Electrics<'_> {
                 y.q = x.q + f * k.q;
                 y.r = x.r + f * k.r;
                 y.b = x.b + f * k.b;
+                y.l = x.l + f * k.l;
                 y.v = x.v;
             }
         };
@@ -163,7 +190,8 @@ impl Electrics<'_> {
             e.q += h / 6.0 * (k[0][i].q + 2.0 * k[1][i].q + 2.0 * k[2][i].q + k[3][i].q);
             e.r += h / 6.0 * (k[0][i].r + 2.0 * k[1][i].r + 2.0 * k[2][i].r + k[3][i].r);
             e.b += h / 6.0 * (k[0][i].b + 2.0 * k[1][i].b + 2.0 * k[2][i].b + k[3][i].b);
-            e.v = self.voltage(e.q, e.v);
+            e.l += h / 6.0 * (k[0][i].l + 2.0 * k[1][i].l + 2.0 * k[2][i].l + k[3][i].l);
+            e.v = self.voltage(i, e.q, e.v);
         }
     }
 }
@@ -204,14 +232,15 @@ impl ModeStep {
 }
 
 /// Runs the strip through the voltages `volts[row][segment]` held for
-/// `dt_s` each, starting `t_session_s` into the session. `camera[row]`
-/// says where positions are wanted, at arc lengths `points_s_m`.
+/// `dt_s` each, starting `t_session_s` into the session, its tip held as
+/// `tip` says. `camera[row]` says where positions are wanted, at arc
+/// lengths `points_s_m`.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     sample: &Sample,
     hidden: &Hidden,
     mesh: Mesh,
-    blocked: bool,
+    tip: Tip,
     volts: &[Vec<f64>],
     dt_s: f64,
     t_session_s: f64,
@@ -230,17 +259,18 @@ pub fn run(
         mesh.per_segment,
         ei,
         sample.mass_kg_per_m() + added,
-        blocked,
+        tip,
     );
+    let (blocked, held) = (tip == Tip::Pinned, tip.is_held());
     let h = dt_s / SUBSTEPS as f64;
-    let zeta = hidden.damping_ratio.unwrap_or(0.0);
+    let zeta = |k: usize| hidden.damping_of_mode(k);
     let modes = beam.omega.len();
     let dynamic: Vec<usize> = (0..modes)
         .filter(|&k| beam.omega[k] < 2.0 * std::f64::consts::PI * mesh.dynamic_limit_hz)
         .collect();
     let steps: Vec<ModeStep> = dynamic
         .iter()
-        .map(|&k| ModeStep::new(beam.omega[k], zeta, h))
+        .map(|&k| ModeStep::new(beam.omega[k], zeta(k), h))
         .collect();
     // Dynamic modes that feel the drag (a leading run: modes are sorted).
     let dragged = dynamic
@@ -267,12 +297,12 @@ pub fn run(
     let rows = volts.len();
     let mut truth = Truth {
         currents_a: vec![Vec::with_capacity(rows); n],
-        points_m: if blocked {
+        points_m: if held {
             Vec::new()
         } else {
             vec![vec![(f64::NAN, f64::NAN); rows]; points_s_m.len()]
         },
-        force_n: Vec::with_capacity(if blocked { rows } else { 0 }),
+        force_n: Vec::with_capacity(if held { rows } else { 0 }),
     };
     let modal_force =
         |u: &[f64], k: usize| -> f64 { (0..n).map(|i| beam.forcing[(k, i)] * u[i]).sum() };
@@ -282,9 +312,9 @@ pub fn run(
         let gain = hidden.drying_s.map_or(1.0, |tau| 1.0 / (1.0 + t_s / tau));
         // Outputs at the row's instant, with the row's voltage just applied.
         for (i, c) in truth.currents_a.iter_mut().enumerate() {
-            c.push(elec.leak_a(v_row[i]) + (v_row[i] - x[i].v) / sample.r1_ohm);
+            c.push(elec.leak_a(v_row[i]) + (v_row[i] - x[i].v) / elec.r1_ohm(i));
         }
-        let want_shape = blocked || camera.get(row).copied().unwrap_or(false);
+        let want_shape = held || camera.get(row).copied().unwrap_or(false);
         if want_shape {
             elec.moments(&x, &mut u0);
             u0.iter_mut().for_each(|u| *u *= gain);
@@ -302,9 +332,12 @@ pub fn run(
                     let w = beam.omega[k];
                     acc[k] = modal_force(&u0, k) + drag_modal[j]
                         - w * w * eta[j]
-                        - 2.0 * zeta * w * w * y2[j];
+                        - 2.0 * zeta(k) * w * w * y2[j];
                 }
                 truth.force_n.push(beam.reaction_n(&full, &acc, &u0));
+            } else if let Some(k_s) = beam.spring_n_per_m {
+                // The load cell that gives reads its own extension.
+                truth.force_n.push(k_s * beam.tip_m(&beam.nodal(&full)));
             } else {
                 let q = beam.nodal(&full);
                 for (p, &s) in points_s_m.iter().enumerate() {

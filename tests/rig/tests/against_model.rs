@@ -8,7 +8,7 @@ use finrs::model::synth::{drive_recording, Drive};
 use finrs::recording::Fixture;
 use finrs::wave::Wave;
 use finrs_rig::strip::{run, Mesh, Truth, BLOCKED_MESH, MESH};
-use finrs_rig::{Hidden, Sample};
+use finrs_rig::{Hidden, Sample, Tip};
 use model_core::Params;
 use rand::SeedableRng;
 
@@ -51,7 +51,7 @@ fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::model::
         } else {
             MESH
         },
-        fixture == Fixture::Blocked,
+        tip(fixture),
         &rec.v_v,
         1e-3,
         0.0,
@@ -62,6 +62,13 @@ fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::model::
     rec.meta.dots_s_m = None;
     let model = predict(&rec, &spec(&s), 4, 1e-3, 0.0, None, &mut |_| {}).unwrap();
     (truth, model)
+}
+
+fn tip(fixture: Fixture) -> Tip {
+    match fixture {
+        Fixture::Blocked => Tip::Pinned,
+        Fixture::Free => Tip::Free,
+    }
 }
 
 fn max_abs(a: impl Iterator<Item = f64>) -> f64 {
@@ -116,7 +123,7 @@ fn the_undamped_blocked_force_has_no_converged_mesh() {
             &s,
             &Hidden::default(),
             mesh,
-            fixture == Fixture::Blocked,
+            tip(fixture),
             &rec.v_v,
             1e-3,
             0.0,

@@ -4,12 +4,14 @@
 //! outside it, which must come out `unexplained` and not as a wrong cause.
 //!
 //! Seeds are fixed so that CI is repeatable; `FINRS_RIG_SEED=n` draws
-//! other strips and strengths (`scripts/rig-sweep` runs many).
+//! other strips and strengths (`scripts/rig-sweep-ideal` runs many).
 
 use finrs::analysis::diagnose::{diagnose, Verdict};
 use finrs::model::params::ModelFile;
 use finrs::session::Session;
-use finrs_rig::{short_protocol, write_session, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE};
+use finrs_rig::{
+    short_protocol, write_session, Bench, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE,
+};
 use rand::{Rng, SeedableRng};
 
 fn seed(default: u64) -> u64 {
@@ -33,6 +35,7 @@ fn hide(names: &[&str], default_seed: u64) -> Verdict {
         &sample,
         &hidden,
         &sensors,
+        &Bench::default(),
         &short_protocol(0.6),
         &label,
         &mut rng,

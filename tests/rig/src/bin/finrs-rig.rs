@@ -14,6 +14,14 @@ struct Cli {
     /// empty: none.
     #[arg(long, default_value = "")]
     hide: String,
+    /// Draw the off-class strip (always damped and soft, relaxing or
+    /// creeping, lagged crosstalk) instead of the baseline's own class.
+    #[arg(long)]
+    off_class: bool,
+    /// Bench imperfections, comma-separated: hum, coloured-noise,
+    /// compliant-load-cell, camera-exposure; empty: a perfect bench.
+    #[arg(long, default_value = "")]
+    bench: String,
     /// Seed of every random draw (sample, strengths, noise).
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -21,32 +29,52 @@ struct Cli {
     /// shipped example's sessions use 0.6); without it, the full protocol.
     #[arg(long)]
     short: Option<f64>,
+    /// Record every run blocked, without a camera, as the board alone does
+    /// (holds scaled as --short, 1 if not given).
+    #[arg(long)]
+    board: bool,
     /// Session directory to write.
     #[arg(long)]
     out: PathBuf,
 }
 
-fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
-    let names: Vec<&str> = cli
-        .hide
-        .split(',')
+/// The comma list's names, blanks dropped.
+fn list(text: &str) -> Vec<&str> {
+    text.split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
-        .collect();
+        .collect()
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    let names = list(&cli.hide);
     let mut rng = rand::rngs::StdRng::seed_from_u64(cli.seed);
-    let sample = finrs_rig::Sample::draw(&mut rng);
-    let hidden = finrs_rig::Hidden::draw(&names, &mut rng).map_err(anyhow::Error::msg)?;
+    let (sample, hidden) = if cli.off_class {
+        let sample = finrs_rig::Sample::draw_off_class(&mut rng);
+        let hidden = finrs_rig::Hidden::draw_off_class(&names, &mut rng);
+        (sample, hidden.map_err(anyhow::Error::msg)?)
+    } else {
+        let sample = finrs_rig::Sample::draw(&mut rng);
+        let hidden = finrs_rig::Hidden::draw(&names, &mut rng);
+        (sample, hidden.map_err(anyhow::Error::msg)?)
+    };
     let sensors = finrs_rig::Sensors::draw(&mut rng);
+    let bench = finrs_rig::Bench::draw(&list(&cli.bench), &mut rng).map_err(anyhow::Error::msg)?;
     let label = format!("RIG-{}", cli.seed);
-    let runs = match cli.short {
-        Some(scale) if scale.is_finite() && scale > 0.0 => finrs_rig::short_protocol(scale),
+    let scale = match cli.short {
+        Some(scale) if scale.is_finite() && scale > 0.0 => Some(scale),
         Some(scale) => anyhow::bail!("--short must be a positive factor, got {scale}"),
-        None => finrs_rig::protocol(),
+        None => None,
+    };
+    let runs = match (cli.board, scale) {
+        (true, scale) => finrs_rig::board_protocol(scale.unwrap_or(1.0)),
+        (false, Some(scale)) => finrs_rig::short_protocol(scale),
+        (false, None) => finrs_rig::protocol(),
     };
     finrs_rig::write_session(
-        &cli.out, &sample, &hidden, &sensors, &runs, &label, &mut rng,
+        &cli.out, &sample, &hidden, &sensors, &bench, &runs, &label, &mut rng,
     )?;
-    println!("{sample:#?}\n{hidden:#?}\n{sensors:#?}");
+    println!("{sample:#?}\n{hidden:#?}\n{sensors:#?}\n{bench:#?}");
     Ok(())
 }

@@ -1,0 +1,139 @@
+//! `rig-sweep`: diagnoses a seeded sweep of off-class rig sessions with the
+//! `finrs` binary and writes the confusion matrix (Markdown, CSV, PNG).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Parser;
+use finrs_rig::expect::score;
+use finrs_rig::sweep::{csv, markdown, plan, write_scenario, Outcome, Scenario};
+
+/// Writes and diagnoses off-class rig sessions, one seed each, and counts
+/// what the diagnosis names against what each session holds.
+#[derive(Parser)]
+#[command(version)]
+struct Cli {
+    /// First seed (the hidden-effect tests use seeds below 1000).
+    #[arg(long, default_value_t = 10_000)]
+    first_seed: u64,
+    /// Sessions.
+    #[arg(long, default_value_t = 100)]
+    sessions: usize,
+    /// The `finrs` binary that diagnoses.
+    #[arg(long, default_value = "target/release/finrs")]
+    finrs: PathBuf,
+    /// Sessions diagnosed at once.
+    #[arg(long, default_value_t = 2)]
+    jobs: usize,
+    /// Directory for the matrix (sweep.md, sweep.csv, sweep.png) and, with
+    /// --keep, the sessions.
+    #[arg(long)]
+    out: PathBuf,
+    /// Keep each session's directory and verdict.
+    #[arg(long)]
+    keep: bool,
+}
+
+/// The verdict's words and names from `finrs diagnose --json`.
+fn read_verdict(path: &Path) -> anyhow::Result<(String, Vec<String>, f64)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let verdict = v["verdict"].as_str().context("no `verdict`")?.to_string();
+    let causes = v["causes"]
+        .as_array()
+        .context("no `causes`")?
+        .iter()
+        .filter_map(|c| c.as_str().map(str::to_string))
+        .collect();
+    let gain = v["gain_percent"].as_f64().unwrap_or(f64::NAN);
+    Ok((verdict, causes, gain))
+}
+
+fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
+    let dir = cli.out.join(format!("session-{}", s.seed));
+    let expected = write_scenario(s, &dir)?;
+    let json = dir.join("verdict.json");
+    let start = Instant::now();
+    let run = Command::new(&cli.finrs)
+        .arg("diagnose")
+        .arg(&dir)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .with_context(|| format!("running {}", cli.finrs.display()))?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (verdict, causes, gain_percent) = if run.status.success() {
+        read_verdict(&json)?
+    } else {
+        let why = String::from_utf8_lossy(&run.stderr);
+        (
+            format!("failed: {}", why.trim().lines().last().unwrap_or("")),
+            Vec::new(),
+            f64::NAN,
+        )
+    };
+    if !cli.keep {
+        std::fs::remove_dir_all(&dir).ok();
+    }
+    let score = score(&expected, &verdict, &causes);
+    Ok(Outcome {
+        scenario: s.clone(),
+        expected,
+        verdict,
+        causes,
+        gain_percent,
+        score,
+        seconds,
+    })
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    anyhow::ensure!(cli.jobs >= 1, "--jobs must be at least 1");
+    anyhow::ensure!(
+        cli.finrs.is_file(),
+        "{} is not a file: build it (cargo build --release -p finrs) or give --finrs",
+        cli.finrs.display()
+    );
+    std::fs::create_dir_all(&cli.out)?;
+    let scenarios = plan(cli.first_seed, cli.sessions);
+    let next = Mutex::new(scenarios.iter());
+    let outcomes = Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..cli.jobs {
+            scope.spawn(|| loop {
+                let Some(s) = next.lock().expect("no panics under the lock").next() else {
+                    break;
+                };
+                match one(&cli, s) {
+                    Ok(o) => {
+                        eprintln!(
+                            "seed {:>6} {:<45} {:<12} {:<50} {} ({:.0} s)",
+                            o.scenario.seed,
+                            o.scenario.row(),
+                            o.verdict,
+                            o.causes.join(","),
+                            if o.score.is_right() { "right" } else { "WRONG" },
+                            o.seconds
+                        );
+                        outcomes.lock().expect("no panics under the lock").push(o);
+                    }
+                    Err(e) => eprintln!("seed {}: {e:#}", s.seed),
+                }
+            });
+        }
+    });
+    let mut outcomes = outcomes.into_inner().expect("no panics under the lock");
+    outcomes.sort_by_key(|o| o.scenario.seed);
+    let md = markdown(&outcomes);
+    std::fs::write(cli.out.join("sweep.md"), &md)?;
+    std::fs::write(cli.out.join("sweep.csv"), csv(&outcomes))?;
+    finrs_rig::heatmap::draw(&outcomes, &cli.out.join("sweep.png"))?;
+    println!("{md}");
+    Ok(())
+}

@@ -1,0 +1,259 @@
+//! What a right diagnosis says for a rig session, written from the
+//! contract (docs/FORMAT.md: the baseline, the catalogue and its notes)
+//! before any tuning of the diagnosis, and how a verdict is scored
+//! against it.
+//!
+//! | in the session | a right diagnosis |
+//! |---|---|
+//! | the baseline's own strip, a perfect bench | `none` |
+//! | `z > p` (creep) | nothing for it: the baseline has it |
+//! | any damping (every off-class strip) | names `damping` |
+//! | `EI` off the laminate's by more than 20 % | names `beam-stiffness` where free runs show it; within 20 %, may |
+//! | a catalogue effect hidden | names it, where the protocol can show it |
+//! | `hydrodynamic-loading` | only in water: never named in air |
+//! | `dehydration` | where the session's start times are known |
+//! | `large-deflection` | where free runs track the tip along the strip |
+//! | hum, 1/f noise, a compliant load cell, exposure, mains pickup | no catalogue name for them; `unexplained` allowed |
+//! | crosstalk through a lag, quadratic drag, a `sinh` leak | the name, `unexplained` beside it allowed (forms the fit only approximates) |
+//!
+//! An effect the protocol cannot show may be named (it is there) but need
+//! not be; a name for something the session does not have is wrong.
+
+use crate::bench::Bench;
+use crate::sample::{Hidden, SEGMENT_VARIATION};
+
+/// What the protocol of a session lets a diagnosis see.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Protocol {
+    /// Free runs with the camera.
+    pub free: bool,
+    /// Blocked runs with the load cell.
+    pub blocked: bool,
+    /// Each recording's start in the session is known.
+    pub session_start: bool,
+}
+
+/// `EI` within this factor of the laminate's need not be named.
+pub const STIFFNESS_TOLERANCE: f64 = 1.2;
+
+/// Segment factors within this of one need not be named.
+pub const VARIATION_TOLERANCE: f64 = 0.04;
+
+/// What a right diagnosis of one session says.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Expected {
+    /// Names it must give.
+    pub required: Vec<&'static str>,
+    /// Names it may give besides (present but not visible, or too weak).
+    pub allowed: Vec<&'static str>,
+    /// `unexplained` is a right verdict (beside the required names).
+    pub unexplained_ok: bool,
+}
+
+/// How a verdict compares with what was expected.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Score {
+    /// Required names the verdict lacks.
+    pub missed: Vec<String>,
+    /// Names the verdict gives for something the session does not have.
+    pub wrong: Vec<String>,
+    /// The verdict word itself fits (`none` with nothing required and a
+    /// perfect bench, `explained`, or an allowed `unexplained`).
+    pub verdict_ok: bool,
+}
+
+impl Score {
+    /// Every required name, no wrong one, a fitting verdict word.
+    pub fn is_right(&self) -> bool {
+        self.missed.is_empty() && self.wrong.is_empty() && self.verdict_ok
+    }
+}
+
+/// What a right diagnosis says of a session of `hidden` on `bench`,
+/// recorded with `protocol`.
+pub fn expected(hidden: &Hidden, bench: &Bench, protocol: Protocol) -> Expected {
+    let mut e = Expected::default();
+    let mut name = |present: bool, visible: bool, name: &'static str| {
+        if present && visible {
+            e.required.push(name);
+        } else if present {
+            e.allowed.push(name);
+        }
+    };
+    let moves = protocol.free || protocol.blocked;
+    name(hidden.arcs, protocol.free, "large-deflection");
+    // Free and blocked runs both pin down EI; blocked runs alone show it
+    // only through the held mode's ringing.
+    if let Some(f) = hidden.ei_factor {
+        let far = !(1.0 / STIFFNESS_TOLERANCE..=STIFFNESS_TOLERANCE).contains(&f);
+        name(true, far && protocol.free, "beam-stiffness");
+    }
+    let damped = hidden.damping_ratio.is_some()
+        || hidden
+            .modal_damping
+            .as_ref()
+            .is_some_and(|z| z.iter().any(|&z| z > 0.0));
+    name(damped, moves, "damping");
+    name(hidden.water.is_some(), moves, "hydrodynamic-loading");
+    name(
+        hidden.electrochemistry.is_some(),
+        true,
+        "electrochemical-nonlinearity",
+    );
+    name(hidden.back_branch.is_some(), moves, "back-relaxation");
+    name(
+        hidden.drying_s.is_some(),
+        protocol.session_start,
+        "dehydration",
+    );
+    name(hidden.crosstalk.is_some(), moves, "segment-crosstalk");
+    let varies = hidden.segment_factors.as_ref().is_some_and(|f| {
+        f.iter().any(|s| {
+            [s.r1, s.c, s.k]
+                .iter()
+                .any(|x| (x - 1.0).abs() > VARIATION_TOLERANCE)
+        })
+    });
+    name(hidden.segment_factors.is_some(), varies, SEGMENT_VARIATION);
+    e.unexplained_ok = !bench.is_perfect()
+        || hidden.mains_pickup.is_some()
+        || hidden.crosstalk_lag_s.is_some()
+        || hidden.water.is_some()
+        || hidden.electrochemistry.is_some();
+    e
+}
+
+/// Scores a verdict (`none`, `explained` or `unexplained`) naming `causes`
+/// against what was expected.
+pub fn score(expected: &Expected, verdict: &str, causes: &[String]) -> Score {
+    let missed = expected
+        .required
+        .iter()
+        .filter(|r| !causes.iter().any(|c| c == *r))
+        .map(|r| r.to_string())
+        .collect();
+    let wrong = causes
+        .iter()
+        .filter(|c| {
+            !expected.required.contains(&c.as_str()) && !expected.allowed.contains(&c.as_str())
+        })
+        .cloned()
+        .collect();
+    let verdict_ok = match verdict {
+        "none" => expected.required.is_empty(),
+        "explained" => !expected.required.is_empty() || !causes.is_empty(),
+        "unexplained" => expected.unexplained_ok,
+        _ => false,
+    };
+    Score {
+        missed,
+        wrong,
+        verdict_ok,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sample::SegmentFactors;
+    use rand::SeedableRng;
+
+    const FULL: Protocol = Protocol {
+        free: true,
+        blocked: true,
+        session_start: true,
+    };
+    const BOARD: Protocol = Protocol {
+        free: false,
+        blocked: true,
+        session_start: true,
+    };
+
+    fn names(v: &[&str]) -> Vec<String> {
+        v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn the_baselines_own_strip_on_a_perfect_bench_is_none() {
+        let e = expected(&Hidden::default(), &Bench::default(), FULL);
+        assert_eq!(e, Expected::default());
+        assert!(score(&e, "none", &[]).is_right());
+        assert!(!score(&e, "unexplained", &[]).is_right());
+        let s = score(&e, "explained", &names(&["damping"]));
+        assert_eq!(s.wrong, ["damping"]);
+    }
+
+    #[test]
+    fn an_off_class_strip_must_be_called_damped_and_soft_where_free_runs_show_it() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+        let mut h = Hidden::draw_off_class(&[], &mut rng).unwrap();
+        h.ei_factor = Some(0.3);
+        let e = expected(&h, &Bench::default(), FULL);
+        assert_eq!(e.required, ["beam-stiffness", "damping"]);
+        assert!(!e.unexplained_ok);
+        let s = score(&e, "explained", &names(&["damping"]));
+        assert_eq!(s.missed, ["beam-stiffness"]);
+        // The board alone cannot pin EI down: naming it is allowed.
+        let e = expected(&h, &Bench::default(), BOARD);
+        assert_eq!(e.required, ["damping"]);
+        assert_eq!(e.allowed, ["beam-stiffness"]);
+        // A strip within 20 % of the laminate need not be called soft.
+        h.ei_factor = Some(0.9);
+        let e = expected(&h, &Bench::default(), FULL);
+        assert_eq!(e.allowed, ["beam-stiffness"]);
+    }
+
+    #[test]
+    fn bench_imperfections_allow_unexplained_but_no_name() {
+        let bench = Bench {
+            hum: Some(2.0),
+            ..Bench::default()
+        };
+        let e = expected(&Hidden::default(), &bench, FULL);
+        assert!(e.required.is_empty() && e.allowed.is_empty() && e.unexplained_ok);
+        assert!(score(&e, "unexplained", &[]).is_right());
+        assert!(score(&e, "none", &[]).is_right());
+        let s = score(&e, "explained", &names(&["segment-crosstalk"]));
+        assert!(!s.is_right() && s.wrong == ["segment-crosstalk"]);
+    }
+
+    #[test]
+    fn what_the_protocol_cannot_show_need_not_be_named() {
+        let h = Hidden {
+            arcs: true,
+            drying_s: Some(200.0),
+            ..Hidden::default()
+        };
+        let e = expected(
+            &h,
+            &Bench::default(),
+            Protocol {
+                session_start: false,
+                ..BOARD
+            },
+        );
+        assert!(e.required.is_empty());
+        assert_eq!(e.allowed, ["large-deflection", "dehydration"]);
+        assert!(score(&e, "none", &[]).is_right());
+        assert!(score(&e, "explained", &names(&["dehydration"])).is_right());
+    }
+
+    #[test]
+    fn segment_variation_is_required_when_a_factor_is_off_by_more_than_the_tolerance() {
+        let mut h = Hidden {
+            segment_factors: Some(vec![
+                SegmentFactors::ONE,
+                SegmentFactors {
+                    r1: 1.1,
+                    ..SegmentFactors::ONE
+                },
+            ]),
+            ..Hidden::default()
+        };
+        let e = expected(&h, &Bench::default(), FULL);
+        assert_eq!(e.required, [SEGMENT_VARIATION]);
+        h.segment_factors = Some(vec![SegmentFactors::ONE; 3]);
+        let e = expected(&h, &Bench::default(), FULL);
+        assert_eq!(e.allowed, [SEGMENT_VARIATION]);
+    }
+}

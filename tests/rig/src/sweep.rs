@@ -1,0 +1,374 @@
+//! A seeded sweep of off-class sessions and the confusion matrix of what
+//! `finrs diagnose` names against what each session holds.
+//!
+//! Each session draws its own off-class strip (always damped and soft,
+//! relaxing or creeping) and hides, by the scenario's turn, nothing, one
+//! departure, a pair of them, or a bench imperfection, on the full
+//! protocol or on the board's alone (blocked runs, no camera). The
+//! diagnosis runs as a user runs it, the `finrs` binary on the session's
+//! directory, and its verdict is scored with [`crate::expect`].
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use rand::SeedableRng;
+
+use crate::bench::{Bench, IMPERFECTIONS};
+use crate::expect::{expected, Expected, Protocol, Score};
+use crate::sample::{Hidden, Sample, OFF_CLASS_DEPARTURES};
+use crate::session::{board_protocol, short_protocol, write, Sensors};
+
+/// One session of a sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scenario {
+    /// Seed of every draw of the session.
+    pub seed: u64,
+    /// Departures hidden on the off-class base.
+    pub hidden: Vec<&'static str>,
+    /// Bench imperfections.
+    pub bench: Vec<&'static str>,
+    /// Recorded by the board alone.
+    pub board: bool,
+}
+
+impl Scenario {
+    /// The matrix row the session counts in: what was hidden, or `base`
+    /// for the off-class strip alone; `board:` in front for the board's
+    /// protocol.
+    pub fn row(&self) -> String {
+        let mut parts: Vec<&str> = self.hidden.clone();
+        parts.extend(self.bench.iter().copied());
+        let what = if parts.is_empty() {
+            "base".to_string()
+        } else {
+            parts.join("+")
+        };
+        if self.board {
+            format!("board:{what}")
+        } else {
+            what
+        }
+    }
+}
+
+/// Holds of the sweep's sessions, as a fraction of the full protocol's
+/// (the hidden-effect tests' length).
+pub const HOLD_SCALE: f64 = 0.6;
+
+/// The sweep's scenarios for seeds `first..first + count`, in turn: the
+/// base alone, each departure alone, each imperfection alone, pairs of
+/// departures, and a board-only session, so that every row fills as the
+/// count grows.
+pub fn plan(first: u64, count: usize) -> Vec<Scenario> {
+    let mut turns: Vec<(Vec<&'static str>, Vec<&'static str>, bool)> =
+        vec![(vec![], vec![], false)];
+    turns.extend(
+        OFF_CLASS_DEPARTURES
+            .iter()
+            .map(|&d| (vec![d], vec![], false)),
+    );
+    turns.extend(IMPERFECTIONS.iter().map(|&b| (vec![], vec![b], false)));
+    turns.push((vec![], vec!["hum", "coloured-noise"], false));
+    turns.push((vec!["dehydration", "segment-variation"], vec![], false));
+    turns.push((vec!["large-deflection", "segment-crosstalk"], vec![], false));
+    turns.push((vec![], vec![], true));
+    turns.push((vec!["back-relaxation"], vec!["hum"], true));
+    (0..count)
+        .map(|i| {
+            let (hidden, bench, board) = turns[i % turns.len()].clone();
+            Scenario {
+                seed: first + i as u64,
+                hidden,
+                bench,
+                board,
+            }
+        })
+        .collect()
+}
+
+/// Writes the scenario's session into `dir` and says what a right
+/// diagnosis of it names.
+pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(s.seed);
+    let sample = Sample::draw_off_class(&mut rng);
+    let hidden = Hidden::draw_off_class(&s.hidden, &mut rng).map_err(anyhow::Error::msg)?;
+    let sensors = Sensors::draw(&mut rng);
+    let bench = Bench::draw(&s.bench, &mut rng).map_err(anyhow::Error::msg)?;
+    let runs = if s.board {
+        board_protocol(HOLD_SCALE)
+    } else {
+        short_protocol(HOLD_SCALE)
+    };
+    let label = format!("SWEEP-{}", s.seed);
+    write(
+        dir, &sample, &hidden, &sensors, &bench, &runs, &label, &mut rng,
+    )?;
+    let protocol = Protocol {
+        free: !s.board,
+        blocked: true,
+        // The rig writes every recording's start into its notes.
+        session_start: true,
+    };
+    Ok(expected(&hidden, &bench, protocol))
+}
+
+/// One diagnosed session.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The session.
+    pub scenario: Scenario,
+    /// What a right diagnosis names.
+    pub expected: Expected,
+    /// `none`, `explained` or `unexplained`, or `failed: …` when the
+    /// diagnosis did not run through.
+    pub verdict: String,
+    /// Names given.
+    pub causes: Vec<String>,
+    /// Held-out gain, percent.
+    pub gain_percent: f64,
+    /// The verdict against the expectation.
+    pub score: Score,
+    /// Wall time of the diagnosis, s.
+    pub seconds: f64,
+}
+
+/// The columns of the matrix: every catalogue name the sweep can meet,
+/// then `none` and `unexplained` (the verdict words).
+pub const COLUMNS: [&str; 11] = [
+    "large-deflection",
+    "beam-stiffness",
+    "damping",
+    "hydrodynamic-loading",
+    "electrochemical-nonlinearity",
+    "back-relaxation",
+    "dehydration",
+    "segment-crosstalk",
+    "segment-variation",
+    "none",
+    "unexplained",
+];
+
+/// One row of the matrix.
+#[derive(Clone, Debug, Default)]
+pub struct Row {
+    /// Sessions in the row.
+    pub sessions: usize,
+    /// Per column, sessions whose verdict gave it.
+    pub named: BTreeMap<&'static str, usize>,
+    /// Sessions whose every required name was given.
+    pub detected: usize,
+    /// Sessions with at least one wrong name.
+    pub false_named: usize,
+    /// Sessions scored right (every required name, no wrong one, a
+    /// fitting verdict word).
+    pub right: usize,
+    /// Held-out gains, percent.
+    pub gains: Vec<f64>,
+}
+
+/// The confusion matrix, row by row in first-seen order.
+pub fn matrix(outcomes: &[Outcome]) -> Vec<(String, Row)> {
+    let mut rows: Vec<(String, Row)> = Vec::new();
+    for o in outcomes {
+        let key = o.scenario.row();
+        let at = match rows.iter().position(|(k, _)| *k == key) {
+            Some(i) => i,
+            None => {
+                rows.push((key, Row::default()));
+                rows.len() - 1
+            }
+        };
+        let row = &mut rows[at].1;
+        row.sessions += 1;
+        for c in COLUMNS {
+            let given = o.causes.iter().any(|x| x == c) || o.verdict == c;
+            if given {
+                *row.named.entry(c).or_default() += 1;
+            }
+        }
+        row.detected += usize::from(o.score.missed.is_empty());
+        row.false_named += usize::from(!o.score.wrong.is_empty());
+        row.right += usize::from(o.score.is_right());
+        row.gains.push(o.gain_percent);
+    }
+    rows
+}
+
+fn median(x: &[f64]) -> f64 {
+    let mut v: Vec<f64> = x.iter().copied().filter(|g| g.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The matrix as Markdown: shares of the row's sessions naming each
+/// column, then detection, false-name and right rates and the median gain.
+pub fn markdown(outcomes: &[Outcome]) -> String {
+    let rows = matrix(outcomes);
+    let mut out = String::new();
+    let short = |c: &str| {
+        match c {
+            "large-deflection" => "LD",
+            "beam-stiffness" => "EI",
+            "damping" => "damp",
+            "hydrodynamic-loading" => "hydro",
+            "electrochemical-nonlinearity" => "echem",
+            "back-relaxation" => "back",
+            "dehydration" => "dry",
+            "segment-crosstalk" => "xtalk",
+            "segment-variation" => "var",
+            other => other,
+        }
+        .to_string()
+    };
+    let _ = write!(out, "| hidden | n |");
+    for c in COLUMNS {
+        let _ = write!(out, " {} |", short(c));
+    }
+    let _ = writeln!(out, " detected | false name | right | gain % |");
+    let _ = write!(out, "|---|---|");
+    for _ in COLUMNS {
+        let _ = write!(out, "---|");
+    }
+    let _ = writeln!(out, "---|---|---|---|");
+    let pct = |k: usize, n: usize| format!("{:.0}", 100.0 * k as f64 / n.max(1) as f64);
+    let mut totals = (0, 0, 0, 0);
+    for (key, r) in &rows {
+        let _ = write!(out, "| {key} | {} |", r.sessions);
+        for c in COLUMNS {
+            let k = r.named.get(c).copied().unwrap_or(0);
+            let _ = write!(
+                out,
+                " {} |",
+                if k == 0 {
+                    String::new()
+                } else {
+                    pct(k, r.sessions)
+                }
+            );
+        }
+        let _ = writeln!(
+            out,
+            " {} | {} | {} | {:.1} |",
+            pct(r.detected, r.sessions),
+            pct(r.false_named, r.sessions),
+            pct(r.right, r.sessions),
+            median(&r.gains)
+        );
+        totals.0 += r.sessions;
+        totals.1 += r.detected;
+        totals.2 += r.false_named;
+        totals.3 += r.right;
+    }
+    let _ = writeln!(
+        out,
+        "\nAll {} sessions: detected {} %, a false name in {} %, right {} %.",
+        totals.0,
+        pct(totals.1, totals.0),
+        pct(totals.2, totals.0),
+        pct(totals.3, totals.0)
+    );
+    let _ = writeln!(
+        out,
+        "\nCells: percent of the row's sessions whose verdict gives the column. \
+         Detected: every required name given. False name: a name for something \
+         the session does not have. Right: detected, no false name and a fitting \
+         verdict word (src/expect.rs says what each session requires)."
+    );
+    out
+}
+
+/// One CSV line per session.
+pub fn csv(outcomes: &[Outcome]) -> String {
+    let mut out = String::from(
+        "seed,row,board,verdict,causes,required,allowed,missed,wrong,right,gain_percent,seconds\n",
+    );
+    for o in outcomes {
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{:.2},{:.1}",
+            o.scenario.seed,
+            o.scenario.row(),
+            o.scenario.board,
+            o.verdict.replace(',', ";"),
+            o.causes.join(";"),
+            o.expected.required.join(";"),
+            o.expected.allowed.join(";"),
+            o.score.missed.join(";"),
+            o.score.wrong.join(";"),
+            o.score.is_right(),
+            o.gain_percent,
+            o.seconds
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expect::score;
+
+    fn outcome(hidden: Vec<&'static str>, verdict: &str, causes: &[&str]) -> Outcome {
+        let scenario = Scenario {
+            seed: 1,
+            hidden,
+            bench: vec![],
+            board: false,
+        };
+        let expected = Expected {
+            required: vec!["damping"],
+            allowed: vec![],
+            unexplained_ok: false,
+        };
+        let causes: Vec<String> = causes.iter().map(|s| s.to_string()).collect();
+        let score = score(&expected, verdict, &causes);
+        Outcome {
+            scenario,
+            expected,
+            verdict: verdict.to_string(),
+            causes,
+            gain_percent: 10.0,
+            score,
+            seconds: 1.0,
+        }
+    }
+
+    #[test]
+    fn the_plan_visits_every_row_and_never_reuses_a_seed() {
+        let p = plan(1000, 40);
+        let rows: std::collections::BTreeSet<String> = p.iter().map(Scenario::row).collect();
+        assert!(rows.contains("base") && rows.contains("board:base"));
+        for d in OFF_CLASS_DEPARTURES.iter().chain(&IMPERFECTIONS) {
+            assert!(rows.contains(*d), "{d}");
+        }
+        let seeds: std::collections::BTreeSet<u64> = p.iter().map(|s| s.seed).collect();
+        assert_eq!(seeds.len(), p.len());
+    }
+
+    #[test]
+    fn the_matrix_counts_names_and_rates_per_row() {
+        let o = [
+            outcome(vec![], "explained", &["damping"]),
+            outcome(vec![], "explained", &["damping", "dehydration"]),
+            outcome(vec![], "none", &[]),
+        ];
+        let m = matrix(&o);
+        assert_eq!(m.len(), 1);
+        let (key, r) = &m[0];
+        assert_eq!(key, "base");
+        assert_eq!(
+            (r.sessions, r.detected, r.false_named, r.right),
+            (3, 2, 1, 1)
+        );
+        assert_eq!(r.named.get("damping"), Some(&2));
+        assert_eq!(r.named.get("none"), Some(&1));
+        let md = markdown(&o);
+        assert!(md.contains("| base | 3 |"), "{md}");
+        assert!(md.contains("right 33 %"), "{md}");
+        assert_eq!(csv(&o).lines().count(), 4);
+    }
+}
