@@ -322,8 +322,42 @@ impl Wave {
                 })
             }
         };
+        let (program, peak_v, peak_is) = self.program(segments, offset_v, options.sweep_s);
         let f = |x: f64| x as f32;
-        let (program, peak_v, peak_is) = match &self.kind {
+        let envelope = Envelope {
+            ramp_in_s: f(options.ramp_in_s),
+            hold_s: f(options.hold_s),
+            ramp_out_s: f(options.ramp_out_s),
+        };
+        let generator =
+            SegmentGenerator::new(segments, program, envelope).map_err(|e| match e {
+                WaveError::Generator(rule) => WaveError::Firmware {
+                    wave: spec.to_string(),
+                    rule,
+                },
+                other => other,
+            })?;
+        // The firmware's limiter would clip a larger wave out of shape.
+        if peak_v.is_nan() || peak_v > f64::from(HARD_LIMIT_V) {
+            return Err(WaveError::Peak {
+                wave: spec.to_string(),
+                peak_v,
+                peak_is,
+            });
+        }
+        Ok(generator)
+    }
+
+    /// The firmware's program for `segments` segments (offset and chirp
+    /// sweep given), its peak voltage, V, and what makes that peak.
+    fn program(
+        &self,
+        segments: usize,
+        offset_v: f64,
+        sweep_s: f64,
+    ) -> (Program, f64, &'static str) {
+        let f = |x: f64| x as f32;
+        match &self.kind {
             WaveKind::Step { levels_v } => {
                 let mut levels = [0.0f32; MAX_SEGMENTS];
                 for (k, level) in levels.iter_mut().take(segments).enumerate() {
@@ -367,7 +401,7 @@ impl Wave {
                     amplitude_v: f(amplitude_v),
                     start_hz: f(start_hz),
                     end_hz: f(end_hz),
-                    duration_s: f(options.sweep_s),
+                    duration_s: f(sweep_s),
                 },
                 amplitude_v.abs(),
                 "amplitude",
@@ -385,29 +419,7 @@ impl Wave {
                 amplitude_v.abs(),
                 "amplitude",
             ),
-        };
-        let envelope = Envelope {
-            ramp_in_s: f(options.ramp_in_s),
-            hold_s: f(options.hold_s),
-            ramp_out_s: f(options.ramp_out_s),
-        };
-        let generator =
-            SegmentGenerator::new(segments, program, envelope).map_err(|e| match e {
-                WaveError::Generator(rule) => WaveError::Firmware {
-                    wave: spec.to_string(),
-                    rule,
-                },
-                other => other,
-            })?;
-        // The firmware's limiter would clip a larger wave out of shape.
-        if peak_v.is_nan() || peak_v > f64::from(HARD_LIMIT_V) {
-            return Err(WaveError::Peak {
-                wave: spec.to_string(),
-                peak_v,
-                peak_is,
-            });
         }
-        Ok(generator)
     }
 }
 

@@ -164,24 +164,50 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
-        if !dt_s.is_finite() {
-            return Err(ParamError::NotFinite {
-                field: "dt_s",
-                value: dt_s,
-            });
-        }
-        if dt_s <= 0.0 {
-            return Err(ParamError::NotPositive {
-                field: "dt_s",
-                value: dt_s,
-            });
-        }
+        check_sample_time(dt_s)?;
         let an = Self::analyse(params, ext, fixture)?;
         let kc = params.k_nm_per_c * params.c_f;
         let z_minus_p = params.z_per_s - params.p_per_s;
-        let inv_tau1 = 1.0 / params.tau1_s();
+        // The pieces are inlined: the board re-discretises with the same
+        // stack as when they were one function.
+        let elec = Self::electrical_step(params, dt_s);
+        let (rot, drive) = Self::modal_steps(&an, params, kc, dt_s);
+        let dof_from_modal = Self::modal_to_dof(&an);
+        let force_row = if fixture == Fixture::Blocked {
+            Self::blocking_force_row(&an, kc, z_minus_p)
+        } else {
+            [T::ZERO; S]
+        };
 
-        // The electrical block alone: v_C' = (v − v_C)/τ1, r' = v_C − p r.
+        Ok(Strip {
+            params: *params,
+            ext: *ext,
+            fixture,
+            dt_s,
+            rot,
+            drive,
+            elec,
+            dof_from_modal,
+            force_row,
+            omega_rad_s: an.omega,
+            modes: an.modes,
+            inv_r1: T::from_f64(1.0 / params.r1_ohm),
+            inv_r2: T::from_f64(1.0 / params.r2_ohm),
+            kc: T::from_f64(kc),
+            z_minus_p: T::from_f64(z_minus_p),
+            charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
+            leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
+            crosstalk: T::from_f64(ext.crosstalk),
+            moment_gain: T::from_f64(1.0),
+        })
+    }
+
+    /// The electrical block alone, discretised at `dt_s`:
+    /// `v_C' = (v − v_C)/τ1`, `r' = v_C − p r`; its `Φ` (three entries, the
+    /// other is 0) and `Γ`.
+    #[inline(always)]
+    fn electrical_step(params: &Params, dt_s: f64) -> [T; 5] {
+        let inv_tau1 = 1.0 / params.tau1_s();
         let mut a_e = [[-inv_tau1, 0.0], [1.0, -params.p_per_s]];
         let (mut phi_e, mut gamma_e) = ([[0.0; 2]; 2], [[0.0; 1]; 2]);
         discretise(
@@ -191,15 +217,28 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             &mut phi_e,
             &mut gamma_e,
         );
-        let elec = [
+        [
             phi_e[0][0],
             phi_e[1][0],
             phi_e[1][1],
             gamma_e[0][0],
             gamma_e[1][0],
         ]
-        .map(T::from_f64);
+        .map(T::from_f64)
+    }
 
+    /// Each mode's rotation over one step, and its columns of `Φ` and `Γ`
+    /// driven by each segment's electrics (`kc` = `K C`).
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn modal_steps(
+        an: &Analysis<N, E, S>,
+        params: &Params,
+        kc: f64,
+        dt_s: f64,
+    ) -> ([[T; S]; 4], [[[T; S]; 3]; N]) {
+        let z_minus_p = params.z_per_s - params.p_per_s;
+        let inv_tau1 = 1.0 / params.tau1_s();
         // A removed freedom's slot (blocked tip) keeps its value, as the
         // exponential of its zero rows would: the identity.
         let mut rot = [[T::ZERO; S]; 4];
@@ -233,8 +272,13 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 }
             }
         }
+        (rot, drive)
+    }
 
-        // Outputs. Freedoms: q = Ψ η; odd rows are ℓθ, so divide by ℓ.
+    /// The freedoms from the modal coordinates: `q = Ψ η`; odd rows are
+    /// `ℓθ`, so divide by `ℓ`.
+    #[inline(always)]
+    fn modal_to_dof(an: &Analysis<N, E, S>) -> DofMat<T, N, E, S> {
         let mut dof_from_modal = dof_zeros(T::ZERO);
         let (rows_out, psi) = (rows_mut(&mut dof_from_modal), &an.psi);
         for d in 0..Self::DOF {
@@ -243,52 +287,34 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 rows_out[d][k] = T::from_f64(psi[(d, k)] * scale);
             }
         }
-        // Blocking force on the cell: the tip row of M q̈ + K q = F u,
-        // solved for the reaction, F_t u − M_t q̈ − K_t q, with
-        // q̈ = Ψ (−Ω² η + g u).
-        let mut force_row = [T::ZERO; S];
-        if fixture == Fixture::Blocked {
-            let (m_t, k_t) = (&an.m_tip, &an.k_tip);
-            let mut mt_psi = [0.0; S];
-            for k in 0..an.modes {
-                let mut kt_psi = 0.0;
-                for d in 0..Self::DOF {
-                    mt_psi[k] += m_t[d] * psi[(d, k)];
-                    kt_psi += k_t[d] * psi[(d, k)];
-                }
-                force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
-            }
-            for i in 0..N {
-                let mut per_moment = an.f_tip[i];
-                for k in 0..an.modes {
-                    per_moment -= mt_psi[k] * an.g[k][i];
-                }
-                force_row[Self::ELEC + 2 * i] = T::from_f64(per_moment * kc);
-                force_row[Self::ELEC + 2 * i + 1] = T::from_f64(per_moment * kc * z_minus_p);
-            }
-        }
+        dof_from_modal
+    }
 
-        Ok(Strip {
-            params: *params,
-            ext: *ext,
-            fixture,
-            dt_s,
-            rot,
-            drive,
-            elec,
-            dof_from_modal,
-            force_row,
-            omega_rad_s: an.omega,
-            modes: an.modes,
-            inv_r1: T::from_f64(1.0 / params.r1_ohm),
-            inv_r2: T::from_f64(1.0 / params.r2_ohm),
-            kc: T::from_f64(kc),
-            z_minus_p: T::from_f64(z_minus_p),
-            charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
-            leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
-            crosstalk: T::from_f64(ext.crosstalk),
-            moment_gain: T::from_f64(1.0),
-        })
+    /// Blocking force on the cell: the tip row of `M q̈ + K q = F u`,
+    /// solved for the reaction, `F_t u − M_t q̈ − K_t q`, with
+    /// `q̈ = Ψ (−Ω² η + g u)`; a row over the state.
+    #[inline(always)]
+    fn blocking_force_row(an: &Analysis<N, E, S>, kc: f64, z_minus_p: f64) -> [T; S] {
+        let mut force_row = [T::ZERO; S];
+        let (m_t, k_t, psi) = (&an.m_tip, &an.k_tip, &an.psi);
+        let mut mt_psi = [0.0; S];
+        for k in 0..an.modes {
+            let mut kt_psi = 0.0;
+            for d in 0..Self::DOF {
+                mt_psi[k] += m_t[d] * psi[(d, k)];
+                kt_psi += k_t[d] * psi[(d, k)];
+            }
+            force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
+        }
+        for i in 0..N {
+            let mut per_moment = an.f_tip[i];
+            for k in 0..an.modes {
+                per_moment -= mt_psi[k] * an.g[k][i];
+            }
+            force_row[Self::ELEC + 2 * i] = T::from_f64(per_moment * kc);
+            force_row[Self::ELEC + 2 * i + 1] = T::from_f64(per_moment * kc * z_minus_p);
+        }
+        force_row
     }
 
     /// Assembles the beam for the fixture and finds its modes.
@@ -619,4 +645,21 @@ fn dot<T: Real, const S: usize>(row: &[T; S], x: &[T; S]) -> T {
         acc += a * b;
     }
     acc
+}
+
+/// A sample time the discretisation accepts: finite and above 0.
+fn check_sample_time(dt_s: f64) -> Result<(), ParamError> {
+    if !dt_s.is_finite() {
+        return Err(ParamError::NotFinite {
+            field: "dt_s",
+            value: dt_s,
+        });
+    }
+    if dt_s <= 0.0 {
+        return Err(ParamError::NotPositive {
+            field: "dt_s",
+            value: dt_s,
+        });
+    }
+    Ok(())
 }

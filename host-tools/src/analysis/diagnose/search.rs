@@ -86,85 +86,24 @@ pub fn diagnose(
         return Err(FitError::TooFewToHoldOut(session.recordings.len()));
     }
     let name = |i: &usize| session.recordings[i.to_owned()].name.clone();
-    let has_clock = session.recordings.iter().all(|r| r.t_start_s.is_some());
     progress("baseline");
     let baseline = fitter.fit(&train, &[], None, fixed)?;
     let base_hold = fitter.score(&hold, &baseline.spec)?;
-    let mut current = baseline.clone();
-    let mut current_hold = base_hold.clone();
-    let mut candidates = Vec::new();
-    let mut accepted: Vec<Effect> = Vec::new();
-    for round in 0..MAX_CAUSES {
-        let untried: Vec<Effect> = Effect::ALL
-            .into_iter()
-            .filter(|e| !current.effects.contains(e))
-            .filter(|e| *e != Effect::Dehydration || has_clock)
-            .collect();
-        if untried.is_empty() {
-            break;
-        }
-        progress(&format!(
-            "round {}: {} candidates",
-            round + 1,
-            untried.len()
-        ));
-        // The model's and the load cell's blocked frequencies, once a round:
-        // every frequency-moving candidate of the round starts from them.
-        let frequencies = untried
-            .iter()
-            .any(|e| moves_frequency(*e))
-            .then(|| blocked_frequencies(session, &train, &current.spec))
-            .flatten();
-        let results: Vec<Result<(Effect, FitResult, Score), FitError>> = untried
-            .par_iter()
-            .map(|&e| {
-                let mut effects = current.effects.clone();
-                effects.push(e);
-                let start = frequency_start(e, &current.spec, frequencies);
-                let fit = fitter.fit(&train, &effects, Some(&start), fixed)?;
-                let score = fitter.score(&hold, &fit.spec)?;
-                Ok((e, fit, score))
-            })
-            .collect();
-        let mut best: Option<(f64, Effect, FitResult, Score)> = None;
-        for r in results {
-            let (e, fit, score) = r?;
-            let delta_bic = fit.bic - current.bic;
-            let gain = gain_percent(current_hold.nrmse, score.nrmse);
-            let rss_gain = 1.0 - score.rss / current_hold.rss;
-            let passed = delta_bic < DELTA_BIC
-                && rss_gain > HOLDOUT_RSS_GAIN
-                && signature_is_significant(e, &fit, &fixed);
-            candidates.push(Candidate {
-                name: e.name().to_string(),
-                round,
-                delta_bic,
-                holdout_gain_percent: gain,
-                holdout_rss_gain_percent: 100.0 * rss_gain,
-                passed,
-                params: fit
-                    .estimates
-                    .iter()
-                    .filter(|est| !est.knob.is_baseline())
-                    .map(|est| (est.knob.name().to_string(), est.value))
-                    .collect(),
-            });
-            if passed && best.as_ref().is_none_or(|(b, ..)| delta_bic < *b) {
-                best = Some((delta_bic, e, fit, score));
-            }
-        }
-        match best {
-            Some((_, e, fit, score)) => {
-                accepted.push(e);
-                current = fit;
-                current_hold = score;
-            }
-            None => break,
-        }
-    }
+    let search = Search {
+        session,
+        fitter: &fitter,
+        train: &train,
+        hold: &hold,
+        fixed,
+    };
+    let found = search.run(&baseline, &base_hold, progress)?;
     let per = |s: &Score| s.rss / s.m.max(1) as f64;
-    let at_floor = per(&current_hold) < NOISE_FLOOR_RATIO;
-    let causes: Vec<String> = accepted.iter().map(|e| e.name().to_string()).collect();
+    let at_floor = per(&found.hold) < NOISE_FLOOR_RATIO;
+    let causes: Vec<String> = found
+        .accepted
+        .iter()
+        .map(|e| e.name().to_string())
+        .collect();
     let rest = rest_structure(session);
     let verdict = match (causes.is_empty(), at_floor && !rest.structured) {
         (true, true) => "none",
@@ -178,7 +117,176 @@ pub fn diagnose(
         aic: fit.aic,
         parameters: fit.parameters,
     };
-    let residual_tests = tested_channels(&base_hold, &current_hold)
+    let verdict = Verdict {
+        causes,
+        verdict: verdict.to_string(),
+        baseline: score_of(&baseline, &base_hold),
+        extended: score_of(&found.fit, &found.hold),
+        gain_percent: gain_percent(base_hold.nrmse, found.hold.nrmse),
+        candidates: found.candidates,
+        params: found
+            .fit
+            .estimates
+            .iter()
+            .map(|e| (e.knob.name().to_string(), e.value))
+            .collect(),
+        training: train.iter().map(name).collect(),
+        holdout: hold.iter().map(name).collect(),
+        residual_tests: residual_tests(&base_hold, &found.hold),
+        rest,
+        analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
+    };
+    Ok(Diagnosis {
+        verdict,
+        baseline,
+        final_fit: found.fit,
+        holdout_scores: (base_hold, found.hold),
+        holdout: hold,
+    })
+}
+
+/// What the forward search needs: the session split in two, and the
+/// baseline's fixed values.
+struct Search<'a> {
+    session: &'a Session,
+    fitter: &'a Fitter<'a>,
+    train: &'a [usize],
+    hold: &'a [usize],
+    fixed: ModelSpec,
+}
+
+/// Where the forward search ended.
+struct Found {
+    /// The final model's fit on the training part.
+    fit: FitResult,
+    /// Its score on the held-out part.
+    hold: Score,
+    /// Effects accepted, strongest first.
+    accepted: Vec<Effect>,
+    /// Every candidate tried.
+    candidates: Vec<Candidate>,
+}
+
+impl Search<'_> {
+    /// Adds, round by round, the best effect that passes the tests, until
+    /// none passes or [`MAX_CAUSES`] are in.
+    fn run(
+        &self,
+        baseline: &FitResult,
+        base_hold: &Score,
+        progress: &(dyn Fn(&str) + Sync),
+    ) -> Result<Found, FitError> {
+        let has_clock = self
+            .session
+            .recordings
+            .iter()
+            .all(|r| r.t_start_s.is_some());
+        let mut found = Found {
+            fit: baseline.clone(),
+            hold: base_hold.clone(),
+            accepted: Vec::new(),
+            candidates: Vec::new(),
+        };
+        for round in 0..MAX_CAUSES {
+            let untried: Vec<Effect> = Effect::ALL
+                .into_iter()
+                .filter(|e| !found.fit.effects.contains(e))
+                .filter(|e| *e != Effect::Dehydration || has_clock)
+                .collect();
+            if untried.is_empty() {
+                break;
+            }
+            progress(&format!(
+                "round {}: {} candidates",
+                round + 1,
+                untried.len()
+            ));
+            let mut best: Option<(f64, Effect, FitResult, Score)> = None;
+            for (e, fit, score) in self.fit_round(&untried, &found.fit)? {
+                let candidate = self.judge(e, round, &fit, &score, &found);
+                let delta_bic = candidate.delta_bic;
+                let passed = candidate.passed;
+                found.candidates.push(candidate);
+                if passed && best.as_ref().is_none_or(|(b, ..)| delta_bic < *b) {
+                    best = Some((delta_bic, e, fit, score));
+                }
+            }
+            let Some((_, e, fit, score)) = best else {
+                break;
+            };
+            found.accepted.push(e);
+            found.fit = fit;
+            found.hold = score;
+        }
+        Ok(found)
+    }
+
+    /// Fits each untried effect on top of `current`, in parallel, and
+    /// scores it on the held-out part.
+    fn fit_round(
+        &self,
+        untried: &[Effect],
+        current: &FitResult,
+    ) -> Result<Vec<(Effect, FitResult, Score)>, FitError> {
+        // The model's and the load cell's blocked frequencies, once a round:
+        // every frequency-moving candidate of the round starts from them.
+        let frequencies = untried
+            .iter()
+            .any(|e| moves_frequency(*e))
+            .then(|| blocked_frequencies(self.session, self.train, &current.spec))
+            .flatten();
+        let results: Vec<Result<(Effect, FitResult, Score), FitError>> = untried
+            .par_iter()
+            .map(|&e| {
+                let mut effects = current.effects.clone();
+                effects.push(e);
+                let start = frequency_start(e, &current.spec, frequencies);
+                let fit = self
+                    .fitter
+                    .fit(self.train, &effects, Some(&start), self.fixed)?;
+                let score = self.fitter.score(self.hold, &fit.spec)?;
+                Ok((e, fit, score))
+            })
+            .collect();
+        // In order, so that the first candidate's failure is the one named.
+        results.into_iter().collect()
+    }
+
+    /// The candidate `e` of round `round` against the model so far: it
+    /// passes when BIC, the held-out error and its own term all say so.
+    fn judge(
+        &self,
+        e: Effect,
+        round: usize,
+        fit: &FitResult,
+        score: &Score,
+        so_far: &Found,
+    ) -> Candidate {
+        let delta_bic = fit.bic - so_far.fit.bic;
+        let rss_gain = 1.0 - score.rss / so_far.hold.rss;
+        Candidate {
+            name: e.name().to_string(),
+            round,
+            delta_bic,
+            holdout_gain_percent: gain_percent(so_far.hold.nrmse, score.nrmse),
+            holdout_rss_gain_percent: 100.0 * rss_gain,
+            passed: delta_bic < DELTA_BIC
+                && rss_gain > HOLDOUT_RSS_GAIN
+                && signature_is_significant(e, fit, &self.fixed),
+            params: fit
+                .estimates
+                .iter()
+                .filter(|est| !est.knob.is_baseline())
+                .map(|est| (est.knob.name().to_string(), est.value))
+                .collect(),
+        }
+    }
+}
+
+/// Whiteness of the held-out residuals, baseline and final model side by
+/// side, channel by channel ([`tested_channels`]).
+fn residual_tests(base_hold: &Score, final_hold: &Score) -> Vec<ResidualTest> {
+    tested_channels(base_hold, final_hold)
         .map(|(b, f)| ResidualTest {
             recording: b.recording.clone(),
             channel: b.channel.name(),
@@ -199,32 +307,7 @@ pub fn diagnose(
             .0,
             input_band: whiteness::input_correlation(&f.residuals, &f.input_v, INPUT_LAGS).1,
         })
-        .collect();
-    let verdict = Verdict {
-        causes,
-        verdict: verdict.to_string(),
-        baseline: score_of(&baseline, &base_hold),
-        extended: score_of(&current, &current_hold),
-        gain_percent: gain_percent(base_hold.nrmse, current_hold.nrmse),
-        candidates,
-        params: current
-            .estimates
-            .iter()
-            .map(|e| (e.knob.name().to_string(), e.value))
-            .collect(),
-        training: train.iter().map(name).collect(),
-        holdout: hold.iter().map(name).collect(),
-        residual_tests,
-        rest,
-        analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
-    };
-    Ok(Diagnosis {
-        verdict,
-        baseline,
-        final_fit: current,
-        holdout_scores: (base_hold, current_hold),
-        holdout: hold,
-    })
+        .collect()
 }
 
 /// The held-out channels whose residuals are tested for whiteness (those
