@@ -30,11 +30,11 @@ use proptest::test_runner::TestCaseError;
 use rand::{Rng, SeedableRng};
 
 /// Cases per sweep when `PROPTEST_CASES` is not set.
-const DEFAULT_CASES: u32 = 12;
+const DEFAULT_CASES: u32 = 16;
 /// Longest a case may run (`FINRS_SWEEP_TIME_BOUND_S` to change it): the
 /// generated inputs are small (a diagnosis of them takes at most seconds of
 /// CPU), so anything near this is a hang, not work, even on a busy machine.
-const TIME_BOUND: Duration = Duration::from_secs(90);
+const TIME_BOUND: Duration = Duration::from_secs(120);
 
 fn time_bound() -> Duration {
     std::env::var("FINRS_SWEEP_TIME_BOUND_S")
@@ -59,8 +59,8 @@ fn config() -> ProptestConfig {
     }
 }
 
-/// A fresh folder for one case, removed when the case passes.
-struct CaseDir(PathBuf);
+/// A fresh folder for one case, removed unless the case failed.
+struct CaseDir(PathBuf, std::cell::Cell<bool>);
 
 impl CaseDir {
     fn new() -> CaseDir {
@@ -72,7 +72,7 @@ impl CaseDir {
         ));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        CaseDir(dir)
+        CaseDir(dir, std::cell::Cell::new(false))
     }
 
     fn path(&self, name: &str) -> PathBuf {
@@ -95,7 +95,7 @@ impl CaseDir {
 
 impl Drop for CaseDir {
     fn drop(&mut self) {
-        if !std::thread::panicking() {
+        if !self.1.get() && !std::thread::panicking() {
             let _ = std::fs::remove_dir_all(&self.0);
         }
     }
@@ -127,6 +127,8 @@ fn run_finrs(dir: &CaseDir, args: &[String]) -> Result<(), TestCaseError> {
         std::thread::sleep(Duration::from_millis(5));
     };
     let stderr = std::fs::read_to_string(dir.path("stderr.txt")).unwrap_or_default();
+    // Kept for whoever reads the failure; removed again if the case passes.
+    dir.1.set(true);
     let what = || {
         let mut s = format!("finrs {}", shell_words(args));
         let _ = write!(
@@ -179,6 +181,7 @@ fn run_finrs(dir: &CaseDir, args: &[String]) -> Result<(), TestCaseError> {
             what()
         );
     }
+    dir.1.set(false);
     Ok(())
 }
 
@@ -809,7 +812,7 @@ fn out_path(dir: &CaseDir, kind: u8, name: &str) -> String {
         0 => dir.arg(&format!("missing/dir/{name}")),
         1 => dir.arg("session"),
         2 => "/dev/full".to_string(),
-        3 => String::new(),
+        3 => "/proc/finrs-sweep-cannot-write".to_string(),
         _ => dir.arg(name),
     }
 }
