@@ -120,15 +120,17 @@ impl Session {
             .unwrap_or(rec.v_v.len());
         let rest_s = rest_rows as f64 * dt_s;
         if rest_s < 1.0 - 0.5 * dt_s {
-            // Metadata lines, then the header, then data rows.
-            return Err(SessionError::Rule {
-                file,
-                message: format!(
-                    "data row {} (t = {} s) drives a segment after only {rest_s:.3} s at 0 V: a recording opens with at least 1 s at zero volts (docs/FORMAT.md), which the fit needs for its rest and noise",
+            let message = match rec.t_s.get(rest_rows) {
+                Some(t_s) => format!(
+                    "data row {} (t = {t_s} s) drives a segment after only {rest_s:.3} s at 0 V: a recording opens with at least 1 s at zero volts (docs/FORMAT.md), which the fit needs for its rest and noise",
                     rest_rows + 1,
-                    rec.t_s[rest_rows]
                 ),
-            });
+                // Never driven: the whole recording is its opening rest.
+                None => format!(
+                    "the recording is {rest_s:.3} s long ({rest_rows} data rows), all at 0 V: a recording opens with at least 1 s at zero volts (docs/FORMAT.md), which the fit needs for its rest and noise",
+                ),
+            };
+            return Err(SessionError::Rule { file, message });
         }
         Ok(SessionRecording {
             name: path
@@ -150,4 +152,48 @@ impl Session {
 
 fn path_name(p: &Path) -> String {
     p.display().to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEAD: &str = "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n# thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\nt_s,v1_V\n";
+
+    fn at_volts(rows: usize, volts: impl Fn(usize) -> f64) -> Recording {
+        let mut text = HEAD.to_string();
+        for i in 0..rows {
+            text += &format!("{},{}\n", i as f64 * 1e-3, volts(i));
+        }
+        Recording::parse("r.csv", &text).unwrap()
+    }
+
+    // Regression: a recording never driven and shorter than 1 s indexed one
+    // row past its end while saying where the drive began.
+    #[test]
+    fn all_rest_shorter_than_1_s_is_refused_by_name() {
+        let err = Session::prepare(Path::new("s/zero.csv"), at_volts(500, |_| 0.0)).unwrap_err();
+        let text = err.to_string();
+        assert!(text.starts_with("s/zero.csv: "), "{text}");
+        assert!(
+            text.contains("0.500 s long (500 data rows), all at 0 V"),
+            "{text}"
+        );
+        assert!(text.contains("at least 1 s at zero volts"), "{text}");
+    }
+
+    #[test]
+    fn drive_before_1_s_is_refused_at_its_row() {
+        let rec = at_volts(2000, |i| if i < 300 { 0.0 } else { 1.0 });
+        let text = Session::prepare(Path::new("d.csv"), rec)
+            .unwrap_err()
+            .to_string();
+        assert!(text.contains("data row 301 (t = 0.3 s)"), "{text}");
+    }
+
+    #[test]
+    fn all_rest_of_1_s_is_accepted() {
+        let r = Session::prepare(Path::new("z.csv"), at_volts(1001, |_| 0.0)).unwrap();
+        assert_eq!(r.rest_rows, 1001);
+    }
 }

@@ -228,20 +228,34 @@ fn writer_refuses_what_the_reader_would() {
         .is_err());
 }
 
-/// The example session (beside the checkout in CI) reads cleanly.
+/// The contract's example recordings (`data/baseline-air`, see its README)
+/// read cleanly.
 #[test]
 fn example_session_reads() {
-    let dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench/examples/baseline-air");
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        eprintln!("skipped: {} is not here", dir.display());
-        return;
-    };
-    for entry in entries {
-        let path = entry.unwrap().path();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air");
+    let files = baseline_air_files(&dir);
+    assert_eq!(files.len(), 3, "{}: {files:?}", dir.display());
+    for path in files {
         let rec = Recording::read(&path).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(rec.meta.segments, 3);
         assert!(rec.t_s.len() > 9_000, "{}", path.display());
         assert!(rec.channel(Channel::Current(2)).is_some());
     }
+}
+
+/// The `.csv` files of `dir`, in name order; a missing folder fails the
+/// test (the data ship with the repository).
+fn baseline_air_files(dir: &Path) -> Vec<std::path::PathBuf> {
+    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (the test data ship with the repository)",
+            dir.display()
+        )
+    });
+    let mut files: Vec<_> = entries
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .collect();
+    files.sort();
+    files
 }

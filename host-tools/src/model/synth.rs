@@ -41,9 +41,9 @@ pub enum DriveError {
         /// The wave's duration, s.
         duration_s: f64,
     },
-    /// More rows than this tool writes.
-    #[error("{0} rows is more than this tool writes (50 million)")]
-    TooManyRows(usize),
+    /// More rows than this tool writes (or too many to count).
+    #[error("{0:.0} rows is more than this tool writes (50 million)")]
+    TooManyRows(f64),
     /// The wave is refused for these segments and options.
     #[error(transparent)]
     Wave(#[from] WaveError),
@@ -58,6 +58,9 @@ pub enum DriveError {
         rule: finrs_drive::LimitError,
     },
 }
+
+/// Rows a drive recording may have at most.
+const MAX_ROWS: usize = 50_000_000;
 
 /// When and how a wave is applied.
 #[derive(Clone, Copy, Debug)]
@@ -162,10 +165,12 @@ pub fn drive_recording_shaped(
     };
     let generator = wave.generator(d.segments, &options)?;
     let total_s = d.rest_s + d.duration_s + d.off_s;
-    let rows = (total_s * d.rate_hz).round() as usize + 1;
-    if rows > 50_000_000 {
-        return Err(DriveError::TooManyRows(rows));
+    // Counted in f64 first: a long drive overflows `usize`, or is infinite.
+    let rows_f = (total_s * d.rate_hz).round() + 1.0;
+    if rows_f.is_nan() || rows_f > MAX_ROWS as f64 {
+        return Err(DriveError::TooManyRows(rows_f));
     }
+    let rows = rows_f as usize;
     // First row at or after rest_s (the 1e-9 forgives rounding in the
     // product, e.g. 0.1 s × 1000 Hz).
     let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
@@ -198,6 +203,32 @@ pub fn drive_recording_shaped(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    // Regression: 2^64 s of drive overflowed the row count (a panic).
+    #[test]
+    fn a_drive_too_long_to_count_is_refused() {
+        let wave = Wave::parse("step:1").unwrap();
+        for (duration_s, off_s) in [
+            (18_446_744_073_709_551_616.0, 0.0),
+            (1e300, 0.0),
+            (f64::MAX, f64::MAX),
+            (50_000.0, 0.001),
+        ] {
+            let d = Drive {
+                segments: 1,
+                fixture: Fixture::Free,
+                rest_s: 0.0,
+                duration_s,
+                off_s,
+                rate_hz: 1000.0,
+            };
+            let err = drive_recording(&wave, &d).unwrap_err().to_string();
+            assert!(
+                err.ends_with("rows is more than this tool writes (50 million)"),
+                "{err}"
+            );
+        }
+    }
 
     #[test]
     fn limits_name_the_value_and_rule() {

@@ -16,6 +16,9 @@ pub enum FitError {
     /// Nothing to fit.
     #[error("the fit needs at least one recording with a measured channel")]
     NoData,
+    /// No recording drives a segment: the data say nothing of the model.
+    #[error("no recording of the fit drives a segment (every voltage is 0 V): the data say nothing of the model's parameters")]
+    NoDrive,
     /// Too few recordings to hold some out.
     #[error("a diagnosis holds recordings out to test on: it needs at least two, and a second of each fixture it holds out; this session has {0}")]
     TooFewToHoldOut(usize),

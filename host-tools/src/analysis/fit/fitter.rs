@@ -203,6 +203,13 @@ impl<'a> Fitter<'a> {
         if n_data == 0 {
             return Err(FitError::NoData);
         }
+        let driven = recordings.iter().any(|&i| {
+            let v_v = &self.session.recordings[i].rec.v_v;
+            v_v.iter().flatten().any(|&v| v != 0.0)
+        });
+        if !driven {
+            return Err(FitError::NoDrive);
+        }
         let space = Space::new(effects, fixed);
         let start = match start {
             Some(s) => *s,
