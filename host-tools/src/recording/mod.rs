@@ -14,12 +14,14 @@
 
 mod channel;
 mod error;
+mod float;
 mod meta;
 mod read;
 mod write;
 
 pub use channel::Channel;
 pub use error::RecordingError;
+pub use float::{max_written_error, MEASURED_DECIMALS, MEASURED_QUANTUM};
 pub use meta::{Fixture, Medium, Metadata, FORMAT};
 
 /// The seed's Nafion samples' safe range, V: no valid recording exceeds it.
