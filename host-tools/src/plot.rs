@@ -1,6 +1,12 @@
 //! PNG plots of recordings: the drive, the mechanical channel (tip or
 //! force), and the currents, one panel each, measured and simulated
-//! together when both are given.
+//! together when both are given; and residual autocorrelations.
+//!
+//! Read at a glance: measured samples are black, each model keeps one
+//! colour ([`model_colour`]) in every plot, camera frames (sampled on a
+//! few rows only) are drawn as points with the models both as lines and
+//! at the same frames, and the whiteness band is a dashed red, not the
+//! grid's grey.
 
 use std::path::Path;
 
@@ -8,19 +14,71 @@ use plotters::prelude::*;
 
 use crate::recording::{Channel, Fixture, Recording};
 
-/// One trace: a label, a colour and its points.
-type Trace = (String, RGBColor, Vec<(f64, f64)>);
+/// Measured samples, in every plot.
+pub const MEASURED_COLOUR: RGBColor = RGBColor(0, 0, 0);
 
-const PALETTE: [RGBColor; 8] = [
+/// The 99 % band of a white residual's autocorrelation.
+pub const BAND_COLOUR: RGBColor = RGBColor(214, 39, 40);
+
+/// The grid's major and minor lines, as drawn (plotters' default, black at
+/// 20 % and 10 % on white, made explicit so the band can be kept apart).
+pub const GRID_COLOURS: [RGBColor; 2] = [RGBColor(204, 204, 204), RGBColor(230, 230, 230)];
+
+/// The models' colours in the order they are given (blue, orange, green,
+/// purple), the same in every plot.
+const MODEL_COLOURS: [RGBColor; 4] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
+];
+
+/// The drive voltages' colours per segment: hues no model uses.
+const SEGMENT_COLOURS: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+    RGBColor(90, 50, 40),
+    RGBColor(150, 60, 120),
+    RGBColor(110, 110, 20),
+    RGBColor(15, 110, 120),
 ];
+
+/// The colour of the `j`th model given to a plot (0-based); the report
+/// gives its models in one order, so each keeps its colour everywhere.
+pub fn model_colour(j: usize) -> RGBColor {
+    MODEL_COLOURS[j % MODEL_COLOURS.len()]
+}
+
+/// `colour` lightened for segment `k`, so that segments of one model stay
+/// in that model's hue.
+fn shade(colour: RGBColor, k: usize) -> RGBColor {
+    let f = [0.0, 0.4, 0.6, 0.7][k.min(3)];
+    let mix = |c: u8| (f64::from(c) + (255.0 - f64::from(c)) * f) as u8;
+    RGBColor(mix(colour.0), mix(colour.1), mix(colour.2))
+}
+
+/// How a trace is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Style {
+    /// A line through the points.
+    Line,
+    /// A dot per point: sparse samples (camera frames).
+    Points,
+    /// A dashed line: a reference, not data.
+    Dashed,
+}
+
+/// One trace: a label (empty: none in the legend), a colour, a style and
+/// its points.
+#[derive(Debug)]
+struct Trace {
+    label: String,
+    colour: RGBColor,
+    style: Style,
+    points: Vec<(f64, f64)>,
+}
 
 /// Writes a three-panel PNG of `simulated`, with `measured` beneath it.
 pub fn plot(
@@ -49,63 +107,111 @@ pub fn plot_models(
     let panels = root.split_evenly((3, 1));
 
     let voltages: Vec<Trace> = (0..first.meta.segments)
-        .map(|k| {
-            let pts = first
+        .map(|k| Trace {
+            label: format!("v{}", k + 1),
+            colour: SEGMENT_COLOURS[k % SEGMENT_COLOURS.len()],
+            style: Style::Line,
+            points: first
                 .t_s
                 .iter()
                 .zip(&first.v_v)
                 .map(|(&t, v)| (t, v[k]))
-                .collect();
-            (format!("v{}", k + 1), PALETTE[k % 8], pts)
+                .collect(),
         })
         .collect();
     panel(&panels[0], "voltage (V)", &voltages)?;
 
-    let (channel, label, scale) = match first.meta.fixture {
-        Fixture::Free => (Channel::TipY, "tip across (mm)", 1e3),
-        Fixture::Blocked => (Channel::Force, "blocking force (mN)", 1e3),
+    let (channel, label) = match first.meta.fixture {
+        Fixture::Free => (Channel::TipY, "tip across (mm)"),
+        Fixture::Blocked => (Channel::Force, "blocking force (mN)"),
     };
-    let mut mech = Vec::new();
-    if let Some(m) = measured {
-        mech.push((
-            "measured".to_string(),
-            RGBColor(120, 120, 120),
-            points(m, channel, scale),
-        ));
-    }
-    for (j, (name, sim)) in models.iter().enumerate() {
-        mech.push((
-            name.to_string(),
-            PALETTE[j % 8],
-            points(sim, channel, scale),
-        ));
-    }
-    panel(&panels[1], label, &mech)?;
+    panel(
+        &panels[1],
+        label,
+        &channel_traces(measured, models, channel, 1e3, 0, ""),
+    )?;
 
     let mut currents = Vec::new();
     for k in 0..first.meta.segments {
-        if let Some(m) = measured {
-            currents.push((
-                format!("i{} measured", k + 1),
-                RGBColor(160, 160, 160),
-                points(m, Channel::Current(k), 1e3),
-            ));
-        }
-        for (j, (name, sim)) in models.iter().enumerate() {
-            currents.push((
-                format!("i{} {name}", k + 1),
-                PALETTE[(k + j * 3) % 8],
-                points(sim, Channel::Current(k), 1e3),
-            ));
-        }
+        let prefix = format!("i{} ", k + 1);
+        currents.extend(channel_traces(
+            measured,
+            models,
+            Channel::Current(k),
+            1e3,
+            k,
+            &prefix,
+        ));
     }
     panel(&panels[2], "current (mA)", &currents)?;
     root.present()?;
     Ok(())
 }
 
-/// Writes a PNG of residual autocorrelations (lag in samples) with the
-/// band `±band` that white residuals stay inside 99 % of the time.
+/// The traces of one channel, scaled: each model as a line in its colour,
+/// and where the measurement is sparse, also as dots at the measured
+/// frames; and the measured samples in black: larger dots on top where
+/// sampled on fewer than half the rows (camera frames), else a line
+/// beneath the models. `segment` lightens the
+/// colours; `prefix` starts every label.
+fn channel_traces(
+    measured: Option<&Recording>,
+    models: &[(&str, &Recording)],
+    ch: Channel,
+    scale: f64,
+    segment: usize,
+    prefix: &str,
+) -> Vec<Trace> {
+    let mut traces = Vec::new();
+    let mut frames = None;
+    let mut measured_trace = None;
+    if let Some(m) = measured {
+        let points = points(m, ch, scale);
+        let sparse = 2 * points.len() < m.t_s.len();
+        if sparse {
+            frames = m.channel(ch);
+        }
+        measured_trace = Some(Trace {
+            label: format!("{prefix}measured"),
+            colour: shade(MEASURED_COLOUR, segment),
+            style: if sparse { Style::Points } else { Style::Line },
+            points,
+        });
+    }
+    for (j, (name, sim)) in models.iter().enumerate() {
+        let colour = shade(model_colour(j), segment);
+        traces.push(Trace {
+            label: format!("{prefix}{name}"),
+            colour,
+            style: Style::Line,
+            points: points(sim, ch, scale),
+        });
+        if let (Some(frames), Some(values)) = (frames, sim.channel(ch)) {
+            traces.push(Trace {
+                label: String::new(),
+                colour,
+                style: Style::Points,
+                points: sim
+                    .t_s
+                    .iter()
+                    .zip(values)
+                    .zip(frames)
+                    .filter_map(|((&t, v), f)| f.and(*v).map(|v| (t, v * scale)))
+                    .collect(),
+            });
+        }
+    }
+    // Dots go on top of the models; a dense line beneath them.
+    match measured_trace {
+        Some(m) if m.style == Style::Line => traces.insert(0, m),
+        m => traces.extend(m),
+    }
+    traces
+}
+
+/// Writes a PNG of residual autocorrelations (lag in samples), one series
+/// per model in the models' colours, with the band `±band` that white
+/// residuals stay inside 99 % of the time, dashed in [`BAND_COLOUR`].
 pub fn plot_autocorrelation(
     path: &Path,
     title: &str,
@@ -115,29 +221,46 @@ pub fn plot_autocorrelation(
     let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
     root.fill(&WHITE)?;
     let root = root.titled(title, ("sans-serif", 20))?;
+    panel_x(
+        &root,
+        "lag (samples)",
+        "autocorrelation",
+        &autocorrelation_traces(series, band),
+    )?;
+    root.present()?;
+    Ok(())
+}
+
+/// The autocorrelation plot's traces: the series, then the two band lines.
+fn autocorrelation_traces(series: &[(&str, Vec<f64>)], band: f64) -> Vec<Trace> {
     let mut traces: Vec<Trace> = series
         .iter()
         .enumerate()
-        .map(|(j, (name, rho))| {
-            let pts = rho
+        .map(|(j, (name, rho))| Trace {
+            label: name.to_string(),
+            colour: model_colour(j),
+            style: Style::Line,
+            points: rho
                 .iter()
                 .enumerate()
                 .map(|(k, &r)| (k as f64, r))
-                .collect();
-            (name.to_string(), PALETTE[j % 8], pts)
+                .collect(),
         })
         .collect();
     let lags = series.iter().map(|s| s.1.len()).max().unwrap_or(1) as f64;
     for sign in [1.0, -1.0] {
-        traces.push((
-            format!("{} 99 % band", if sign > 0.0 { "+" } else { "−" }),
-            RGBColor(150, 150, 150),
-            vec![(0.0, sign * band), (lags, sign * band)],
-        ));
+        traces.push(Trace {
+            label: if sign > 0.0 {
+                "±99 % band of white noise".to_string()
+            } else {
+                String::new()
+            },
+            colour: BAND_COLOUR,
+            style: Style::Dashed,
+            points: vec![(0.0, sign * band), (lags, sign * band)],
+        });
     }
-    panel_x(&root, "lag (samples)", "autocorrelation", &traces)?;
-    root.present()?;
-    Ok(())
+    traces
 }
 
 /// The sampled points of a channel, scaled; empty if the channel is absent.
@@ -173,7 +296,7 @@ fn panel_x<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let all = traces.iter().flat_map(|t| t.2.iter());
+    let all = traces.iter().flat_map(|t| t.points.iter());
     let (mut t0, mut t1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(t, y) in all {
         t0 = t0.min(t);
@@ -192,15 +315,28 @@ where
         .build_cartesian_2d(t0..t1.max(t0 + 1e-9), (y0 - pad)..(y1 + pad))?;
     chart
         .configure_mesh()
+        .bold_line_style(GRID_COLOURS[0])
+        .light_line_style(GRID_COLOURS[1])
         .x_desc(x_label)
         .y_desc(y_label)
         .draw()?;
-    for (label, colour, pts) in traces {
-        let colour = *colour;
-        chart
-            .draw_series(LineSeries::new(pts.iter().copied(), colour))?
-            .label(label)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour));
+    for trace in traces {
+        let colour = trace.colour;
+        let pts = trace.points.iter().copied();
+        let drawn = match trace.style {
+            Style::Line => chart.draw_series(LineSeries::new(pts, colour))?,
+            Style::Points => chart.draw_series(pts.map(|p| Circle::new(p, 2, colour.filled())))?,
+            Style::Dashed => {
+                chart.draw_series(DashedLineSeries::new(pts, 10, 6, colour.stroke_width(2)))?
+            }
+        };
+        if trace.label.is_empty() {
+            continue;
+        }
+        drawn.label(&trace.label).legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (16, 0)], colour.stroke_width(2))
+        });
     }
     chart
         .configure_series_labels()
@@ -208,4 +344,103 @@ where
         .border_style(BLACK)
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::{Medium, Metadata};
+
+    /// Squared distance between two colours in RGB.
+    fn distance2(a: RGBColor, b: RGBColor) -> i32 {
+        let d = |x: u8, y: u8| (i32::from(x) - i32::from(y)).pow(2);
+        d(a.0, b.0) + d(a.1, b.1) + d(a.2, b.2)
+    }
+
+    #[test]
+    fn every_model_band_and_measurement_stands_apart() {
+        // One colour per model, the same on every call.
+        assert_eq!(model_colour(1), model_colour(1));
+        let mut apart = vec![MEASURED_COLOUR, BAND_COLOUR];
+        apart.extend((0..MODEL_COLOURS.len()).map(model_colour));
+        apart.extend(GRID_COLOURS);
+        apart.extend(SEGMENT_COLOURS);
+        for (i, &a) in apart.iter().enumerate() {
+            for &b in &apart[i + 1..] {
+                assert!(distance2(a, b) > 40 * 40, "{a:?} and {b:?} look alike");
+            }
+        }
+        // The band is far from the grid's greys, not one of them.
+        for g in GRID_COLOURS {
+            assert!(distance2(BAND_COLOUR, g) > 150 * 150);
+        }
+    }
+
+    fn free(rows: usize, tip: impl Fn(usize) -> Option<f64>) -> Recording {
+        Recording {
+            meta: Metadata {
+                segments: 1,
+                length_m: 0.05,
+                width_m: 0.01,
+                thickness_m: 2.858e-4,
+                fixture: Fixture::Free,
+                medium: Medium::Air,
+                sample: None,
+                cation: None,
+                dots_s_m: None,
+                notes: None,
+            },
+            t_s: (0..rows).map(|k| k as f64 * 1e-3).collect(),
+            v_v: vec![vec![1.0]; rows],
+            channels: vec![
+                (
+                    Channel::Current(0),
+                    (0..rows).map(|k| Some(k as f64)).collect(),
+                ),
+                (Channel::TipY, (0..rows).map(tip).collect()),
+            ],
+        }
+    }
+
+    #[test]
+    fn camera_frames_are_dots_and_models_keep_their_colour() {
+        // Camera every 33rd row: sparse.
+        let measured = free(100, |k| (k % 33 == 0).then_some(1e-3));
+        let base = free(100, |_| Some(2e-3));
+        let fin = free(100, |_| Some(3e-3));
+        let models = [("baseline", &base), ("final", &fin)];
+        let tip = channel_traces(Some(&measured), &models, Channel::TipY, 1e3, 0, "");
+        let styles: Vec<(Style, RGBColor, usize)> = tip
+            .iter()
+            .map(|t| (t.style, t.colour, t.points.len()))
+            .collect();
+        assert_eq!(
+            styles,
+            [
+                (Style::Line, model_colour(0), 100),
+                (Style::Points, model_colour(0), 4),
+                (Style::Line, model_colour(1), 100),
+                (Style::Points, model_colour(1), 4),
+                (Style::Points, MEASURED_COLOUR, 4),
+            ]
+        );
+        // The models at the frames are their own values there.
+        assert_eq!(tip[3].points[1], (33e-3, 3.0));
+        // Currents on every row: a line, no frames.
+        let i = channel_traces(Some(&measured), &models, Channel::Current(0), 1e3, 0, "i1 ");
+        assert_eq!(i.len(), 3);
+        assert_eq!((i[0].style, i[0].colour), (Style::Line, MEASURED_COLOUR));
+        assert_eq!(i[2].colour, model_colour(1));
+        assert_eq!(i[2].label, "i1 final");
+        // The same models in the autocorrelation plot: the same colours.
+        let rho = autocorrelation_traces(
+            &[("baseline", vec![1.0, 0.1]), ("final", vec![1.0, 0.0])],
+            0.05,
+        );
+        assert_eq!(rho[0].colour, model_colour(0));
+        assert_eq!(rho[1].colour, model_colour(1));
+        assert!(rho[2..]
+            .iter()
+            .all(|t| t.colour == BAND_COLOUR && t.style == Style::Dashed));
+    }
 }

@@ -1,7 +1,7 @@
 //! The reader on arbitrary and on nearly valid input: it never panics, and
 //! whatever it accepts is a recording that passes every rule.
 
-use finrs::recording::{Channel, Fixture, Medium, Metadata, Recording};
+use finrs::recording::{max_written_error, Channel, Fixture, Medium, Metadata, Recording};
 use proptest::prelude::*;
 
 const VALID: &str = include_str!("data/good/free_camera.csv");
@@ -46,9 +46,9 @@ proptest! {
     }
 
     #[test]
-    fn valid_recordings_round_trip_exactly(
+    fn valid_recordings_round_trip_within_resolution(
         segments in 1usize..=8,
-        rows in proptest::collection::vec((1e-6f64..10.0, -4.0f64..=4.0, proptest::option::of(-1.0f64..1.0)), 1..40),
+        rows in proptest::collection::vec((1e-6f64..10.0, -4.0f64..=4.0, proptest::option::of(prop_oneof![-1.0f64..1.0, -1e-6f64..1e-6, -200.0f64..200.0])), 1..40),
         blocked in any::<bool>(),
         notes in any::<String>(),
     ) {
@@ -83,6 +83,22 @@ proptest! {
         };
         rec.validate("gen.csv").unwrap();
         let back = Recording::parse("gen.csv", &rec.to_csv_string()).unwrap();
-        prop_assert_eq!(back, rec);
+        // Metadata, time and voltages exactly; empty fields stay empty;
+        // measured values within the written resolution.
+        prop_assert_eq!(&back.meta, &rec.meta);
+        prop_assert_eq!(&back.t_s, &rec.t_s);
+        prop_assert_eq!(&back.v_v, &rec.v_v);
+        prop_assert_eq!(back.channels.len(), rec.channels.len());
+        for ((bc, bv), (rc, rv)) in back.channels.iter().zip(&rec.channels) {
+            prop_assert_eq!(bc, rc);
+            prop_assert_eq!(bv.len(), rv.len());
+            for (b, r) in bv.iter().zip(rv) {
+                match (b, r) {
+                    (Some(b), Some(r)) => prop_assert!((b - r).abs() <= max_written_error(*r), "{} read back as {}", r, b),
+                    (None, None) => {}
+                    _ => prop_assert!(false, "{:?} read back as {:?}", r, b),
+                }
+            }
+        }
     }
 }

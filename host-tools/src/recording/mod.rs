@@ -16,6 +16,7 @@
 mod channel;
 mod data;
 mod error;
+mod float;
 mod geometry;
 mod meta;
 mod read;
@@ -25,6 +26,7 @@ mod write;
 pub use channel::Channel;
 pub use data::{Recording, SAFE_VOLTAGE_LIMIT_V};
 pub use error::RecordingError;
+pub use float::{max_written_error, MEASURED_DECIMALS, MEASURED_QUANTUM};
 pub use geometry::Geometry;
 pub use meta::{Fixture, Medium, Metadata, FORMAT};
 pub use timing::SampleTimeError;

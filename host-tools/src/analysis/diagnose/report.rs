@@ -3,16 +3,41 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::Diagnosis;
+use super::{Diagnosis, ResidualTest, Verdict};
+use crate::analysis::fit::ChannelFit;
 use crate::model::simulate::simulate;
 use crate::plot;
 use crate::session::Session;
+
+/// A held-out channel under baseline and final model, with its whiteness.
+type Tested<'a> = ((&'a ChannelFit, &'a ChannelFit), &'a ResidualTest);
+
+/// The models in the order every plot gives them, so that each keeps its
+/// colour ([`plot::model_colour`]) from plot to plot.
+const MODELS: [&str; 2] = ["baseline", "final"];
 
 /// Writes `REPORT.md` and its plots into `dir`.
 pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir)?;
     let v = &d.verdict;
     let mut s = String::new();
+    summary(&mut s, session, v);
+    baseline_misses(&mut s, v);
+    candidates(&mut s, v);
+    parameters(&mut s, d);
+    let (b, f) = &d.holdout_scores;
+    let tested: Vec<Tested> = super::tested_channels(b, f)
+        .zip(&v.residual_tests)
+        .collect();
+    holdout_channels(&mut s, &tested);
+    recording_plots(&mut s, dir, session, d)?;
+    autocorrelation_plot(&mut s, dir, &tested)?;
+    std::fs::write(dir.join("REPORT.md"), s)?;
+    Ok(())
+}
+
+/// The verdict, the split and the two models' scores.
+fn summary(s: &mut String, session: &Session, v: &Verdict) {
     let _ = writeln!(s, "# Diagnosis of `{}`\n", session.dir.display());
     let causes = if v.causes.is_empty() {
         "none".to_string()
@@ -59,6 +84,10 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             " (white noise fails one in a hundred)"
         }
     );
+}
+
+/// Where the baseline's misfit lives across the session.
+fn baseline_misses(s: &mut String, v: &Verdict) {
     let a = &v.analyses;
     let _ = writeln!(s, "## Where the baseline misses\n");
     let _ = writeln!(
@@ -125,6 +154,10 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             a.immovable.join(", ")
         );
     }
+}
+
+/// Every candidate effect tried, with its tests.
+fn candidates(s: &mut String, v: &Verdict) {
     let _ = writeln!(s, "## Candidates\n");
     let _ = writeln!(
         s,
@@ -153,6 +186,10 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             terms.join(", ")
         );
     }
+}
+
+/// The final model's estimates with their intervals.
+fn parameters(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(s, "\n## Final model's parameters (95 % intervals)\n");
     let _ = writeln!(s, "| parameter | estimate | interval |");
     let _ = writeln!(s, "|---|---|---|");
@@ -166,14 +203,14 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             e.high
         );
     }
+}
+
+/// Fit and whiteness of every held-out channel.
+fn holdout_channels(s: &mut String, tested: &[Tested]) {
     let _ = writeln!(s, "\n## Held-out channels\n");
     let _ = writeln!(s, "| recording | channel | baseline fit % | final fit % | Ljung–Box Q baseline | final | 99 % threshold | input correlation baseline | final | 99 % band |");
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
-    let (b, f) = &d.holdout_scores;
-    let tested: Vec<_> = super::tested_channels(b, f)
-        .zip(&v.residual_tests)
-        .collect();
-    for &((cb, cf), t) in &tested {
+    for &((cb, cf), t) in tested {
         let _ = writeln!(
             s,
             "| {} | {} | {:.2} | {:.2} | {:.1} | {:.1} | {:.1} | {:.3} | {:.3} | {:.3} |",
@@ -189,6 +226,15 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             t.input_band
         );
     }
+}
+
+/// A plot of every held-out recording: measured, baseline and final model.
+fn recording_plots(
+    s: &mut String,
+    dir: &Path,
+    session: &Session,
+    d: &Diagnosis,
+) -> anyhow::Result<()> {
     let _ = writeln!(s, "\n## Plots\n");
     let _ = writeln!(
         s,
@@ -205,10 +251,16 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             &dir.join(&png),
             &format!("{} (held out)", r.name),
             Some(&r.rec),
-            &[("baseline", &base), ("final", &fin)],
+            &[(MODELS[0], &base), (MODELS[1], &fin)],
         )?;
         let _ = writeln!(s, "![{}]({png})\n", r.name);
     }
+    Ok(())
+}
+
+/// The residual autocorrelation of the held-out channel whose baseline
+/// residuals are least white, under both models.
+fn autocorrelation_plot(s: &mut String, dir: &Path, tested: &[Tested]) -> anyhow::Result<()> {
     // The held-out channel whose baseline residuals are least white.
     let worst = tested
         .iter()
@@ -226,11 +278,11 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             ),
             &[
                 (
-                    "baseline",
+                    MODELS[0],
                     super::whiteness::autocorrelation(&cb.residuals, lags),
                 ),
                 (
-                    "final",
+                    MODELS[1],
                     super::whiteness::autocorrelation(&cf.residuals, lags),
                 ),
             ],
@@ -240,11 +292,10 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
             s,
             "The least white held-out channel under the baseline, {} of {}: residual \
              autocorrelation of baseline and final model, with the band white noise \
-             stays inside 99 % of the time.\n\n![residual autocorrelation]({png})\n",
+             stays inside 99 % of the time (dashed red).\n\n![residual autocorrelation]({png})\n",
             cb.channel.name(),
             cb.recording
         );
     }
-    std::fs::write(dir.join("REPORT.md"), s)?;
     Ok(())
 }
