@@ -407,8 +407,8 @@ fn piece() -> impl Strategy<Value = Piece> {
     ]
 }
 
-/// The stream the pieces make, and the Samples encoded in it (intact or
-/// not), as (time s, force N).
+/// The stream the pieces make, and the intact Samples encoded in it, as
+/// (time s, force N) on the host's unwrapped clock.
 fn build(pieces: &[Piece], start_seq: u32, start_us: u32) -> (Vec<u8>, Vec<(f64, f64)>) {
     let (mut seq, mut bytes, mut encoded) = (start_seq, Vec::new(), Vec::new());
     let mut clock = Clock::new();
@@ -421,12 +421,16 @@ fn build(pieces: &[Piece], start_seq: u32, start_us: u32) -> (Vec<u8>, Vec<(f64,
                 if let Piece::FlipBit(i) = p {
                     let i = i % b.len();
                     b[i] ^= 0x01;
+                } else {
+                    // The host's clock sees only intact Samples (CRC-16
+                    // catches every single-bit flip): a wrap the damaged
+                    // ones crossed before the first intact one is unseen.
+                    encoded.push((
+                        clock.unwrap(t_us).unwrap() as f64 / 1e6,
+                        f64::from(s.force_n),
+                    ));
                 }
                 bytes.extend(b);
-                encoded.push((
-                    clock.unwrap(t_us).unwrap() as f64 / 1e6,
-                    f64::from(s.force_n),
-                ));
                 seq = seq.wrapping_add(1);
             }
             Piece::Skip(n) => seq = seq.wrapping_add(*n),
