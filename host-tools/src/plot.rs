@@ -389,6 +389,7 @@ mod tests {
                 cation: None,
                 dots_s_m: None,
                 notes: None,
+                t_session_start_s: None,
             },
             t_s: (0..rows).map(|k| k as f64 * 1e-3).collect(),
             v_v: vec![vec![1.0]; rows],

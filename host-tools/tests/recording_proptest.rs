@@ -76,6 +76,7 @@ proptest! {
                 cation: None,
                 dots_s_m: None,
                 notes: Some(notes),
+                t_session_start_s: None,
             },
             t_s,
             v_v,

@@ -193,6 +193,7 @@ pub fn drive_recording_shaped(
             cation: None,
             dots_s_m: None,
             notes: None,
+            t_session_start_s: None,
         },
         t_s,
         v_v,

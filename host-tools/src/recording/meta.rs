@@ -46,6 +46,9 @@ pub struct Metadata {
     pub dots_s_m: Option<Vec<f64>>,
     /// Free text.
     pub notes: Option<String>,
+    /// Seconds from the start of the session's first recording to this
+    /// one's `t_s = 0`: the clock drying is measured against.
+    pub t_session_start_s: Option<f64>,
 }
 
 const REQUIRED: [&str; 7] = [
@@ -57,7 +60,7 @@ const REQUIRED: [&str; 7] = [
     "fixture",
     "medium",
 ];
-const OPTIONAL: [&str; 4] = ["sample", "cation", "dots_s_m", "notes"];
+const OPTIONAL: [&str; 5] = ["sample", "cation", "dots_s_m", "notes", "t_session_start_s"];
 
 /// Collects metadata lines, then checks them as a whole.
 #[derive(Default)]
@@ -202,6 +205,30 @@ impl MetaBuilder {
             None => None,
             Some((_, v, l)) => Some(dots(file, *l, v, length_m)?),
         };
+        let t_session_start_s = match get("t_session_start_s") {
+            None => None,
+            Some((_, v, l)) => {
+                let x = match v {
+                    toml::Value::Float(f) => *f,
+                    toml::Value::Integer(i) => *i as f64,
+                    _ => {
+                        return Err(RecordingError::at(
+                            file,
+                            *l,
+                            "`t_session_start_s` must be a number of seconds".to_string(),
+                        ))
+                    }
+                };
+                if !x.is_finite() || x < 0.0 {
+                    return Err(RecordingError::at(
+                        file,
+                        *l,
+                        format!("`t_session_start_s` must be zero or positive and finite, got {x}"),
+                    ));
+                }
+                Some(x)
+            }
+        };
         Ok(Metadata {
             segments,
             length_m,
@@ -213,6 +240,7 @@ impl MetaBuilder {
             cation: string("cation")?.map(|s| s.0),
             dots_s_m,
             notes: string("notes")?.map(|s| s.0),
+            t_session_start_s,
         })
     }
 }
@@ -282,6 +310,9 @@ impl Metadata {
         }
         if let Some(s) = &self.notes {
             out.push_str(&format!("# notes = {}\n", q(s)));
+        }
+        if let Some(t) = self.t_session_start_s {
+            out.push_str(&format!("# t_session_start_s = {t:?}\n"));
         }
         out
     }

@@ -1,5 +1,6 @@
 //! When a recording's rows were taken: its sample time, and where it sits
-//! in its session's time (`t_session_start_s = …` in its notes).
+//! in its session's time (the `t_session_start_s` key, or the same words
+//! in its notes, as earlier recordings wrote it).
 
 use super::data::Recording;
 use super::meta::Metadata;
@@ -53,9 +54,13 @@ fn sample_time(t_s: &[f64]) -> Result<f64, SampleTimeError> {
 }
 
 impl Metadata {
-    /// Session time at the recording's start, s, when its notes say
-    /// `t_session_start_s = …`: the dehydration clock.
+    /// Session time at the recording's start, s: the `t_session_start_s`
+    /// key, or where it is missing `t_session_start_s = …` in the notes
+    /// (how recordings said it before the key): the dehydration clock.
     pub fn session_start_s(&self) -> Option<f64> {
+        if let Some(t) = self.t_session_start_s {
+            return Some(t);
+        }
         let notes = self.notes.as_deref()?;
         let rest = &notes[notes.find("t_session_start_s")? + "t_session_start_s".len()..];
         let rest = rest.trim_start().strip_prefix('=')?.trim_start();
@@ -95,5 +100,34 @@ mod tests {
         assert_eq!(m.session_start_s(), None);
         m.notes = None;
         assert_eq!(m.session_start_s(), None);
+    }
+
+    const HEAD: &str = "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n# thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\n";
+
+    #[test]
+    fn session_start_is_a_key_that_wins_over_the_notes_and_round_trips() {
+        let text = format!(
+            "{HEAD}# notes = \"t_session_start_s = 5\"\n# t_session_start_s = 97.25\nt_s,v1_V\n0,0\n"
+        );
+        let r = Recording::parse("k.csv", &text).unwrap();
+        assert_eq!(r.meta.t_session_start_s, Some(97.25));
+        assert_eq!(r.meta.session_start_s(), Some(97.25));
+        let again =
+            Recording::parse("k2.csv", &format!("{}t_s,v1_V\n0,0\n", r.meta.to_lines())).unwrap();
+        assert_eq!(again.meta, r.meta);
+    }
+
+    #[test]
+    fn a_bad_session_start_is_refused_by_line_and_rule() {
+        for (value, rule) in [
+            ("-1", "zero or positive"),
+            ("\"soon\"", "a number of seconds"),
+            ("nan", "zero or positive and finite"),
+        ] {
+            let text = format!("{HEAD}# t_session_start_s = {value}\nt_s,v1_V\n0,0\n");
+            let e = Recording::parse("bad.csv", &text).unwrap_err().to_string();
+            assert!(e.starts_with("bad.csv:8:"), "{e}");
+            assert!(e.contains("`t_session_start_s`") && e.contains(rule), "{e}");
+        }
     }
 }

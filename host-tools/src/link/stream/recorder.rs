@@ -415,6 +415,7 @@ impl Recorder {
                 cation: None,
                 dots_s_m: None,
                 notes: Some(self.notes()),
+                t_session_start_s: None,
             },
             t_s: self.t_s.clone(),
             v_v: self.v_v.clone(),
