@@ -213,3 +213,37 @@ fn one_recording_is_refused_with_the_reason() {
         "{err}"
     );
 }
+
+/// The contract's evidence: a session in air cannot show hydrodynamic
+/// loading, and one without every recording's session time cannot show
+/// drying; both are said, with the reason, and neither is tried.
+#[test]
+fn what_a_session_cannot_show_is_named_not_skipped() {
+    let dir = std::env::temp_dir().join(format!("finrs-untestable-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air");
+    for (i, name) in ["04_free_chirp.csv", "07_free_single_seg2.csv"]
+        .iter()
+        .enumerate()
+    {
+        let text = std::fs::read_to_string(data.join(name)).unwrap();
+        // The second recording loses its session time.
+        let text = if i == 1 {
+            text.replace("t_session_start_s = ", "started at ")
+        } else {
+            text
+        };
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    let session = Session::read(&dir).unwrap();
+    let u = finrs::analysis::diagnose::untestable(&session);
+    std::fs::remove_dir_all(&dir).ok();
+    let names: Vec<&str> = u.iter().map(|u| u.effect.as_str()).collect();
+    assert_eq!(names, ["hydrodynamic-loading", "dehydration"], "{u:?}");
+    assert!(u[0].why.contains("air"), "{}", u[0].why);
+    assert!(
+        u[1].why.contains("1 of 2") && u[1].why.contains("07_free_single_seg2"),
+        "{}",
+        u[1].why
+    );
+}

@@ -31,7 +31,9 @@ mod verdict;
 pub mod whiteness;
 
 pub use search::{
-    diagnose, rest_structure, split, tested_channels, DELTA_BIC, HOLDOUT_RSS_GAIN, INPUT_LAGS,
-    MAX_CAUSES, NOISE_FLOOR_RATIO, REST_STRUCTURE_SHARE,
+    diagnose, rest_structure, split, tested_channels, untestable, DELTA_BIC, HOLDOUT_RSS_GAIN,
+    INPUT_LAGS, MAX_CAUSES, NOISE_FLOOR_RATIO, REST_STRUCTURE_SHARE,
 };
-pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Verdict};
+pub use verdict::{
+    Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Untestable, Verdict,
+};

@@ -45,6 +45,12 @@ fn summary(s: &mut String, session: &Session, v: &Verdict) {
         v.causes.join(", ")
     };
     let _ = writeln!(s, "**Verdict: {}**; causes: {causes}.\n", v.verdict);
+    for u in &v.untestable {
+        let _ = writeln!(s, "- Not testable here: `{}`: {}.", u.effect, u.why);
+    }
+    if !v.untestable.is_empty() {
+        let _ = writeln!(s);
+    }
     let _ = writeln!(
         s,
         "Fitted on {} recordings ({}); scored on {} held out ({}).\n",

@@ -3,10 +3,13 @@
 use rayon::prelude::*;
 
 use super::analyses;
-use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Verdict};
+use super::verdict::{
+    Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Untestable, Verdict,
+};
 use super::whiteness;
 use crate::analysis::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::model::predict::ModelSpec;
+use crate::recording::Medium;
 use crate::session::Session;
 
 /// Held-out weighted RSS per residual above which structure remains: the
@@ -73,6 +76,38 @@ pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
     (train, hold)
 }
 
+/// The catalogue effects `session` cannot show, and why (docs/FORMAT.md):
+/// `hydrodynamic-loading` needs water around the strip, `dehydration` the
+/// session time of every recording. They are not tried, and the verdict
+/// says so.
+pub fn untestable(session: &Session) -> Vec<Untestable> {
+    let mut out = Vec::new();
+    let recs = &session.recordings;
+    if !recs.iter().any(|r| r.rec.meta.medium == Medium::Water) {
+        out.push(Untestable {
+            effect: Effect::HydrodynamicLoading.name().to_string(),
+            why: "the session is in air (`medium`): air's density is 1/800 of water's, so it cannot show added mass or drag".to_string(),
+        });
+    }
+    let without: Vec<&str> = recs
+        .iter()
+        .filter(|r| r.t_start_s.is_none())
+        .map(|r| r.name.as_str())
+        .collect();
+    if !without.is_empty() {
+        out.push(Untestable {
+            effect: Effect::Dehydration.name().to_string(),
+            why: format!(
+                "{} of {} recordings give no `t_session_start_s` ({}): drying is measured on the session's clock",
+                without.len(),
+                recs.len(),
+                without.join(", ")
+            ),
+        });
+    }
+    out
+}
+
 /// Diagnoses `session`; `progress` hears what is being fitted.
 pub fn diagnose(
     session: &Session,
@@ -96,7 +131,8 @@ pub fn diagnose(
         hold: &hold,
         fixed,
     };
-    let found = search.run(&baseline, &base_hold, progress)?;
+    let untestable = untestable(session);
+    let found = search.run(&baseline, &base_hold, &untestable, progress)?;
     let per = |s: &Score| s.rss / s.m.max(1) as f64;
     let at_floor = per(&found.hold) < NOISE_FLOOR_RATIO;
     let causes: Vec<String> = found
@@ -133,6 +169,7 @@ pub fn diagnose(
         training: train.iter().map(name).collect(),
         holdout: hold.iter().map(name).collect(),
         residual_tests: residual_tests(&base_hold, &found.hold),
+        untestable,
         rest,
         analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
     };
@@ -174,13 +211,9 @@ impl Search<'_> {
         &self,
         baseline: &FitResult,
         base_hold: &Score,
+        untestable: &[Untestable],
         progress: &(dyn Fn(&str) + Sync),
     ) -> Result<Found, FitError> {
-        let has_clock = self
-            .session
-            .recordings
-            .iter()
-            .all(|r| r.t_start_s.is_some());
         let mut found = Found {
             fit: baseline.clone(),
             hold: base_hold.clone(),
@@ -191,7 +224,7 @@ impl Search<'_> {
             let untried: Vec<Effect> = Effect::ALL
                 .into_iter()
                 .filter(|e| !found.fit.effects.contains(e))
-                .filter(|e| *e != Effect::Dehydration || has_clock)
+                .filter(|e| !untestable.iter().any(|u| u.effect == e.name()))
                 .collect();
             if untried.is_empty() {
                 break;

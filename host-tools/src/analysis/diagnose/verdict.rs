@@ -86,10 +86,21 @@ pub struct Verdict {
     pub holdout: Vec<String>,
     /// Whiteness of the held-out residuals.
     pub residual_tests: Vec<ResidualTest>,
+    /// Catalogue effects this session cannot show, not tried.
+    pub untestable: Vec<Untestable>,
     /// Whiteness of the DAQ's channels during the opening rests.
     pub rest: RestStructure,
     /// Where the baseline's misfit lives across the session.
     pub analyses: analyses::Analyses,
+}
+
+/// A catalogue effect the session cannot show.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Untestable {
+    /// The catalogue name.
+    pub effect: String,
+    /// Why the session cannot show it.
+    pub why: String,
 }
 
 /// The verdict as `finrs diagnose` prints it: verdict and causes, the
@@ -121,6 +132,9 @@ impl std::fmt::Display for Verdict {
                 c.holdout_gain_percent,
                 if c.passed { "passed" } else { "-" }
             )?;
+        }
+        for u in &self.untestable {
+            writeln!(f, "  not testable here: {}: {}", u.effect, u.why)?;
         }
         Ok(())
     }
