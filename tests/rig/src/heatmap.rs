@@ -10,7 +10,7 @@ use crate::sweep::{matrix, Outcome, COLUMNS};
 /// Draws the matrix of `outcomes` into the PNG at `path`.
 pub fn draw(outcomes: &[Outcome], path: &Path) -> anyhow::Result<()> {
     let rows = matrix(outcomes);
-    let (label_w, cell_w, cell_h, head_h) = (330i32, 72i32, 26i32, 150i32);
+    let (label_w, cell_w, cell_h, head_h) = (330i32, 72i32, 26i32, 240i32);
     let width = (label_w + cell_w * COLUMNS.len() as i32 + 20) as u32;
     let height = (head_h + cell_h * rows.len() as i32 + 20) as u32;
     let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
