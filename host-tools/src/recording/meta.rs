@@ -134,16 +134,12 @@ impl MetaBuilder {
         };
         let number = |key: &str| -> Result<f64, RecordingError> {
             let (_, v, l) = get(key).expect("required");
-            let x = match v {
-                toml::Value::Float(f) => *f,
-                toml::Value::Integer(i) => *i as f64,
-                _ => {
-                    return Err(RecordingError::at(
-                        file,
-                        *l,
-                        format!("`{key}` must be a number"),
-                    ))
-                }
+            let Some(x) = as_number(v) else {
+                return Err(RecordingError::at(
+                    file,
+                    *l,
+                    format!("`{key}` must be a number"),
+                ));
             };
             if !x.is_finite() || x <= 0.0 {
                 return Err(RecordingError::at(
@@ -208,16 +204,12 @@ impl MetaBuilder {
         let t_session_start_s = match get("t_session_start_s") {
             None => None,
             Some((_, v, l)) => {
-                let x = match v {
-                    toml::Value::Float(f) => *f,
-                    toml::Value::Integer(i) => *i as f64,
-                    _ => {
-                        return Err(RecordingError::at(
-                            file,
-                            *l,
-                            "`t_session_start_s` must be a number of seconds".to_string(),
-                        ))
-                    }
+                let Some(x) = as_number(v) else {
+                    return Err(RecordingError::at(
+                        file,
+                        *l,
+                        "`t_session_start_s` must be a number of seconds".to_string(),
+                    ));
                 };
                 if !x.is_finite() || x < 0.0 {
                     return Err(RecordingError::at(
@@ -245,6 +237,15 @@ impl MetaBuilder {
     }
 }
 
+/// A TOML number (float or integer) as `f64`.
+fn as_number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
 fn dots(
     file: &str,
     line: usize,
@@ -260,10 +261,8 @@ fn dots(
     }
     let mut out = Vec::with_capacity(items.len());
     for item in items {
-        let s = match item {
-            toml::Value::Float(f) => *f,
-            toml::Value::Integer(i) => *i as f64,
-            _ => return Err(err("`dots_s_m` must be an array of numbers".to_string())),
+        let Some(s) = as_number(item) else {
+            return Err(err("`dots_s_m` must be an array of numbers".to_string()));
         };
         if !(s.is_finite() && s > 0.0 && s <= length_m) {
             return Err(err(format!(
