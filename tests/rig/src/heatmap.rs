@@ -5,18 +5,19 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::sweep::{matrix, Outcome, COLUMNS};
+use crate::sweep::{columns, matrix, Outcome};
 
 /// Draws the matrix of `outcomes` into the PNG at `path`.
 pub fn draw(outcomes: &[Outcome], path: &Path) -> anyhow::Result<()> {
     let rows = matrix(outcomes);
+    let columns = columns();
     let (label_w, cell_w, cell_h, head_h) = (330i32, 72i32, 26i32, 240i32);
-    let width = (label_w + cell_w * COLUMNS.len() as i32 + 20) as u32;
+    let width = (label_w + cell_w * columns.len() as i32 + 20) as u32;
     let height = (head_h + cell_h * rows.len() as i32 + 20) as u32;
     let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
     root.fill(&WHITE)?;
     let text = ("sans-serif", 15).into_font();
-    for (j, c) in COLUMNS.iter().enumerate() {
+    for (j, c) in columns.iter().enumerate() {
         let x = label_w + cell_w * j as i32 + cell_w / 2;
         root.draw(&Text::new(
             c.to_string(),
@@ -31,7 +32,7 @@ pub fn draw(outcomes: &[Outcome], path: &Path) -> anyhow::Result<()> {
             (6, y + 6),
             text.clone(),
         ))?;
-        for (j, c) in COLUMNS.iter().enumerate() {
+        for (j, c) in columns.iter().enumerate() {
             let share = r.named.get(c).copied().unwrap_or(0) as f64 / r.sessions.max(1) as f64;
             let x = label_w + cell_w * j as i32;
             // White (never) to dark blue (every session).

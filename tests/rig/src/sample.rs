@@ -257,33 +257,25 @@ impl Hidden {
     /// off-class forms: crosstalk through a 10 to 30 ms lag. `damping` and
     /// `beam-stiffness` are refused: the base has them already.
     pub fn draw_off_class(names: &[&str], rng: &mut impl Rng) -> Result<Hidden, String> {
-        let mut h = Hidden {
-            modal_damping: Some(
-                (0..DAMPED_MODES)
-                    .map(|_| rng.gen_range(0.02..0.1))
-                    .collect(),
-            ),
-            ei_factor: Some(rng.gen_range(0.15..1.0)),
-            ..Hidden::default()
-        };
-        for &name in names {
-            if !OFF_CLASS_DEPARTURES.contains(&name) && name != OUTSIDE {
-                return Err(format!(
-                    "the off-class rig hides {OFF_CLASS_DEPARTURES:?} and `{OUTSIDE}` on its base strip, which is always damped and soft; `{name}` is not one of them"
-                ));
-            }
-            let one = Hidden::draw(&[name], rng)?;
-            h.arcs |= one.arcs;
-            h.water = h.water.or(one.water);
-            h.electrochemistry = h.electrochemistry.or(one.electrochemistry);
-            h.back_branch = h.back_branch.or(one.back_branch);
-            h.drying_s = h.drying_s.or(one.drying_s);
-            h.segment_factors = h.segment_factors.clone().or(one.segment_factors);
-            h.mains_pickup = h.mains_pickup.or(one.mains_pickup);
-            if one.crosstalk.is_some() {
-                h.crosstalk = one.crosstalk;
-                h.crosstalk_lag_s = Some(rng.gen_range(0.01..0.03));
-            }
+        if let Some(name) = names
+            .iter()
+            .find(|n| !OFF_CLASS_DEPARTURES.contains(n) && **n != OUTSIDE)
+        {
+            return Err(format!(
+                "the off-class rig hides {OFF_CLASS_DEPARTURES:?} and `{OUTSIDE}` on its base strip, which is always damped and soft; `{name}` is not one of them"
+            ));
+        }
+        let modal_damping = (0..DAMPED_MODES)
+            .map(|_| rng.gen_range(0.02..0.1))
+            .collect();
+        let ei_factor = rng.gen_range(0.15..1.0);
+        // The departures in the ideal rig's forms, then the base on top
+        // (the names above cannot touch its damping or EI) and the lag.
+        let mut h = Hidden::draw(names, rng)?;
+        h.modal_damping = Some(modal_damping);
+        h.ei_factor = Some(ei_factor);
+        if h.crosstalk.is_some() {
+            h.crosstalk_lag_s = Some(rng.gen_range(0.01..0.03));
         }
         Ok(h)
     }

@@ -12,8 +12,8 @@ use rand_distr::{Distribution, Normal};
 
 use crate::beam::{Beam, Tip};
 use crate::bench::{self, Bench};
-use crate::sample::{Hidden, Sample, WATER_KG_M3};
-use crate::strip::{run, Mesh, Truth, BLOCKED_MESH, MESH};
+use crate::sample::{Hidden, Sample, SEGMENTS};
+use crate::strip::{run, section, Mesh, Truth, BLOCKED_MESH, MESH};
 
 /// One recording of a protocol.
 #[derive(Clone, Debug)]
@@ -208,7 +208,7 @@ pub fn write(
     for (index, r) in runs.iter().enumerate() {
         let wave = Wave::parse(r.wave).map_err(anyhow::Error::msg)?;
         let drive = Drive {
-            segments: 3,
+            segments: SEGMENTS,
             fixture: r.fixture,
             rest_s: r.rest_s,
             duration_s: r.hold_s,
@@ -273,17 +273,19 @@ fn load_cell(sample: &Sample, hidden: &Hidden, bench: &Bench) -> Tip {
     let Some(ratio) = bench.load_cell_mode_ratio else {
         return Tip::Pinned;
     };
-    let width = sample.width_m;
-    let added = hidden.water.map_or(0.0, |w| {
-        w.added_mass_factor * WATER_KG_M3 * PI * width * width / 4.0
-    });
-    let ei = sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0);
-    let mass = sample.mass_kg_per_m() + added;
+    let (ei, mass) = section(sample, hidden);
     let Mesh { per_segment, .. } = BLOCKED_MESH;
-    let beam = |tip| Beam::new(sample.length_m, 3, per_segment, ei, mass, tip);
+    let beam = |tip| Beam::new(sample.length_m, SEGMENTS, per_segment, ei, mass, tip);
     let pinned_hz = beam(Tip::Pinned).omega[0] / (2.0 * PI);
-    Beam::spring_for_first_mode(sample.length_m, 3, per_segment, ei, mass, ratio * pinned_hz)
-        .map_or(Tip::Pinned, Tip::Spring)
+    Beam::spring_for_first_mode(
+        sample.length_m,
+        SEGMENTS,
+        per_segment,
+        ei,
+        mass,
+        ratio * pinned_hz,
+    )
+    .map_or(Tip::Pinned, Tip::Spring)
 }
 
 /// Rows whose positions a camera exposing for `window` rows up to each

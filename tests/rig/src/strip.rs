@@ -231,6 +231,17 @@ impl ModeStep {
     }
 }
 
+/// The true strip's bending stiffness, N·m², and mass per length with the
+/// water's added mass, kg/m: what its beam is built from.
+pub fn section(sample: &Sample, hidden: &Hidden) -> (f64, f64) {
+    let width = sample.width_m;
+    let added = hidden.water.map_or(0.0, |w| {
+        w.added_mass_factor * WATER_KG_M3 * std::f64::consts::PI * width * width / 4.0
+    });
+    let ei = sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0);
+    (ei, sample.mass_kg_per_m() + added)
+}
+
 /// Runs the strip through the voltages `volts[row][segment]` held for
 /// `dt_s` each, starting `t_session_s` into the session, its tip held as
 /// `tip` says. `camera[row]` says where positions are wanted, at arc
@@ -249,18 +260,8 @@ pub fn run(
 ) -> Truth {
     let n = volts.first().map_or(0, Vec::len);
     let width = sample.width_m;
-    let added = hidden.water.map_or(0.0, |w| {
-        w.added_mass_factor * WATER_KG_M3 * std::f64::consts::PI * width * width / 4.0
-    });
-    let ei = sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0);
-    let beam = Beam::new(
-        sample.length_m,
-        n,
-        mesh.per_segment,
-        ei,
-        sample.mass_kg_per_m() + added,
-        tip,
-    );
+    let (ei, mass) = section(sample, hidden);
+    let beam = Beam::new(sample.length_m, n, mesh.per_segment, ei, mass, tip);
     let (blocked, held) = (tip == Tip::Pinned, tip.is_held());
     let h = dt_s / SUBSTEPS as f64;
     let zeta = |k: usize| hidden.damping_of_mode(k);

@@ -16,7 +16,7 @@ use rand::SeedableRng;
 
 use crate::bench::{Bench, IMPERFECTIONS};
 use crate::expect::{expected, Expected, Protocol, Score};
-use crate::sample::{Hidden, Sample, OFF_CLASS_DEPARTURES};
+use crate::sample::{Hidden, Sample, CATALOGUE, OFF_CLASS_DEPARTURES, SEGMENT_VARIATION};
 use crate::session::{board_protocol, short_protocol, write, Sensors};
 
 /// One session of a sweep.
@@ -133,21 +133,15 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
-/// The columns of the matrix: every catalogue name the sweep can meet,
-/// then `none` and `unexplained` (the verdict words).
-pub const COLUMNS: [&str; 11] = [
-    "large-deflection",
-    "beam-stiffness",
-    "damping",
-    "hydrodynamic-loading",
-    "electrochemical-nonlinearity",
-    "back-relaxation",
-    "dehydration",
-    "segment-crosstalk",
-    "segment-variation",
-    "none",
-    "unexplained",
-];
+/// The columns of the matrix: the catalogue (the ideal rig's names and
+/// `segment-variation`), then `none` and `unexplained` (the verdict words).
+pub fn columns() -> Vec<&'static str> {
+    CATALOGUE
+        .iter()
+        .copied()
+        .chain([SEGMENT_VARIATION, "none", "unexplained"])
+        .collect()
+}
 
 /// One row of the matrix.
 #[derive(Clone, Debug, Default)]
@@ -181,7 +175,7 @@ pub fn matrix(outcomes: &[Outcome]) -> Vec<(String, Row)> {
         };
         let row = &mut rows[at].1;
         row.sessions += 1;
-        for c in COLUMNS {
+        for c in columns() {
             let given = o.causes.iter().any(|x| x == c) || o.verdict == c;
             if given {
                 *row.named.entry(c).or_default() += 1;
@@ -224,13 +218,14 @@ pub fn markdown(outcomes: &[Outcome]) -> String {
         }
         .to_string()
     };
+    let columns = columns();
     let _ = write!(out, "| hidden | n |");
-    for c in COLUMNS {
+    for &c in &columns {
         let _ = write!(out, " {} |", short(c));
     }
     let _ = writeln!(out, " detected | false name | right | gain % |");
     let _ = write!(out, "|---|---|");
-    for _ in COLUMNS {
+    for _ in &columns {
         let _ = write!(out, "---|");
     }
     let _ = writeln!(out, "---|---|---|---|");
@@ -238,7 +233,7 @@ pub fn markdown(outcomes: &[Outcome]) -> String {
     let mut totals = (0, 0, 0, 0);
     for (key, r) in &rows {
         let _ = write!(out, "| {key} | {} |", r.sessions);
-        for c in COLUMNS {
+        for &c in &columns {
             let k = r.named.get(c).copied().unwrap_or(0);
             let _ = write!(
                 out,
