@@ -221,7 +221,7 @@ fn one_recording_is_refused_with_the_reason() {
 fn what_a_session_cannot_show_is_named_not_skipped() {
     let dir = std::env::temp_dir().join(format!("finrs-untestable-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air");
+    let data = common::baseline_air_dir();
     for (i, name) in ["04_free_chirp.csv", "07_free_single_seg2.csv"]
         .iter()
         .enumerate()

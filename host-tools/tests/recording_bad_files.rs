@@ -1,6 +1,8 @@
 //! Every rule of `ipmc-bench/1` broken once: each file in `data/bad` must be
 //! refused with its file name, the right line and the rule in the message.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use finrs::recording::{Channel, Recording};
@@ -232,30 +234,12 @@ fn writer_refuses_what_the_reader_would() {
 /// read cleanly.
 #[test]
 fn example_session_reads() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air");
-    let files = baseline_air_files(&dir);
-    assert_eq!(files.len(), 3, "{}: {files:?}", dir.display());
+    let files = common::baseline_air_files();
+    assert_eq!(files.len(), 3, "{files:?}");
     for path in files {
         let rec = Recording::read(&path).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(rec.meta.segments, 3);
         assert!(rec.t_s.len() > 9_000, "{}", path.display());
         assert!(rec.channel(Channel::Current(2)).is_some());
     }
-}
-
-/// The `.csv` files of `dir`, in name order; a missing folder fails the
-/// test (the data ship with the repository).
-fn baseline_air_files(dir: &Path) -> Vec<std::path::PathBuf> {
-    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e} (the test data ship with the repository)",
-            dir.display()
-        )
-    });
-    let mut files: Vec<_> = entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
-        .collect();
-    files.sort();
-    files
 }

@@ -1,7 +1,7 @@
 //! `finrs simulate` end to end: waves, the seed's facts, and the example
 //! session (a baseline recording, so the model must reproduce it).
 
-use std::path::Path;
+mod common;
 
 use finrs::model::params::ModelFile;
 use finrs::model::predict::ModelSpec;
@@ -98,19 +98,8 @@ fn blocked_step_settles_to_three_u_over_two_l() {
 /// match its measurements within the noise.
 #[test]
 fn example_session_is_reproduced_within_noise() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air");
-    let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e} (the test data ship with the repository)",
-            dir.display()
-        )
-    });
-    let mut files: Vec<_> = entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
-        .collect();
-    files.sort();
-    assert_eq!(files.len(), 3, "{}: {files:?}", dir.display());
+    let files = common::baseline_air_files();
+    assert_eq!(files.len(), 3, "{files:?}");
     for path in files {
         let name = path.display().to_string();
         let measured = Recording::read(&path).unwrap();

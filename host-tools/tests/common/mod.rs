@@ -15,6 +15,30 @@ use finrs::wave::Wave;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
+/// Three recordings of the contract's example session `baseline-air`,
+/// shipped with the repository (see the folder's README).
+pub fn baseline_air_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air")
+}
+
+/// The `.csv` files of [`baseline_air_dir`], in name order; a missing
+/// folder fails the test (the data ship with the repository).
+pub fn baseline_air_files() -> Vec<std::path::PathBuf> {
+    let dir = baseline_air_dir();
+    let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (the test data ship with the repository)",
+            dir.display()
+        )
+    });
+    let mut files: Vec<_> = entries
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .collect();
+    files.sort();
+    files
+}
+
 /// Sensor noise of the example session's README.
 pub const CURRENT_NOISE_A: f64 = 1e-4;
 /// Camera noise before quantisation, m.
