@@ -1009,19 +1009,26 @@ proptest! {
 
 // ------------------------------------------------------- regressions
 
+/// A free, one-segment recording of `rows` rows at 1 kHz, all at 0 V, with
+/// the camera's tip at rest on every 33rd row.
+fn all_zero_recording(rows: usize) -> String {
+    let mut text = String::from(
+        "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n\
+         # thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\nt_s,v1_V,tip_y_m\n",
+    );
+    for i in 0..rows {
+        let cam = if i % 33 == 0 { "0" } else { "" };
+        writeln!(text, "{},0,{cam}", i as f64 * 1e-3).unwrap();
+    }
+    text
+}
+
 /// The known bug of issue #15: a session whose recording is all 0 V and
 /// shorter than 1 s panicked (index out of bounds) in `fit` and `diagnose`.
 #[test]
 fn all_zero_session_shorter_than_1_s_is_refused_by_name() {
     let dir = CaseDir::new();
-    let mut text = String::from(
-        "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n\
-         # thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\nt_s,v1_V,tip_y_m\n",
-    );
-    for i in 0..500 {
-        let cam = if i % 33 == 0 { "0" } else { "" };
-        writeln!(text, "{},0,{cam}", i as f64 * 1e-3).unwrap();
-    }
+    let text = all_zero_recording(500);
     let file = dir.write("session/zero.csv", text.as_bytes());
     for command in ["fit", "diagnose"] {
         let out = Command::new(env!("CARGO_BIN_EXE_finrs"))
@@ -1044,14 +1051,7 @@ fn all_zero_session_shorter_than_1_s_is_refused_by_name() {
 #[test]
 fn undriven_session_is_refused_by_the_fit() {
     let dir = CaseDir::new();
-    let mut text = String::from(
-        "# format = \"ipmc-bench/1\"\n# segments = 1\n# length_m = 0.05\n# width_m = 0.01\n\
-         # thickness_m = 0.0003\n# fixture = \"free\"\n# medium = \"air\"\nt_s,v1_V,tip_y_m\n",
-    );
-    for i in 0..1500 {
-        let cam = if i % 33 == 0 { "0" } else { "" };
-        writeln!(text, "{},0,{cam}", i as f64 * 1e-3).unwrap();
-    }
+    let text = all_zero_recording(1500);
     dir.write("session/a.csv", text.as_bytes());
     dir.write("session/b.csv", text.as_bytes());
     for command in ["fit", "diagnose"] {
