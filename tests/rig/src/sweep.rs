@@ -87,14 +87,50 @@ pub fn plan(first: u64, count: usize) -> Vec<Scenario> {
         .collect()
 }
 
-/// Writes the scenario's session into `dir` and says what a right
-/// diagnosis of it names.
-pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
+/// Everything a scenario's seed draws, in the order the rig draws it.
+struct Draws {
+    sample: Sample,
+    hidden: Hidden,
+    sensors: Sensors,
+    bench: Bench,
+    rng: rand::rngs::StdRng,
+}
+
+fn draw(s: &Scenario) -> anyhow::Result<Draws> {
     let mut rng = rand::rngs::StdRng::seed_from_u64(s.seed);
     let sample = Sample::draw_off_class(&mut rng);
     let hidden = Hidden::draw_off_class(&s.hidden, &mut rng).map_err(anyhow::Error::msg)?;
     let sensors = Sensors::draw(&mut rng);
     let bench = Bench::draw(&s.bench, &mut rng).map_err(anyhow::Error::msg)?;
+    Ok(Draws {
+        sample,
+        hidden,
+        sensors,
+        bench,
+        rng,
+    })
+}
+
+fn protocol(s: &Scenario) -> Protocol {
+    Protocol {
+        free: !s.board,
+        blocked: true,
+        // The rig writes every recording's start into its notes.
+        session_start: true,
+    }
+}
+
+/// What a right diagnosis of the scenario's session names, without
+/// writing the session (the same draws as [`write_scenario`]).
+pub fn expected_of(s: &Scenario) -> anyhow::Result<Expected> {
+    let d = draw(s)?;
+    Ok(expected(&d.hidden, &d.bench, protocol(s)))
+}
+
+/// Writes the scenario's session into `dir` and says what a right
+/// diagnosis of it names.
+pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
+    let mut d = draw(s)?;
     let runs = if s.board {
         board_protocol(HOLD_SCALE)
     } else {
@@ -102,15 +138,9 @@ pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
     };
     let label = format!("SWEEP-{}", s.seed);
     write(
-        dir, &sample, &hidden, &sensors, &bench, &runs, &label, &mut rng,
+        dir, &d.sample, &d.hidden, &d.sensors, &d.bench, &runs, &label, &mut d.rng,
     )?;
-    let protocol = Protocol {
-        free: !s.board,
-        blocked: true,
-        // The rig writes every recording's start into its notes.
-        session_start: true,
-    };
-    Ok(expected(&hidden, &bench, protocol))
+    Ok(expected(&d.hidden, &d.bench, protocol(s)))
 }
 
 /// One diagnosed session.

@@ -236,3 +236,24 @@ fn the_board_protocol_holds_every_run_on_the_load_cell() {
     }
     assert!(SEGMENT_VARIATION == "segment-variation");
 }
+
+#[test]
+fn a_resumed_sweep_scores_a_kept_result_against_the_same_expectation() {
+    // The sweep rebuilds the expectation of a kept result from the seed
+    // alone; it must be the one written beside the session.
+    use finrs_rig::sweep::{expected_of, write_scenario, Scenario};
+    let s = Scenario {
+        seed: 31,
+        hidden: vec![SEGMENT_VARIATION],
+        bench: vec!["hum"],
+        board: true,
+    };
+    let dir = std::env::temp_dir().join(format!("finrs-rig-resume-{}", std::process::id()));
+    let written = write_scenario(&s, &dir).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(expected_of(&s).unwrap(), written);
+    assert!(
+        written.required.contains(&SEGMENT_VARIATION)
+            || written.allowed.contains(&SEGMENT_VARIATION)
+    );
+}

@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Parser;
 use finrs_rig::expect::score;
-use finrs_rig::sweep::{csv, markdown, plan, write_scenario, Outcome, Scenario};
+use finrs_rig::sweep::{csv, expected_of, markdown, plan, write_scenario, Outcome, Scenario};
 
 /// Writes and diagnoses off-class rig sessions, one seed each, and counts
 /// what the diagnosis names against what each session holds.
@@ -28,13 +28,76 @@ struct Cli {
     /// Sessions diagnosed at once.
     #[arg(long, default_value_t = 2)]
     jobs: usize,
-    /// Directory for the matrix (sweep.md, sweep.csv, sweep.png) and, with
-    /// --keep, the sessions.
+    /// Directory for the matrix (sweep.md, sweep.csv, sweep.png), each
+    /// session's result (results/seed-N.json: a sweep run again resumes
+    /// from them) and, with --keep, the sessions.
     #[arg(long)]
     out: PathBuf,
     /// Keep each session's directory and verdict.
     #[arg(long)]
     keep: bool,
+    /// Diagnose every session again, even those with a result in
+    /// OUT/results from an earlier (interrupted) run.
+    #[arg(long)]
+    fresh: bool,
+}
+
+/// What `finrs diagnose` said of one session, as kept in OUT/results so
+/// that an interrupted sweep resumes where it stopped.
+struct Said {
+    verdict: String,
+    causes: Vec<String>,
+    gain_percent: f64,
+    seconds: f64,
+}
+
+fn result_path(cli: &Cli, s: &Scenario) -> PathBuf {
+    cli.out
+        .join("results")
+        .join(format!("seed-{}.json", s.seed))
+}
+
+/// The kept result of the scenario's session, if an earlier run wrote one
+/// for the same row (a different first seed gives a seed another row).
+fn kept(cli: &Cli, s: &Scenario) -> anyhow::Result<Option<Said>> {
+    let path = result_path(cli, s);
+    if cli.fresh || !path.is_file() {
+        return Ok(None);
+    }
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    if v["row"].as_str() != Some(s.row().as_str()) {
+        return Ok(None);
+    }
+    let (verdict, causes, gain_percent) =
+        verdict_of(&v).with_context(|| format!("{}: not a kept result", path.display()))?;
+    let seconds = v["seconds"].as_f64().unwrap_or(f64::NAN);
+    Ok(Some(Said {
+        verdict,
+        causes,
+        gain_percent,
+        seconds,
+    }))
+}
+
+/// Keeps a result: written to a temporary name and renamed, so that an
+/// interrupted write never leaves half a file to resume from.
+fn keep_result(cli: &Cli, s: &Scenario, said: &Said) -> anyhow::Result<()> {
+    let path = result_path(cli, s);
+    let tmp = path.with_extension("json.tmp");
+    let v = serde_json::json!({
+        "seed": s.seed,
+        "row": s.row(),
+        "verdict": said.verdict,
+        "causes": said.causes,
+        "gain_percent": if said.gain_percent.is_finite() { Some(said.gain_percent) } else { None },
+        "seconds": said.seconds,
+    });
+    std::fs::write(&tmp, serde_json::to_string_pretty(&v)?)
+        .with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, &path).with_context(|| format!("renaming to {}", path.display()))
 }
 
 /// The verdict's words and names from `finrs diagnose --json`.
@@ -43,6 +106,12 @@ fn read_verdict(path: &Path) -> anyhow::Result<(String, Vec<String>, f64)> {
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    verdict_of(&v)
+}
+
+/// The verdict word, the names and the held-out gain of a verdict (or of
+/// a kept result, which holds the same fields).
+fn verdict_of(v: &serde_json::Value) -> anyhow::Result<(String, Vec<String>, f64)> {
     let verdict = v["verdict"].as_str().context("no `verdict`")?.to_string();
     let causes = v["causes"]
         .as_array()
@@ -55,6 +124,19 @@ fn read_verdict(path: &Path) -> anyhow::Result<(String, Vec<String>, f64)> {
 }
 
 fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
+    if let Some(said) = kept(cli, s)? {
+        let expected = expected_of(s)?;
+        let score = score(&expected, &said.verdict, &said.causes);
+        return Ok(Outcome {
+            scenario: s.clone(),
+            expected,
+            verdict: said.verdict,
+            causes: said.causes,
+            gain_percent: said.gain_percent,
+            score,
+            seconds: said.seconds,
+        });
+    }
     let dir = cli.out.join(format!("session-{}", s.seed));
     let expected = write_scenario(s, &dir)?;
     let json = dir.join("verdict.json");
@@ -67,6 +149,14 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         .output()
         .with_context(|| format!("running {}", cli.finrs.display()))?;
     let seconds = start.elapsed().as_secs_f64();
+    // A diagnosis killed by a signal (the sweep interrupted) is not a
+    // result: nothing is kept, and a resumed sweep runs it again.
+    anyhow::ensure!(
+        run.status.code().is_some(),
+        "{} was stopped by a signal ({})",
+        cli.finrs.display(),
+        run.status
+    );
     let (verdict, causes, gain_percent) = if run.status.success() {
         read_verdict(&json)?
     } else {
@@ -80,15 +170,22 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
     if !cli.keep {
         std::fs::remove_dir_all(&dir).ok();
     }
-    let score = score(&expected, &verdict, &causes);
-    Ok(Outcome {
-        scenario: s.clone(),
-        expected,
+    let said = Said {
         verdict,
         causes,
         gain_percent,
-        score,
         seconds,
+    };
+    keep_result(cli, s, &said)?;
+    let score = score(&expected, &said.verdict, &said.causes);
+    Ok(Outcome {
+        scenario: s.clone(),
+        expected,
+        verdict: said.verdict,
+        causes: said.causes,
+        gain_percent: said.gain_percent,
+        score,
+        seconds: said.seconds,
     })
 }
 
@@ -100,7 +197,7 @@ fn main() -> anyhow::Result<()> {
         "{} is not a file: build it (cargo build --release -p finrs) or give --finrs",
         cli.finrs.display()
     );
-    std::fs::create_dir_all(&cli.out)?;
+    std::fs::create_dir_all(cli.out.join("results"))?;
     let scenarios = plan(cli.first_seed, cli.sessions);
     let next = Mutex::new(scenarios.iter());
     let outcomes = Mutex::new(Vec::new());
