@@ -420,11 +420,22 @@ fn measure(
                 .collect::<Vec<_>>()
         };
         let tip = truth.points_m.last().expect("the tip is tracked");
-        channels.push((Channel::TipY, camera_channel(tip, false, rng)));
-        channels.push((Channel::TipX, camera_channel(tip, true, rng)));
+        let tip_y = camera_channel(tip, false, rng);
+        let tip_x = camera_channel(tip, true, rng);
+        channels.push((Channel::TipY, tip_y.clone()));
+        channels.push((Channel::TipX, tip_x.clone()));
+        let last = truth.points_m.len() - 1;
         for (j, p) in truth.points_m.iter().enumerate() {
-            channels.push((Channel::DotY(j), camera_channel(p, false, rng)));
-            channels.push((Channel::DotX(j), camera_channel(p, true, rng)));
+            // The last dot is the tip's mark: one measurement in two
+            // columns (as in the contract's example session), not two
+            // independent looks at the same point.
+            if j == last {
+                channels.push((Channel::DotY(j), tip_y.clone()));
+                channels.push((Channel::DotX(j), tip_x.clone()));
+            } else {
+                channels.push((Channel::DotY(j), camera_channel(p, false, rng)));
+                channels.push((Channel::DotX(j), camera_channel(p, true, rng)));
+            }
         }
     } else {
         let n = white(sensors.force_n);

@@ -257,3 +257,46 @@ fn a_resumed_sweep_scores_a_kept_result_against_the_same_expectation() {
             || written.allowed.contains(&SEGMENT_VARIATION)
     );
 }
+
+#[test]
+fn the_last_dot_is_the_tips_mark_read_once_by_the_camera() {
+    use finrs::recording::{Channel, Recording};
+    use finrs_rig::sweep::{write_scenario, Scenario};
+    let s = Scenario {
+        seed: 32,
+        hidden: vec![],
+        bench: vec![],
+        board: false,
+    };
+    let dir = std::env::temp_dir().join(format!("finrs-rig-tipmark-{}", std::process::id()));
+    write_scenario(&s, &dir).unwrap();
+    let mut free = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "csv") {
+            continue;
+        }
+        let rec = Recording::read(&path).unwrap();
+        let Some(tip_y) = rec.channel(Channel::TipY) else {
+            continue;
+        };
+        free += 1;
+        let last = rec.meta.dots_s_m.as_ref().unwrap().len() - 1;
+        assert_eq!(
+            Some(tip_y),
+            rec.channel(Channel::DotY(last)),
+            "{}",
+            path.display()
+        );
+        assert_eq!(
+            rec.channel(Channel::TipX),
+            rec.channel(Channel::DotX(last)),
+            "{}",
+            path.display()
+        );
+        // The other dots are looked at on their own.
+        assert_ne!(Some(tip_y), rec.channel(Channel::DotY(last - 1)));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(free >= 3, "only {free} free recordings");
+}
