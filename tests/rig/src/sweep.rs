@@ -15,7 +15,7 @@ use std::path::Path;
 use rand::SeedableRng;
 
 use crate::bench::{Bench, IMPERFECTIONS};
-use crate::expect::{expected, Expected, Protocol, Score};
+use crate::expect::{expected, Expected, Protocol, Score, BENCH_COLOURED, BENCH_HUM};
 use crate::sample::{Hidden, Sample, CATALOGUE, OFF_CLASS_DEPARTURES, SEGMENT_VARIATION};
 use crate::session::{board_protocol, short_protocol, write, Sensors};
 
@@ -164,12 +164,19 @@ pub struct Outcome {
 }
 
 /// The columns of the matrix: the catalogue (the ideal rig's names and
-/// `segment-variation`), then `none` and `unexplained` (the verdict words).
+/// `segment-variation`), then `none` and `unexplained` (the verdict words),
+/// then the bench findings.
 pub fn columns() -> Vec<&'static str> {
     CATALOGUE
         .iter()
         .copied()
-        .chain([SEGMENT_VARIATION, "none", "unexplained"])
+        .chain([
+            SEGMENT_VARIATION,
+            "none",
+            "unexplained",
+            BENCH_HUM,
+            BENCH_COLOURED,
+        ])
         .collect()
 }
 

@@ -21,19 +21,24 @@
 //! - `unexplained`: above the noise floor after the best model, with the
 //!   effects that did pass (possibly none); or the DAQ's channels already
 //!   carry structure while the strip rests before its drive (most
-//!   rests fail a Ljung–Box test): every candidate is driven by the
-//!   voltage, so nothing in the catalogue can account for that.
+//!   rests fail a Ljung–Box test) that no bench finding accounts for:
+//!   every candidate is driven by the voltage, so nothing in the
+//!   catalogue can account for that.
+//!
+//! Bench imperfections are not model effects: mains hum and coloured
+//! sensor noise, seen in the opening rests ([`rests`]), are reported as
+//! bench findings beside the verdict, never as a catalogue name.
 
 pub mod analyses;
 pub mod report;
+pub mod rests;
 mod search;
 mod verdict;
 pub mod whiteness;
 
+pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
 pub use search::{
-    diagnose, rest_structure, split, tested_channels, untestable, DELTA_BIC, HOLDOUT_RSS_GAIN,
-    INPUT_LAGS, MAX_CAUSES, NOISE_FLOOR_RATIO, REST_STRUCTURE_SHARE,
+    diagnose, split, tested_channels, untestable, DELTA_BIC, HOLDOUT_RSS_GAIN, INPUT_LAGS,
+    MAX_CAUSES, NOISE_FLOOR_RATIO,
 };
-pub use verdict::{
-    Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Untestable, Verdict,
-};
+pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};

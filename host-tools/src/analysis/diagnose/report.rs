@@ -80,16 +80,29 @@ fn summary(s: &mut String, session: &Session, v: &Verdict) {
     );
     let _ = writeln!(
         s,
-        "Opening rests (currents, load cell): {} of {} fail a Ljung–Box test at 99 %{}.\n",
+        "Opening rests (currents, load cell): {} of {} fail a Ljung–Box test at 99 % \
+         once any mains hum is removed{}.\n",
         v.rest.failing,
         v.rest.tested,
         if v.rest.structured {
-            ": the channels carry structure before any drive, which no \
-             voltage-driven candidate can explain"
+            ": the channels carry structure before any drive that neither hum \
+             nor coloured noise accounts for, and no voltage-driven candidate can explain"
+        } else if v.rest.failing > 0 && v.rest.failing_unexplained < v.rest.failing {
+            " (on channels with coloured noise, which fails it by its nature)"
         } else {
             " (white noise fails one in a hundred)"
         }
     );
+    if !v.rest.bench.is_empty() {
+        let _ = writeln!(
+            s,
+            "The bench, not the strip (seen in the opening rests; no catalogue effect is named for these):\n"
+        );
+        for b in &v.rest.bench {
+            let _ = writeln!(s, "- {}", b.detail);
+        }
+        let _ = writeln!(s);
+    }
 }
 
 /// Where the baseline's misfit lives across the session.

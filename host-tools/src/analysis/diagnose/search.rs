@@ -3,9 +3,8 @@
 use rayon::prelude::*;
 
 use super::analyses;
-use super::verdict::{
-    Candidate, Diagnosis, ModelScore, ResidualTest, RestStructure, Untestable, Verdict,
-};
+use super::rests::rest_structure;
+use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
 use crate::analysis::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::model::predict::ModelSpec;
@@ -24,40 +23,6 @@ pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
 pub const MAX_CAUSES: usize = 3;
 /// Lags of the residual–input correlation, as MATLAB's `resid` default.
 pub const INPUT_LAGS: usize = 25;
-/// Share of the opening rests (DAQ channels) that may fail the whiteness
-/// test before the rest itself is called structured: white noise fails
-/// one in a hundred.
-pub const REST_STRUCTURE_SHARE: f64 = 0.5;
-
-/// Tests the opening rest of every DAQ channel (currents, load cell) for
-/// whiteness; camera channels are too short there to test.
-pub fn rest_structure(session: &Session) -> RestStructure {
-    let (mut tested, mut failing) = (0, 0);
-    for r in &session.recordings {
-        for (ch, values) in &r.rec.channels {
-            if ch.is_camera() {
-                continue;
-            }
-            let rest: Option<Vec<f64>> = values[..r.rest_rows.min(values.len())]
-                .iter()
-                .copied()
-                .collect();
-            let Some(rest) = rest.filter(|v| v.len() >= 200) else {
-                continue;
-            };
-            tested += 1;
-            if whiteness::ljung_box(&rest, 20) > whiteness::chi2_99(20) {
-                failing += 1;
-            }
-        }
-    }
-    RestStructure {
-        tested,
-        failing,
-        structured: tested > 0 && failing as f64 > REST_STRUCTURE_SHARE * tested as f64,
-    }
-}
-
 /// Splits a session: every third recording from the second is held out,
 /// unless that would leave its fixture without a training recording.
 pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {

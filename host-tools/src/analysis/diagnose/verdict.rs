@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::analyses;
+use super::rests::RestStructure;
 use crate::analysis::fit::{FitResult, Score};
 
 /// How a model does on the two parts of the session.
@@ -88,7 +89,8 @@ pub struct Verdict {
     pub residual_tests: Vec<ResidualTest>,
     /// Catalogue effects this session cannot show, not tried.
     pub untestable: Vec<Untestable>,
-    /// Whiteness of the DAQ's channels during the opening rests.
+    /// The DAQ's channels during the opening rests: whiteness, and the
+    /// bench's hum and coloured noise.
     pub rest: RestStructure,
     /// Where the baseline's misfit lives across the session.
     pub analyses: analyses::Analyses,
@@ -136,19 +138,11 @@ impl std::fmt::Display for Verdict {
         for u in &self.untestable {
             writeln!(f, "  not testable here: {}: {}", u.effect, u.why)?;
         }
+        for b in &self.rest.bench {
+            writeln!(f, "  bench, not the strip: {}", b.detail)?;
+        }
         Ok(())
     }
-}
-
-/// Whether the measured channels carry structure before any drive.
-#[derive(Clone, Debug, Serialize)]
-pub struct RestStructure {
-    /// Opening rests tested (recording × current or force channel).
-    pub tested: usize,
-    /// Those whose Ljung–Box `Q` over 20 lags exceeds the 99 % threshold.
-    pub failing: usize,
-    /// Whether more than [`REST_STRUCTURE_SHARE`](super::REST_STRUCTURE_SHARE) of them fail.
-    pub structured: bool,
 }
 
 /// A diagnosis with the fits behind it, for the report.
