@@ -192,6 +192,13 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
 
 /// `finrs diagnose`.
 pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
+    // The run takes minutes: an output that cannot be written fails now.
+    if let Some(path) = &args.json {
+        check_writable(path)?;
+    }
+    if let Some(dir) = &args.report {
+        check_writable(&dir.join("REPORT.md"))?;
+    }
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
     let bar = spinner("diagnosing");
@@ -369,7 +376,28 @@ fn spinner(msg: &'static str) -> ProgressBar {
 /// Creates the folder a file goes into.
 fn create_parent(path: &Path) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// Fails, naming `path`, unless it can be written: creates its folder and
+/// opens it for writing. An existing file is left as it was (not
+/// truncated); a file made only for this check is removed again, so that
+/// a run that fails later leaves no empty output behind.
+fn check_writable(path: &Path) -> anyhow::Result<()> {
+    create_parent(path)?;
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    if !existed {
+        std::fs::remove_file(path)
+            .with_context(|| format!("removing {} after checking it", path.display()))?;
     }
     Ok(())
 }
