@@ -44,6 +44,20 @@ pub enum DriveError {
     /// More rows than this tool writes (or too many to count).
     #[error("{0:.0} rows is more than this tool writes (50 million)")]
     TooManyRows(f64),
+    /// Fewer rows than the cap, but too many to simulate in memory.
+    #[error(
+        "{rows} rows of {segments} segment(s) would take about {:.1} GiB to simulate \
+         ({} bytes a row); this tool refuses above {:.0} GiB: shorten the drive or lower its rate",
+        bytes_to_simulate(*rows, *segments) as f64 / GIB,
+        bytes_to_simulate(1, *segments),
+        MAX_BYTES as f64 / GIB
+    )]
+    TooMuchMemory {
+        /// Rows of the drive.
+        rows: usize,
+        /// Segments driven.
+        segments: usize,
+    },
     /// The wave is refused for these segments and options.
     #[error(transparent)]
     Wave(#[from] WaveError),
@@ -61,6 +75,22 @@ pub enum DriveError {
 
 /// Rows a drive recording may have at most.
 const MAX_ROWS: usize = 50_000_000;
+
+/// Memory a drive may take to simulate at most, bytes (2 GiB).
+const MAX_BYTES: usize = 2 << 30;
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Memory `finrs simulate --wave` takes for a drive of `rows` rows of
+/// `segments` segments, bytes, from above: the drive, its simulated copy
+/// with the predicted channels, and the file's text are all in memory at
+/// once. Peak RSS of `finrs simulate --wave step:1 --rest-s 0` grew by
+/// 212–236 bytes a row for 1 segment, 305–316 for 3 and 536–545 for 8
+/// (free and blocked, 250 000 vs 500 000 rows, `/usr/bin/time -f %M`);
+/// 200 + 48 per segment covers each.
+fn bytes_to_simulate(rows: usize, segments: usize) -> usize {
+    rows.saturating_mul(200 + 48 * segments)
+}
 
 /// When and how a wave is applied.
 #[derive(Clone, Copy, Debug)]
@@ -171,6 +201,12 @@ pub fn drive_recording_shaped(
         return Err(DriveError::TooManyRows(rows_f));
     }
     let rows = rows_f as usize;
+    if bytes_to_simulate(rows, d.segments) > MAX_BYTES {
+        return Err(DriveError::TooMuchMemory {
+            rows,
+            segments: d.segments,
+        });
+    }
     // First row at or after rest_s (the 1e-9 forgives rounding in the
     // product, e.g. 0.1 s × 1000 Hz).
     let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
@@ -229,6 +265,32 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    #[test]
+    fn a_drive_under_the_row_cap_but_too_big_to_simulate_is_refused() {
+        // 7 million rows of 3 segments: under 50 million, over 2 GiB.
+        let d = Drive {
+            segments: 3,
+            fixture: Fixture::Free,
+            rest_s: 0.0,
+            duration_s: 7_000.0,
+            off_s: 0.0,
+            rate_hz: 1000.0,
+        };
+        let err = drive_recording(&Wave::parse("step:1").unwrap(), &d).unwrap_err();
+        assert_eq!(
+            err,
+            DriveError::TooMuchMemory {
+                rows: 7_000_001,
+                segments: 3
+            }
+        );
+        assert_eq!(
+            err.to_string(),
+            "7000001 rows of 3 segment(s) would take about 2.2 GiB to simulate (344 bytes a row); \
+             this tool refuses above 2 GiB: shorten the drive or lower its rate"
+        );
     }
 
     #[test]
