@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context};
 use finrs::analysis::fit::{Effect, Fitter};
-use finrs::link::capture::{self, Firmware, Monitor};
+use finrs::link::capture::{self, CaptureError, Firmware, Monitor};
+use finrs::link::probe::ProbeError;
 use finrs::model::params::ModelFile;
 use finrs::model::simulate::simulate as simulate_recording;
 use finrs::model::synth::{self, DriveError};
@@ -242,7 +243,7 @@ pub fn log(args: LogArgs) -> anyhow::Result<()> {
             let opts = args
                 .record
                 .options(format!("the byte dump {}", path.display()))?;
-            capture::from_bytes(path, &opts)?
+            capture::from_bytes(path, &opts).map_err(capture_flags)?
         }
         None => {
             let probe = args.probe.options()?;
@@ -283,7 +284,7 @@ fn record(
     opts: &capture::CaptureOptions,
 ) -> anyhow::Result<String> {
     let status = StatusLine::new();
-    let mut connected = capture::connect(probe, firmware, &status)?;
+    let mut connected = capture::connect(probe, firmware, &status).map_err(capture_flags)?;
     // Armed only now: until here Ctrl-C ends the process as usual.
     let stop = interrupted()?;
     capture::capture(
@@ -293,6 +294,33 @@ fn record(
         opts,
         &status,
     )
+    .map_err(capture_flags)
+}
+
+/// A refused capture, told with the flags that set it.
+fn capture_flags(e: CaptureError) -> anyhow::Error {
+    match e {
+        CaptureError::Probe(e) => probe_flags(e),
+        other => other.into(),
+    }
+}
+
+/// A probe that cannot be chosen, told with the flag that chooses it.
+fn probe_flags(e: ProbeError) -> anyhow::Error {
+    match e {
+        ProbeError::ManyProbes { count, found } => {
+            anyhow!("{count} debug probes found: {found}; choose one with --probe VID:PID[:SERIAL]")
+        }
+        ProbeError::NoProbe {
+            selector: Some(selector),
+            seen,
+        } => ProbeError::NoProbe {
+            selector: Some(format!("--probe {selector}")),
+            seen,
+        }
+        .into(),
+        other => other.into(),
+    }
 }
 
 /// A flag that Ctrl-C sets (the handler is installed once per process).
@@ -358,7 +386,7 @@ pub fn limit(max_abs_v: f64, args: &SendArgs) -> anyhow::Result<()> {
 pub fn send(args: &SendArgs, command: &finrs_frames::Command) -> anyhow::Result<()> {
     let probe = args.probe.options()?;
     let bytes = finrs::link::command::encode(command);
-    finrs::link::probe::send(&probe, args.elf.as_deref(), &bytes)?;
+    finrs::link::probe::send(&probe, args.elf.as_deref(), &bytes).map_err(probe_flags)?;
     eprintln!("sent {command:?}");
     Ok(())
 }
