@@ -273,49 +273,76 @@ pub fn capture(
                 Err(e) => break Err(e),
             };
             decoder.received(&buf[..m]);
-            loop {
-                match decoder.decode() {
-                    Ok(frame) => monitor.line(&frame.display(false).to_string()),
-                    Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
-                    Err(defmt_decoder::DecodeError::Malformed) => {
-                        malformed_defmt += 1;
-                        if malformed_defmt == 1 {
-                            monitor.line("defmt: malformed frame (is the ELF the one running?)");
-                        }
-                    }
-                }
-            }
+            show_log(decoder.as_mut(), monitor, &mut malformed_defmt);
         }
         if last_status.elapsed() >= Duration::from_millis(250) {
             last_status = Instant::now();
-            let s = rec.summary();
-            let secs = started.elapsed().as_secs_f64().max(1e-3);
-            monitor.status(&format!(
-                "{} samples, {:.0}/s, {} gaps ({} lost), {} faults, {} corrupt bytes",
-                s.rows,
-                s.rows as f64 / secs,
-                s.gaps,
-                s.lost_samples,
-                s.faults,
-                s.corrupt_bytes
-            ));
+            monitor.status(&status(&rec, started));
         }
         if n == 0 && m == 0 {
             std::thread::sleep(Duration::from_millis(2));
         }
     };
+    conclude(rec, outcome, &opts.out, monitor, malformed_defmt)
+}
+
+/// Shows every whole defmt frame the decoder holds; counts malformed ones
+/// and says so at the first.
+fn show_log(
+    decoder: &mut dyn defmt_decoder::StreamDecoder,
+    monitor: &dyn Monitor,
+    malformed: &mut u64,
+) {
+    loop {
+        match decoder.decode() {
+            Ok(frame) => monitor.line(&frame.display(false).to_string()),
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(defmt_decoder::DecodeError::Malformed) => {
+                *malformed += 1;
+                if *malformed == 1 {
+                    monitor.line("defmt: malformed frame (is the ELF the one running?)");
+                }
+            }
+        }
+    }
+}
+
+/// The live status: samples, rate, gaps, faults, corrupt bytes.
+fn status(rec: &Recorder, started: Instant) -> String {
+    let s = rec.summary();
+    let secs = started.elapsed().as_secs_f64().max(1e-3);
+    format!(
+        "{} samples, {:.0}/s, {} gaps ({} lost), {} faults, {} corrupt bytes",
+        s.rows,
+        s.rows as f64 / secs,
+        s.gaps,
+        s.lost_samples,
+        s.faults,
+        s.corrupt_bytes
+    )
+}
+
+/// After the loop: writes what came (also when the link failed, with why
+/// in the notes) and returns the report, or the link's failure.
+fn conclude(
+    mut rec: Recorder,
+    outcome: Result<(), ProbeError>,
+    out: &Path,
+    monitor: &dyn Monitor,
+    malformed_defmt: u64,
+) -> Result<String, CaptureError> {
     // Whatever stopped the loop, what came so far is written, and why it
     // ended early goes into the notes.
     if let Err(e) = &outcome {
         rec.stopped_early(format!("the link failed: {}", with_causes(e)));
     }
-    let written = finish(rec, &opts.out);
+    let written = finish(rec, out);
     let mut text = match (written, outcome) {
         (Ok(text), Ok(())) => text,
         (Ok(text), Err(e)) => {
             monitor.line(text.trim_end());
             return Err(CaptureError::LinkFailed {
-                out: opts.out.clone(),
+                out: out.to_path_buf(),
                 source: e,
             });
         }
