@@ -18,7 +18,7 @@ use finrs::plot;
 use finrs::recording::Geometry;
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
-use finrs::wave::{Wave, WaveError};
+use finrs::wave::{Wave, WaveError, WaveOptions};
 use finrs_drive::MAX_SEGMENTS;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -81,11 +81,12 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         FixtureArg::Free => Fixture::Free,
         FixtureArg::Blocked => Fixture::Blocked,
     };
+    let duration_s = args.duration_s.unwrap_or(10.0);
     let drive = synth::Drive {
         segments: args.shape.segments.unwrap_or(3),
         fixture,
         rest_s: args.rest_s.unwrap_or(1.0),
-        duration_s: args.duration_s.unwrap_or(10.0),
+        duration_s,
         off_s: args.off_s.unwrap_or(0.0),
         rate_hz: args.rate_hz.unwrap_or(1000.0),
     };
@@ -93,14 +94,14 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         (Some(v), Some(slew)) => Some(synth::limits(v, slew).map_err(drive_flags)?),
         _ => None,
     };
-    let shaping = synth::Shaping {
+    // Held until the ramp out ends the wave at --duration-s.
+    let options = WaveOptions {
         offset_v: args.shape.offset_v.unwrap_or(0.0),
         ramp_in_s: args.shape.ramp_in_s.unwrap_or(0.0),
         ramp_out_s: args.shape.ramp_out_s.unwrap_or(0.0),
-        sweep_s: args.shape.sweep_s,
-        limits,
+        ..WaveOptions::steady(args.shape.sweep_s.unwrap_or(duration_s))
     };
-    synth::drive_recording_shaped(&wave, &drive, &shaping).map_err(drive_flags)
+    synth::drive_recording_shaped(&wave, &drive, &options, limits).map_err(drive_flags)
 }
 
 /// The flag that sets a field of the library's options: `rest_s` is

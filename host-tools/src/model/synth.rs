@@ -9,7 +9,7 @@ use crate::recording::{Fixture, Geometry, Medium, Metadata, Recording};
 use crate::wave::{Wave, WaveError, WaveOptions};
 
 /// Why a drive was refused; each names the field of [`Drive`] or
-/// [`Shaping`] (or the limit) and the rule it breaks.
+/// [`WaveOptions`] (or the limit) and the rule it breaks.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum DriveError {
     /// A time that must not be negative is.
@@ -36,6 +36,18 @@ pub enum DriveError {
     RampsTooLong {
         /// Ramp in, s.
         ramp_in_s: f64,
+        /// Ramp out, s.
+        ramp_out_s: f64,
+        /// The wave's duration, s.
+        duration_s: f64,
+    },
+    /// A finite hold and the ramps do not fit in the wave's duration.
+    #[error("ramp_in_s + hold_s + ramp_out_s must not exceed duration_s: {ramp_in_s} + {hold_s} + {ramp_out_s} > {duration_s}")]
+    HoldTooLong {
+        /// Ramp in, s.
+        ramp_in_s: f64,
+        /// Hold, s.
+        hold_s: f64,
         /// Ramp out, s.
         ramp_out_s: f64,
         /// The wave's duration, s.
@@ -109,22 +121,6 @@ pub struct Drive {
     pub rate_hz: f64,
 }
 
-/// How the wave is shaped and limited beyond its text.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Shaping {
-    /// Constant added to a `sine:` or `standing:` wave, V.
-    pub offset_v: f64,
-    /// Ramp in at the start of the wave, s (within its duration).
-    pub ramp_in_s: f64,
-    /// Ramp out at the end of the wave, s (within its duration).
-    pub ramp_out_s: f64,
-    /// Length of one `chirp:` sweep, s; `None`: the wave's duration.
-    pub sweep_s: Option<f64>,
-    /// The firmware's limiter (voltage and slew limits) on every row;
-    /// `None`: the generator's voltages as they are (within the hard limit).
-    pub limits: Option<finrs_drive::Limits>,
-}
-
 /// The firmware's limits, checked by [`finrs_drive::Limits::new`]; the
 /// error names the value (`limit_v` or `slew_v_per_s`) and its rule.
 pub fn limits(limit_v: f64, slew_v_per_s: f64) -> Result<finrs_drive::Limits, DriveError> {
@@ -146,25 +142,32 @@ pub fn limits(limit_v: f64, slew_v_per_s: f64) -> Result<finrs_drive::Limits, Dr
 /// A voltage-only recording of the seed's strip driven by `wave`, with no
 /// ramps, offset nor limiter, and chirps sweeping over the whole duration.
 pub fn drive_recording(wave: &Wave, d: &Drive) -> Result<Recording, DriveError> {
-    drive_recording_shaped(wave, d, &Shaping::default())
+    drive_recording_shaped(wave, d, &WaveOptions::steady(d.duration_s), None)
 }
 
 /// A voltage-only recording of the seed's strip driven by `wave`, shaped by
-/// `shaping`. The wave starts on the first row at or after `rest_s` and
-/// its envelope (ramp in, hold, ramp out) lasts `duration_s`; every row's
+/// `options` as `finrs wave` shapes it on the firmware, and through the
+/// firmware's limiter if `limits` are given (else the generator's voltages
+/// as they are, within the hard limit). The wave starts on the first row
+/// at or after `rest_s` and its envelope lasts `duration_s`: ramp in, hold
+/// (an infinite `hold_s`: until the ramp out ends at `duration_s`; a
+/// finite one ends the wave early, at 0 V after), ramp out. Every row's
 /// voltages are the firmware generator's at that row's tick.
 pub fn drive_recording_shaped(
     wave: &Wave,
     d: &Drive,
-    shaping: &Shaping,
+    options: &WaveOptions,
+    limits: Option<finrs_drive::Limits>,
 ) -> Result<Recording, DriveError> {
     for (field, value) in [
         ("rest_s", d.rest_s),
         ("off_s", d.off_s),
-        ("ramp_in_s", shaping.ramp_in_s),
-        ("ramp_out_s", shaping.ramp_out_s),
+        ("ramp_in_s", options.ramp_in_s),
+        ("ramp_out_s", options.ramp_out_s),
+        ("hold_s", options.hold_s),
     ] {
-        if !(value.is_finite() && value >= 0.0) {
+        // An infinite hold is "until the ramp out".
+        if value.is_nan() || value < 0.0 || (value.is_infinite() && field != "hold_s") {
             return Err(DriveError::Negative { field, value });
         }
     }
@@ -178,21 +181,7 @@ pub fn drive_recording_shaped(
         return Err(DriveError::RateNotWhole(d.rate_hz));
     }
     let tick_hz = d.rate_hz as u32;
-    let hold_s = d.duration_s - shaping.ramp_in_s - shaping.ramp_out_s;
-    if hold_s < 0.0 {
-        return Err(DriveError::RampsTooLong {
-            ramp_in_s: shaping.ramp_in_s,
-            ramp_out_s: shaping.ramp_out_s,
-            duration_s: d.duration_s,
-        });
-    }
-    let options = WaveOptions {
-        offset_v: shaping.offset_v,
-        ramp_in_s: shaping.ramp_in_s,
-        hold_s,
-        ramp_out_s: shaping.ramp_out_s,
-        sweep_s: shaping.sweep_s.unwrap_or(d.duration_s),
-    };
+    let options = within_duration(options, d.duration_s)?;
     let generator = wave.generator(d.segments, &options)?;
     let total_s = d.rest_s + d.duration_s + d.off_s;
     // Counted in f64 first: a long drive overflows `usize`, or is infinite.
@@ -214,7 +203,7 @@ pub fn drive_recording_shaped(
     let wave_rows = (rows - start_row) as u64;
     // A limiter through the rest would hold its outputs at 0 V: starting
     // it with the wave gives the same rows.
-    v_v.extend(generator.run(wave_rows, tick_hz, shaping.limits));
+    v_v.extend(generator.run(wave_rows, tick_hz, limits));
     let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
     let g = Geometry::THESIS_2006;
     Ok(Recording {
@@ -234,6 +223,37 @@ pub fn drive_recording_shaped(
         t_s,
         v_v,
         channels: Vec::new(),
+    })
+}
+
+/// `options` with an infinite hold made the one that ends the ramp out at
+/// `duration_s`; refused when the envelope does not fit in `duration_s`.
+fn within_duration(options: &WaveOptions, duration_s: f64) -> Result<WaveOptions, DriveError> {
+    let WaveOptions {
+        ramp_in_s,
+        hold_s,
+        ramp_out_s,
+        ..
+    } = *options;
+    let longest_hold_s = duration_s - ramp_in_s - ramp_out_s;
+    if longest_hold_s < 0.0 {
+        return Err(DriveError::RampsTooLong {
+            ramp_in_s,
+            ramp_out_s,
+            duration_s,
+        });
+    }
+    if hold_s.is_finite() && hold_s > longest_hold_s {
+        return Err(DriveError::HoldTooLong {
+            ramp_in_s,
+            hold_s,
+            ramp_out_s,
+            duration_s,
+        });
+    }
+    Ok(WaveOptions {
+        hold_s: hold_s.min(longest_hold_s),
+        ..*options
     })
 }
 
