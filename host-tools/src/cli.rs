@@ -144,7 +144,8 @@ impl ProbeArgs {
     pub fn options(&self) -> anyhow::Result<finrs::link::probe::ProbeOptions> {
         if let Some(p) = &self.probe {
             // Checked now, so the refusal names the flag.
-            finrs::link::probe::parse_selector(p).map_err(|e| anyhow::anyhow!("--probe {e}"))?;
+            finrs::link::probe::parse_selector(p)
+                .map_err(|e| anyhow::anyhow!("--probe {:#}", anyhow::Error::new(e)))?;
         }
         Ok(finrs::link::probe::ProbeOptions {
             chip: self.chip.clone(),

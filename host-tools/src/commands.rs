@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context};
 use finrs::analysis::fit::{Effect, Fitter};
-use finrs::link::capture::{self, Firmware, Monitor};
+use finrs::link::capture::{self, CaptureError, Firmware, Monitor};
+use finrs::link::probe::ProbeError;
 use finrs::model::params::ModelFile;
 use finrs::model::simulate::simulate as simulate_recording;
 use finrs::model::synth::{self, DriveError};
@@ -17,7 +18,7 @@ use finrs::plot;
 use finrs::recording::Geometry;
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
-use finrs::wave::{Wave, WaveError};
+use finrs::wave::{Wave, WaveError, WaveOptions};
 use finrs_drive::MAX_SEGMENTS;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -55,7 +56,10 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     bar.set_message("simulating");
     let sim = simulate_recording(&name, &input, &spec, args.elements, &mut |n| {
         bar.set_position(n)
-    })?;
+    })
+    // SimulateError's message already ends with its source's (in
+    // model/simulate.rs); its text alone says each once.
+    .map_err(|e| anyhow!(e.to_string()))?;
     bar.finish_and_clear();
 
     create_parent(&args.out)?;
@@ -77,11 +81,12 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         FixtureArg::Free => Fixture::Free,
         FixtureArg::Blocked => Fixture::Blocked,
     };
+    let duration_s = args.duration_s.unwrap_or(10.0);
     let drive = synth::Drive {
         segments: args.shape.segments.unwrap_or(3),
         fixture,
         rest_s: args.rest_s.unwrap_or(1.0),
-        duration_s: args.duration_s.unwrap_or(10.0),
+        duration_s,
         off_s: args.off_s.unwrap_or(0.0),
         rate_hz: args.rate_hz.unwrap_or(1000.0),
     };
@@ -89,14 +94,14 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         (Some(v), Some(slew)) => Some(synth::limits(v, slew).map_err(drive_flags)?),
         _ => None,
     };
-    let shaping = synth::Shaping {
+    // Held until the ramp out ends the wave at --duration-s.
+    let options = WaveOptions {
         offset_v: args.shape.offset_v.unwrap_or(0.0),
         ramp_in_s: args.shape.ramp_in_s.unwrap_or(0.0),
         ramp_out_s: args.shape.ramp_out_s.unwrap_or(0.0),
-        sweep_s: args.shape.sweep_s,
-        limits,
+        ..WaveOptions::steady(args.shape.sweep_s.unwrap_or(duration_s))
     };
-    synth::drive_recording_shaped(&wave, &drive, &shaping).map_err(drive_flags)
+    synth::drive_recording_shaped(&wave, &drive, &options, limits).map_err(drive_flags)
 }
 
 /// The flag that sets a field of the library's options: `rest_s` is
@@ -192,6 +197,13 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
 
 /// `finrs diagnose`.
 pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
+    // The run takes minutes: an output that cannot be written fails now.
+    if let Some(path) = &args.json {
+        check_writable(path)?;
+    }
+    if let Some(dir) = &args.report {
+        check_writable(&dir.join("REPORT.md"))?;
+    }
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
     let bar = spinner("diagnosing");
@@ -235,7 +247,7 @@ pub fn log(args: LogArgs) -> anyhow::Result<()> {
             let opts = args
                 .record
                 .options(format!("the byte dump {}", path.display()))?;
-            capture::from_bytes(path, &opts)?
+            capture::from_bytes(path, &opts).map_err(capture_flags)?
         }
         None => {
             let probe = args.probe.options()?;
@@ -276,7 +288,7 @@ fn record(
     opts: &capture::CaptureOptions,
 ) -> anyhow::Result<String> {
     let status = StatusLine::new();
-    let mut connected = capture::connect(probe, firmware, &status)?;
+    let mut connected = capture::connect(probe, firmware, &status).map_err(capture_flags)?;
     // Armed only now: until here Ctrl-C ends the process as usual.
     let stop = interrupted()?;
     capture::capture(
@@ -286,6 +298,33 @@ fn record(
         opts,
         &status,
     )
+    .map_err(capture_flags)
+}
+
+/// A refused capture, told with the flags that set it.
+fn capture_flags(e: CaptureError) -> anyhow::Error {
+    match e {
+        CaptureError::Probe(e) => probe_flags(e),
+        other => other.into(),
+    }
+}
+
+/// A probe that cannot be chosen, told with the flag that chooses it.
+fn probe_flags(e: ProbeError) -> anyhow::Error {
+    match e {
+        ProbeError::ManyProbes { count, found } => {
+            anyhow!("{count} debug probes found: {found}; choose one with --probe VID:PID[:SERIAL]")
+        }
+        ProbeError::NoProbe {
+            selector: Some(selector),
+            seen,
+        } => ProbeError::NoProbe {
+            selector: Some(format!("--probe {selector}")),
+            seen,
+        }
+        .into(),
+        other => other.into(),
+    }
 }
 
 /// A flag that Ctrl-C sets (the handler is installed once per process).
@@ -351,7 +390,7 @@ pub fn limit(max_abs_v: f64, args: &SendArgs) -> anyhow::Result<()> {
 pub fn send(args: &SendArgs, command: &finrs_frames::Command) -> anyhow::Result<()> {
     let probe = args.probe.options()?;
     let bytes = finrs::link::command::encode(command);
-    finrs::link::probe::send(&probe, args.elf.as_deref(), &bytes)?;
+    finrs::link::probe::send(&probe, args.elf.as_deref(), &bytes).map_err(probe_flags)?;
     eprintln!("sent {command:?}");
     Ok(())
 }
@@ -369,7 +408,28 @@ fn spinner(msg: &'static str) -> ProgressBar {
 /// Creates the folder a file goes into.
 fn create_parent(path: &Path) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// Fails, naming `path`, unless it can be written: creates its folder and
+/// opens it for writing. An existing file is left as it was (not
+/// truncated); a file made only for this check is removed again, so that
+/// a run that fails later leaves no empty output behind.
+fn check_writable(path: &Path) -> anyhow::Result<()> {
+    create_parent(path)?;
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    if !existed {
+        std::fs::remove_file(path)
+            .with_context(|| format!("removing {} after checking it", path.display()))?;
     }
     Ok(())
 }

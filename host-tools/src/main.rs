@@ -17,24 +17,12 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", chain(&e));
+            // `{:#}`: the error and its causes, `: `-separated; each
+            // library error says its cause only as source(), so once.
+            eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
-}
-
-/// The error and its causes, `: `-separated as `{:#}` prints them, but a
-/// cause the message before it already ends with is said once.
-fn chain(e: &anyhow::Error) -> String {
-    let mut text = e.to_string();
-    for cause in e.chain().skip(1) {
-        let cause = cause.to_string();
-        if !text.ends_with(&cause) {
-            text += ": ";
-            text += &cause;
-        }
-    }
-    text
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {

@@ -10,9 +10,27 @@
 
 use std::path::Path;
 
+use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
 
 use crate::recording::{Channel, Fixture, Recording};
+
+/// Why a plot was not drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// No model was given.
+    #[error("nothing to plot")]
+    Nothing,
+    /// plotters failed to draw or to write the PNG.
+    #[error("drawing the plot")]
+    Draw(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl<E: std::error::Error + Send + Sync + 'static> From<DrawingAreaErrorKind<E>> for PlotError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        PlotError::Draw(Box::new(e))
+    }
+}
 
 /// Measured samples, in every plot.
 pub const MEASURED_COLOUR: RGBColor = RGBColor(0, 0, 0);
@@ -86,7 +104,7 @@ pub fn plot(
     title: &str,
     measured: Option<&Recording>,
     simulated: &Recording,
-) -> anyhow::Result<()> {
+) -> Result<(), PlotError> {
     plot_models(path, title, measured, &[("model", simulated)])
 }
 
@@ -97,9 +115,9 @@ pub fn plot_models(
     title: &str,
     measured: Option<&Recording>,
     models: &[(&str, &Recording)],
-) -> anyhow::Result<()> {
+) -> Result<(), PlotError> {
     let Some(&(_, first)) = models.first() else {
-        anyhow::bail!("nothing to plot");
+        return Err(PlotError::Nothing);
     };
     let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -217,7 +235,7 @@ pub fn plot_autocorrelation(
     title: &str,
     series: &[(&str, Vec<f64>)],
     band: f64,
-) -> anyhow::Result<()> {
+) -> Result<(), PlotError> {
     let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
     root.fill(&WHITE)?;
     let root = root.titled(title, ("sans-serif", 20))?;
@@ -280,7 +298,7 @@ fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     y_label: &str,
     traces: &[Trace],
-) -> anyhow::Result<()>
+) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
 {
@@ -292,7 +310,7 @@ fn panel_x<DB: DrawingBackend>(
     x_label: &str,
     y_label: &str,
     traces: &[Trace],
-) -> anyhow::Result<()>
+) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
 {

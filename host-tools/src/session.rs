@@ -33,11 +33,12 @@ pub struct Session {
 #[derive(Debug, thiserror::Error)]
 pub enum SessionError {
     /// The folder cannot be listed.
-    #[error("{dir}: {source}")]
+    #[error("listing the folder {dir}")]
     Io {
         /// The folder.
         dir: String,
         /// Why.
+        #[source]
         source: std::io::Error,
     },
     /// No `.csv` file in the folder.

@@ -167,7 +167,9 @@ pub struct Wave {
     kind: WaveKind,
 }
 
-/// What shapes a wave beyond its text.
+/// What shapes a wave beyond its text: the one description `finrs wave`
+/// sends to the firmware and `finrs simulate --wave` drives a recording
+/// with (`model::synth::drive_recording_shaped`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WaveOptions {
     /// Constant added to a `sine:` or `standing:` wave, V (0 for others).

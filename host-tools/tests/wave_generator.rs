@@ -5,7 +5,7 @@
 //! and `finrs wave` sends the same program for the same text.
 
 use finrs::link::command::wave_command;
-use finrs::model::synth::{drive_recording, drive_recording_shaped, Drive, Shaping};
+use finrs::model::synth::{drive_recording, drive_recording_shaped, Drive};
 use finrs::recording::Fixture;
 use finrs::wave::{Wave, WaveOptions};
 use finrs_drive::{Envelope, Generator, Limiter, Limits, Program, SINE_MAX_ERROR};
@@ -171,12 +171,11 @@ fn ramps_offset_and_limiter_are_the_firmwares() {
     let start_row = (REST_S * f64::from(RATE_HZ)) as u64;
     let rows = ((REST_S + DURATION_S + OFF_S) * f64::from(RATE_HZ)) as u64 + 1;
     let limits = Limits::new(1.8, 40.0).unwrap();
-    let shaping = Shaping {
+    let shaping = WaveOptions {
         offset_v: 0.5,
         ramp_in_s: 0.6,
         ramp_out_s: 0.4,
-        sweep_s: None,
-        limits: Some(limits),
+        ..WaveOptions::steady(DURATION_S)
     };
     for n in [1, 3, 8] {
         let (text, program) = ("sine:2.5,1.3,120", cases(n)[0].1);
@@ -200,7 +199,13 @@ fn ramps_offset_and_limiter_are_the_firmwares() {
             hold_s: (DURATION_S - 0.6 - 0.4) as f32,
             ramp_out_s: 0.4,
         };
-        let rec = drive_recording_shaped(&Wave::parse(text).unwrap(), &drive(n), &shaping).unwrap();
+        let rec = drive_recording_shaped(
+            &Wave::parse(text).unwrap(),
+            &drive(n),
+            &shaping,
+            Some(limits),
+        )
+        .unwrap();
         let expected = firmware_n(n, program, envelope, start_row, rows, Some(limits));
         assert_same_rows(&format!("{text}, N = {n}"), &rec.v_v, &expected);
         // The limiter acted: clipped at 1.8 V, and slewed back to 0 after.
@@ -241,37 +246,45 @@ fn travelling_wave_stays_within_the_sine_error_of_the_exact_wave() {
 
 #[test]
 fn simulate_refuses_what_the_firmware_refuses_and_bad_shaping() {
-    let refuse = |text: &str, shaping: Shaping, d: Drive| {
-        drive_recording_shaped(&Wave::parse(text).unwrap(), &d, &shaping)
+    let refuse = |text: &str, shaping: WaveOptions, d: Drive| {
+        drive_recording_shaped(&Wave::parse(text).unwrap(), &d, &shaping, None)
             .unwrap_err()
             .to_string()
     };
+    let steady = WaveOptions::steady(3.0);
     assert_eq!(
-        refuse("sine:2,300,0", Shaping::default(), drive(3)),
+        refuse("sine:2,300,0", steady, drive(3)),
         "wave `sine:2,300,0`: Travelling.frequency_hz must be within 0.001..=100 Hz"
     );
     assert_eq!(
-        refuse("chirp:2,5,1", Shaping::default(), drive(3)),
+        refuse("chirp:2,5,1", steady, drive(3)),
         "wave `chirp:2,5,1`: Chirp.end_hz must be above start_hz"
     );
-    let ramps = Shaping {
+    let ramps = WaveOptions {
         ramp_in_s: 2.0,
         ramp_out_s: 1.5,
-        ..Shaping::default()
+        ..steady
     };
     assert_eq!(
         refuse("sine:2,1,0", ramps, drive(3)),
         "ramp_in_s + ramp_out_s must not exceed duration_s: 2 + 1.5 > 3"
     );
+    let hold = WaveOptions {
+        ramp_in_s: 1.0,
+        hold_s: 2.5,
+        ..steady
+    };
+    assert_eq!(
+        refuse("sine:2,1,0", hold, drive(3)),
+        "ramp_in_s + hold_s + ramp_out_s must not exceed duration_s: 1 + 2.5 + 0 > 3"
+    );
     let d = Drive {
         rate_hz: 999.5,
         ..drive(3)
     };
-    assert!(
-        refuse("step:1", Shaping::default(), d).starts_with("rate_hz must be a whole number of Hz")
-    );
+    assert!(refuse("step:1", steady, d).starts_with("rate_hz must be a whole number of Hz"));
     assert_eq!(
-        refuse("step:1", Shaping::default(), drive(9)),
+        refuse("step:1", steady, drive(9)),
         "segments must be 1..=8, got 9"
     );
 }

@@ -148,93 +148,132 @@ fn step_response(
 pub fn seed_check() -> Result<SeedCheck, SeedCheckError> {
     let file = ModelFile::thesis_2006();
     let base = file.spec_for(&Geometry::THESIS_2006)?;
-    let mut arcs = base;
-    arcs.ext.large_deflection = true;
-    // Long enough for the relaxation (1/p = 10 s) to settle to 1e-5.
-    let (across_b, along_b, _) =
-        step_response(&base, &Geometry::THESIS_2006, Fixture::Free, 2.5, 120.0)?;
-    let (across_e, along_e, _) =
-        step_response(&arcs, &Geometry::THESIS_2006, Fixture::Free, 2.5, 120.0)?;
-    let mut rows = vec![
-        Row {
-            quantity: "tip across at 2.5 V, 50 mm strip".into(),
-            measured: SECTION_4_1_1_M.0,
-            baseline: across_b,
-            extended: across_e,
-            unit: "m",
-            effect: "large-deflection",
-        },
-        Row {
-            quantity: "tip along at 2.5 V, 50 mm strip".into(),
-            measured: SECTION_4_1_1_M.1,
-            baseline: along_b,
-            extended: along_e,
-            unit: "m",
-            effect: "large-deflection",
-        },
-    ];
-    // Table 4-1's strip: the same material and moment gain, 25 mm long.
-    let short = file.spec_for(&TABLE_STRIP)?;
-    let mut forces = Vec::new();
-    for &(v, _, gf) in &TABLE_4_1 {
-        let (_, _, peak) = step_response(&short, &TABLE_STRIP, Fixture::Blocked, v, 20.0)?;
-        forces.push((v, gf * 1e-3 * G_M_PER_S2, peak));
-    }
-    // The 13 mm fixes u/EI; the force fixes u. One factor on EI (and the
-    // moment gain with it, keeping the 13 mm) for all four voltages, by
-    // least squares in logarithms.
-    let factor =
-        (forces.iter().map(|(_, m, b)| (m / b).ln()).sum::<f64>() / forces.len() as f64).exp();
-    for &(v, measured, baseline) in &forces {
-        rows.push(Row {
-            quantity: format!("peak blocking force at {v} V, 25 mm strip"),
-            measured,
-            baseline,
-            extended: baseline * factor,
-            unit: "N",
-            effect: "beam-stiffness",
-        });
-    }
-    // Current: the baseline's leak is linear (V/R2 once the double layer
-    // has charged); the extension's is V/R2 (1 + b V²). Fit (1/R2, b/R2) by
-    // linear least squares on the four points.
-    let (mut s11, mut s13, mut s33, mut y1, mut y3) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(v, i, _) in &TABLE_4_1 {
-        let (a, c) = (v, v * v * v);
-        s11 += a * a;
-        s13 += a * c;
-        s33 += c * c;
-        y1 += a * i;
-        y3 += c * i;
-    }
-    let det = s11 * s33 - s13 * s13;
-    let g1 = (y1 * s33 - y3 * s13) / det;
-    let g3 = (s11 * y3 - s13 * y1) / det;
+    let tip = Tip::of(&base)?;
+    let mut rows = tip.rows();
+    let forces = Forces::of(&file)?;
+    rows.extend(forces.rows());
+    let leak = Leak::fit();
     let r2 = base.params.r2_ohm;
-    for &(v, i, _) in &TABLE_4_1 {
-        rows.push(Row {
-            quantity: format!("current at {v} V"),
-            measured: i,
-            baseline: v / r2,
-            extended: g1 * v + g3 * v * v * v,
-            unit: "A",
-            effect: "electrochemical-nonlinearity",
-        });
-    }
+    rows.extend(leak.rows(r2));
     let (v_hi, i_hi, _) = TABLE_4_1[0];
     let (v_lo, i_lo, _) = TABLE_4_1[3];
     let current_exponent = (i_hi / i_lo).ln() / (v_hi / v_lo).ln();
     let laminate_ei = base.params.ei_nm2;
-    let implied_ei = laminate_ei * factor;
+    let implied_ei = laminate_ei * forces.factor;
     let g = Geometry::THESIS_2006;
     let implied_modulus = implied_ei / (g.width_m * g.thickness_m.powi(3) / 12.0);
     let explanations = vec![
+        tip.explanation(),
+        forces.explanation(laminate_ei, implied_ei, implied_modulus),
+        leak.explanation(current_exponent, r2),
+    ];
+    Ok(SeedCheck {
+        rows,
+        implied_ei_nm2: implied_ei,
+        laminate_ei_nm2: laminate_ei,
+        implied_modulus_pa: implied_modulus,
+        current_exponent,
+        leak_fit: (leak.g1, leak.g3 / leak.g1),
+        explanations,
+    })
+}
+
+/// Section 4.1.1: the 50 mm strip's tip at 2.5 V, m, under the baseline
+/// and with large deflection.
+struct Tip {
+    across_b: f64,
+    along_b: f64,
+    across_e: f64,
+    along_e: f64,
+}
+
+impl Tip {
+    fn of(base: &ModelSpec) -> Result<Tip, SeedCheckError> {
+        let mut arcs = *base;
+        arcs.ext.large_deflection = true;
+        // Long enough for the relaxation (1/p = 10 s) to settle to 1e-5.
+        let (across_b, along_b, _) =
+            step_response(base, &Geometry::THESIS_2006, Fixture::Free, 2.5, 120.0)?;
+        let (across_e, along_e, _) =
+            step_response(&arcs, &Geometry::THESIS_2006, Fixture::Free, 2.5, 120.0)?;
+        Ok(Tip {
+            across_b,
+            along_b,
+            across_e,
+            along_e,
+        })
+    }
+
+    fn rows(&self) -> Vec<Row> {
+        vec![
+            Row {
+                quantity: "tip across at 2.5 V, 50 mm strip".into(),
+                measured: SECTION_4_1_1_M.0,
+                baseline: self.across_b,
+                extended: self.across_e,
+                unit: "m",
+                effect: "large-deflection",
+            },
+            Row {
+                quantity: "tip along at 2.5 V, 50 mm strip".into(),
+                measured: SECTION_4_1_1_M.1,
+                baseline: self.along_b,
+                extended: self.along_e,
+                unit: "m",
+                effect: "large-deflection",
+            },
+        ]
+    }
+
+    fn explanation(&self) -> String {
         format!(
             "Along the strip: the baseline's small-deflection kinematics move every point only across, so it predicts {:.2} mm along; \
              the same bending integrated along the arc of its slope field (large-deflection) gives {:.2} mm along and {:.2} mm across, \
              the seed's 'about 2 mm'. Nothing else changes: the 13 mm is the moment gain's calibration.",
-            1e3 * along_b, 1e3 * along_e, 1e3 * across_e
-        ),
+            1e3 * self.along_b, 1e3 * self.along_e, 1e3 * self.across_e
+        )
+    }
+}
+
+/// Table 4-1's peak blocking forces on its 25 mm strip, and the one factor
+/// on EI that fits them.
+struct Forces {
+    /// Voltage, V; measured and baseline peak force, N.
+    each: Vec<(f64, f64, f64)>,
+    factor: f64,
+}
+
+impl Forces {
+    fn of(file: &ModelFile) -> Result<Forces, SeedCheckError> {
+        // Table 4-1's strip: the same material and moment gain, 25 mm long.
+        let short = file.spec_for(&TABLE_STRIP)?;
+        let mut each = Vec::new();
+        for &(v, _, gf) in &TABLE_4_1 {
+            let (_, _, peak) = step_response(&short, &TABLE_STRIP, Fixture::Blocked, v, 20.0)?;
+            each.push((v, gf * 1e-3 * G_M_PER_S2, peak));
+        }
+        // The 13 mm fixes u/EI; the force fixes u. One factor on EI (and the
+        // moment gain with it, keeping the 13 mm) for all four voltages, by
+        // least squares in logarithms.
+        let factor =
+            (each.iter().map(|(_, m, b)| (m / b).ln()).sum::<f64>() / each.len() as f64).exp();
+        Ok(Forces { each, factor })
+    }
+
+    fn rows(&self) -> impl Iterator<Item = Row> + '_ {
+        self.each.iter().map(|&(v, measured, baseline)| Row {
+            quantity: format!("peak blocking force at {v} V, 25 mm strip"),
+            measured,
+            baseline,
+            extended: baseline * self.factor,
+            unit: "N",
+            effect: "beam-stiffness",
+        })
+    }
+
+    fn explanation(&self, laminate_ei: f64, implied_ei: f64, implied_modulus: f64) -> String {
+        let (forces, factor) = (&self.each, self.factor);
+        let g = Geometry::THESIS_2006;
         format!(
             "Blocking force: calibrated on the 13 mm, the baseline predicts {:.0} to {:.0} times the forces of Table 4-1. \
              A blocked tip measures the moment u itself (F = 3u/2L), a free tip measures u/EI; so the wrong parameter is EI. \
@@ -249,24 +288,59 @@ pub fn seed_check() -> Result<SeedCheck, SeedCheckError> {
             laminate_ei / (g.width_m * g.thickness_m.powi(3) / 12.0) / 1e9,
             implied_modulus / 1e6,
             (forces[0].1 / forces[3].1).ln() / (forces[0].0 / forces[3].0).ln()
-        ),
+        )
+    }
+}
+
+/// The extended leak `i = g1 V + g3 V³` fitted to Table 4-1's currents.
+struct Leak {
+    /// `1/R2`, S.
+    g1: f64,
+    /// `b/R2`, S/V².
+    g3: f64,
+}
+
+impl Leak {
+    /// The baseline's leak is linear (V/R2 once the double layer has
+    /// charged); the extension's is V/R2 (1 + b V²). Fits (1/R2, b/R2) by
+    /// linear least squares on the four points.
+    fn fit() -> Leak {
+        let (mut s11, mut s13, mut s33, mut y1, mut y3) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for &(v, i, _) in &TABLE_4_1 {
+            let (a, c) = (v, v * v * v);
+            s11 += a * a;
+            s13 += a * c;
+            s33 += c * c;
+            y1 += a * i;
+            y3 += c * i;
+        }
+        let det = s11 * s33 - s13 * s13;
+        Leak {
+            g1: (y1 * s33 - y3 * s13) / det,
+            g3: (s11 * y3 - s13 * y1) / det,
+        }
+    }
+
+    fn rows(&self, r2: f64) -> impl Iterator<Item = Row> + '_ {
+        TABLE_4_1.iter().map(move |&(v, i, _)| Row {
+            quantity: format!("current at {v} V"),
+            measured: i,
+            baseline: v / r2,
+            extended: self.g1 * v + self.g3 * v * v * v,
+            unit: "A",
+            effect: "electrochemical-nonlinearity",
+        })
+    }
+
+    fn explanation(&self, current_exponent: f64, r2: f64) -> String {
         format!(
             "Current: Table 4-1's current grows as V^{current_exponent:.1} between 2.5 and 4 V; the baseline's is linear in V \
              (V/R2 = {:.1} mA at 2.5 V and {:.1} mA at 4 V once the double layer has charged). The electrochemical extension's leak \
              V/R2 (1 + b V²) fits the four points with R2 = {:.0} Ω and b = {:.3} 1/V²: the current is not linear in voltage.",
             1e3 * 2.5 / r2,
             1e3 * 4.0 / r2,
-            1.0 / g1,
-            g3 / g1
-        ),
-    ];
-    Ok(SeedCheck {
-        rows,
-        implied_ei_nm2: implied_ei,
-        laminate_ei_nm2: laminate_ei,
-        implied_modulus_pa: implied_modulus,
-        current_exponent,
-        leak_fit: (g1, g3 / g1),
-        explanations,
-    })
+            1.0 / self.g1,
+            self.g3 / self.g1
+        )
+    }
 }

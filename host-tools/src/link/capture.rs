@@ -9,12 +9,15 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{bail, Context};
-
+use crate::link::causes::with_causes;
 use crate::link::probe::{
-    self, Bounded, ProbeOptions, ProbeTarget, Target, DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL,
+    self, Bounded, ProbeError, ProbeOptions, ProbeTarget, Target, DEFMT_UP_CHANNEL,
+    FORCE_UP_CHANNEL,
 };
 use crate::link::stream::{GapSource, Recorder, Setup};
+
+mod error;
+pub use error::CaptureError;
 
 /// Where the recording goes and when to stop.
 #[derive(Clone, Debug)]
@@ -28,10 +31,10 @@ pub struct CaptureOptions {
 }
 
 impl CaptureOptions {
-    fn check(&self) -> anyhow::Result<()> {
+    fn check(&self) -> Result<(), CaptureError> {
         if let Some(d) = self.duration_s {
             if !(d.is_finite() && d > 0.0) {
-                bail!("duration_s must be a positive number of seconds, got {d}");
+                return Err(CaptureError::Duration(d));
             }
         }
         Ok(())
@@ -84,32 +87,41 @@ pub fn report(rec: &Recorder) -> String {
 
 /// Writes the recording (with the account in its notes) and returns the
 /// report. Called also after Ctrl-C, with what came so far.
-pub fn finish(mut rec: Recorder, out: &Path) -> anyhow::Result<String> {
+pub fn finish(mut rec: Recorder, out: &Path) -> Result<String, CaptureError> {
     rec.finish();
     let report = report(&rec);
     let name = out.display().to_string();
     let recording = rec
         .recording(&name)
-        .with_context(|| format!("nothing written; {}", report.trim_end()))?;
+        .map_err(|source| CaptureError::NothingWritten {
+            report: report.trim_end().to_string(),
+            source,
+        })?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+        std::fs::create_dir_all(dir).map_err(|source| CaptureError::Folder {
+            dir: dir.to_path_buf(),
+            source,
+        })?;
     }
-    recording.write(out)?;
+    recording.write(out).map_err(CaptureError::Write)?;
     Ok(format!("wrote {name}\n{report}"))
 }
 
 /// `finrs log --from-bytes FILE`: a raw dump of the up channel (`-`: the
 /// standard input, e.g. piped from QEMU) through the same recorder.
 /// Returns the report.
-pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> anyhow::Result<String> {
+pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> Result<String, CaptureError> {
     opts.check()?;
     let bytes = if path == Path::new("-") {
         let mut bytes = Vec::new();
         std::io::Read::read_to_end(&mut std::io::stdin(), &mut bytes)
-            .context("reading the standard input")?;
+            .map_err(CaptureError::Stdin)?;
         bytes
     } else {
-        std::fs::read(path).with_context(|| format!("reading {}", path.display()))?
+        std::fs::read(path).map_err(|source| CaptureError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?
     };
     let mut rec = Recorder::new(opts.setup.clone());
     rec.push_bytes(&bytes);
@@ -137,19 +149,19 @@ impl Monitor for Silent {
 /// or a stand-in in tests.
 pub trait Link {
     /// Reads what the force stream's channel holds now, without waiting.
-    fn read_force(&mut self, buf: &mut [u8]) -> anyhow::Result<usize>;
+    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError>;
     /// Reads what the defmt log's channel holds now, without waiting.
-    fn read_log(&mut self, buf: &mut [u8]) -> anyhow::Result<usize>;
+    fn read_log(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError>;
 }
 
 /// The probe's RTT up channels 1 (force) and 0 (defmt), each read bounded
 /// in time.
 impl<T: Target> Link for Bounded<T> {
-    fn read_force(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
         self.read_up(FORCE_UP_CHANNEL, buf)
     }
 
-    fn read_log(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+    fn read_log(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
         self.read_up(DEFMT_UP_CHANNEL, buf)
     }
 }
@@ -179,23 +191,24 @@ pub fn connect(
     probe_opts: &ProbeOptions,
     firmware: &Firmware,
     monitor: &dyn Monitor,
-) -> anyhow::Result<Connected> {
+) -> Result<Connected, CaptureError> {
     let elf_path = match firmware {
         Firmware::Running(p) => p.clone(),
         Firmware::Flash(p) => Some(p.clone()),
     };
     // Read the file now so that a wrong path fails before any USB work.
-    let elf = elf_path
-        .as_ref()
-        .map(|p| std::fs::read(p).with_context(|| format!("reading {}", p.display())))
-        .transpose()?;
+    let elf = elf_path.as_deref().map(probe::read_elf).transpose()?;
     let session = probe::attach(probe_opts)?;
     let (rtt_at, table) = match (&elf_path, &elf) {
         (Some(p), Some(bytes)) => {
             let name = p.display().to_string();
             let at = probe::rtt_address(&name, bytes)?;
-            let table = defmt_decoder::Table::parse(bytes)
-                .map_err(|e| anyhow::anyhow!("{name}: bad defmt table: {e}"))?;
+            // defmt-decoder's error is an anyhow::Error: `{:#}` keeps its causes.
+            let table =
+                defmt_decoder::Table::parse(bytes).map_err(|e| CaptureError::DefmtTable {
+                    elf: name.clone(),
+                    reason: format!("{e:#}"),
+                })?;
             if table.is_none() {
                 monitor.line(&format!(
                     "{name}: no defmt table; the log on channel 0 is not shown"
@@ -211,7 +224,7 @@ pub fn connect(
     let mut link = probe::connect(session, probe_opts)?;
     if let Firmware::Flash(p) = firmware {
         // Set above: `finrs run` always reads its ELF.
-        let at = rtt_at.ok_or_else(|| anyhow::anyhow!("{}: no RTT address", p.display()))?;
+        let at = rtt_at.ok_or_else(|| CaptureError::NoRttAddress { elf: p.clone() })?;
         monitor.line(&format!("flashing {}", p.display()));
         probe::flash_and_run(&mut link, p, at)?;
     }
@@ -229,7 +242,7 @@ pub fn capture(
     stop: &AtomicBool,
     opts: &CaptureOptions,
     monitor: &dyn Monitor,
-) -> anyhow::Result<String> {
+) -> Result<String, CaptureError> {
     opts.check()?;
     let mut defmt = table.map(|t| t.new_stream_decoder());
     let mut rec = Recorder::new(opts.setup.clone());
@@ -237,7 +250,7 @@ pub fn capture(
     let started = Instant::now();
     let mut last_status = started;
     let mut malformed_defmt = 0u64;
-    let outcome: anyhow::Result<()> = loop {
+    let outcome: Result<(), ProbeError> = loop {
         if stop.load(Ordering::SeqCst) {
             monitor.line("stopped");
             break Ok(());
@@ -260,54 +273,86 @@ pub fn capture(
                 Err(e) => break Err(e),
             };
             decoder.received(&buf[..m]);
-            loop {
-                match decoder.decode() {
-                    Ok(frame) => monitor.line(&frame.display(false).to_string()),
-                    Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
-                    Err(defmt_decoder::DecodeError::Malformed) => {
-                        malformed_defmt += 1;
-                        if malformed_defmt == 1 {
-                            monitor.line("defmt: malformed frame (is the ELF the one running?)");
-                        }
-                    }
-                }
-            }
+            show_log(decoder.as_mut(), monitor, &mut malformed_defmt);
         }
         if last_status.elapsed() >= Duration::from_millis(250) {
             last_status = Instant::now();
-            let s = rec.summary();
-            let secs = started.elapsed().as_secs_f64().max(1e-3);
-            monitor.status(&format!(
-                "{} samples, {:.0}/s, {} gaps ({} lost), {} faults, {} corrupt bytes",
-                s.rows,
-                s.rows as f64 / secs,
-                s.gaps,
-                s.lost_samples,
-                s.faults,
-                s.corrupt_bytes
-            ));
+            monitor.status(&status(&rec, started));
         }
         if n == 0 && m == 0 {
             std::thread::sleep(Duration::from_millis(2));
         }
     };
+    conclude(rec, outcome, &opts.out, monitor, malformed_defmt)
+}
+
+/// Shows every whole defmt frame the decoder holds; counts malformed ones
+/// and says so at the first.
+fn show_log(
+    decoder: &mut dyn defmt_decoder::StreamDecoder,
+    monitor: &dyn Monitor,
+    malformed: &mut u64,
+) {
+    loop {
+        match decoder.decode() {
+            Ok(frame) => monitor.line(&frame.display(false).to_string()),
+            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+            Err(defmt_decoder::DecodeError::Malformed) => {
+                *malformed += 1;
+                if *malformed == 1 {
+                    monitor.line("defmt: malformed frame (is the ELF the one running?)");
+                }
+            }
+        }
+    }
+}
+
+/// The live status: samples, rate, gaps, faults, corrupt bytes.
+fn status(rec: &Recorder, started: Instant) -> String {
+    let s = rec.summary();
+    let secs = started.elapsed().as_secs_f64().max(1e-3);
+    format!(
+        "{} samples, {:.0}/s, {} gaps ({} lost), {} faults, {} corrupt bytes",
+        s.rows,
+        s.rows as f64 / secs,
+        s.gaps,
+        s.lost_samples,
+        s.faults,
+        s.corrupt_bytes
+    )
+}
+
+/// After the loop: writes what came (also when the link failed, with why
+/// in the notes) and returns the report, or the link's failure.
+fn conclude(
+    mut rec: Recorder,
+    outcome: Result<(), ProbeError>,
+    out: &Path,
+    monitor: &dyn Monitor,
+    malformed_defmt: u64,
+) -> Result<String, CaptureError> {
     // Whatever stopped the loop, what came so far is written, and why it
     // ended early goes into the notes.
     if let Err(e) = &outcome {
-        rec.stopped_early(format!("the link failed: {e:#}"));
+        rec.stopped_early(format!("the link failed: {}", with_causes(e)));
     }
-    let written = finish(rec, &opts.out);
+    let written = finish(rec, out);
     let mut text = match (written, outcome) {
         (Ok(text), Ok(())) => text,
         (Ok(text), Err(e)) => {
             monitor.line(text.trim_end());
-            return Err(e.context(format!(
-                "the link failed; the samples so far are in {}",
-                opts.out.display()
-            )));
+            return Err(CaptureError::LinkFailed {
+                out: out.to_path_buf(),
+                source: e,
+            });
         }
         (Err(w), Ok(())) => return Err(w),
-        (Err(w), Err(e)) => return Err(e.context(format!("the link failed, and {w:#}"))),
+        (Err(w), Err(e)) => {
+            return Err(CaptureError::LinkAndWrite {
+                write: with_causes(&w),
+                source: e,
+            })
+        }
     };
     if malformed_defmt > 0 {
         text.push_str(&format!(

@@ -3,6 +3,7 @@
 //! to it ([`command`]).
 
 pub mod capture;
+pub(crate) mod causes;
 pub mod command;
 pub mod probe;
 pub mod stream;

@@ -156,11 +156,12 @@ pub struct Beam {
 #[derive(Debug, thiserror::Error)]
 pub enum ParamsError {
     /// The file could not be read.
-    #[error("{path}: {source}")]
+    #[error("reading {path}")]
     Io {
         /// The file.
         path: String,
         /// The cause.
+        #[source]
         source: std::io::Error,
     },
     /// The file is not valid TOML or misses or misnames a field.
@@ -172,11 +173,12 @@ pub enum ParamsError {
         message: String,
     },
     /// A value is not physical.
-    #[error("{context}: {source}")]
+    #[error("{context}")]
     Invalid {
         /// Where the values came from.
         context: String,
         /// The rule broken.
+        #[source]
         source: model_core::ParamError,
     },
 }
@@ -323,6 +325,7 @@ impl ModelFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::error::Error;
 
     #[test]
     fn preset_round_trips_and_matches_the_core() {
@@ -358,17 +361,22 @@ mod tests {
         let text = ModelFile::thesis_2006()
             .to_toml()
             .replace("z_per_s = 0.077", "z_per_s = 0.5");
-        let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
+        let err = ModelFile::parse("p.toml", &text).unwrap_err();
+        // The file is the message, the rule its source: each said once.
+        assert_eq!(err.to_string(), "p.toml");
+        let rule = err.source().unwrap().to_string();
         assert!(
-            err.starts_with("p.toml: relaxation needs its zero below its pole, z < p"),
-            "{err}"
+            rule.starts_with("relaxation needs its zero below its pole, z < p"),
+            "{rule}"
         );
         let f = ModelFile::thesis_2006();
         let thin = Geometry {
             thickness_m: 3e-6,
             ..Geometry::THESIS_2006
         };
-        let err = f.params_for(&thin).unwrap_err().to_string();
-        assert!(err.contains("core_thickness_m must be positive"), "{err}");
+        let err = f.params_for(&thin).unwrap_err();
+        assert!(err.to_string().starts_with("strip of length"), "{err}");
+        let rule = err.source().unwrap().to_string();
+        assert!(rule.contains("core_thickness_m must be positive"), "{rule}");
     }
 }

@@ -9,7 +9,7 @@ use crate::recording::{Fixture, Geometry, Medium, Metadata, Recording};
 use crate::wave::{Wave, WaveError, WaveOptions};
 
 /// Why a drive was refused; each names the field of [`Drive`] or
-/// [`Shaping`] (or the limit) and the rule it breaks.
+/// [`WaveOptions`] (or the limit) and the rule it breaks.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum DriveError {
     /// A time that must not be negative is.
@@ -41,9 +41,35 @@ pub enum DriveError {
         /// The wave's duration, s.
         duration_s: f64,
     },
+    /// A finite hold and the ramps do not fit in the wave's duration.
+    #[error("ramp_in_s + hold_s + ramp_out_s must not exceed duration_s: {ramp_in_s} + {hold_s} + {ramp_out_s} > {duration_s}")]
+    HoldTooLong {
+        /// Ramp in, s.
+        ramp_in_s: f64,
+        /// Hold, s.
+        hold_s: f64,
+        /// Ramp out, s.
+        ramp_out_s: f64,
+        /// The wave's duration, s.
+        duration_s: f64,
+    },
     /// More rows than this tool writes (or too many to count).
     #[error("{0:.0} rows is more than this tool writes (50 million)")]
     TooManyRows(f64),
+    /// Fewer rows than the cap, but too many to simulate in memory.
+    #[error(
+        "{rows} rows of {segments} segment(s) would take about {:.1} GiB to simulate \
+         ({} bytes a row); this tool refuses above {:.0} GiB: shorten the drive or lower its rate",
+        bytes_to_simulate(*rows, *segments) as f64 / GIB,
+        bytes_to_simulate(1, *segments),
+        MAX_BYTES as f64 / GIB
+    )]
+    TooMuchMemory {
+        /// Rows of the drive.
+        rows: usize,
+        /// Segments driven.
+        segments: usize,
+    },
     /// The wave is refused for these segments and options.
     #[error(transparent)]
     Wave(#[from] WaveError),
@@ -62,6 +88,22 @@ pub enum DriveError {
 /// Rows a drive recording may have at most.
 const MAX_ROWS: usize = 50_000_000;
 
+/// Memory a drive may take to simulate at most, bytes (2 GiB).
+const MAX_BYTES: usize = 2 << 30;
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Memory `finrs simulate --wave` takes for a drive of `rows` rows of
+/// `segments` segments, bytes, from above: the drive, its simulated copy
+/// with the predicted channels, and the file's text are all in memory at
+/// once. Peak RSS of `finrs simulate --wave step:1 --rest-s 0` grew by
+/// 212–236 bytes a row for 1 segment, 305–316 for 3 and 536–545 for 8
+/// (free and blocked, 250 000 vs 500 000 rows, `/usr/bin/time -f %M`);
+/// 200 + 48 per segment covers each.
+fn bytes_to_simulate(rows: usize, segments: usize) -> usize {
+    rows.saturating_mul(200 + 48 * segments)
+}
+
 /// When and how a wave is applied.
 #[derive(Clone, Copy, Debug)]
 pub struct Drive {
@@ -77,22 +119,6 @@ pub struct Drive {
     pub off_s: f64,
     /// Sample rate, Hz: a whole number, the generator's tick rate.
     pub rate_hz: f64,
-}
-
-/// How the wave is shaped and limited beyond its text.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Shaping {
-    /// Constant added to a `sine:` or `standing:` wave, V.
-    pub offset_v: f64,
-    /// Ramp in at the start of the wave, s (within its duration).
-    pub ramp_in_s: f64,
-    /// Ramp out at the end of the wave, s (within its duration).
-    pub ramp_out_s: f64,
-    /// Length of one `chirp:` sweep, s; `None`: the wave's duration.
-    pub sweep_s: Option<f64>,
-    /// The firmware's limiter (voltage and slew limits) on every row;
-    /// `None`: the generator's voltages as they are (within the hard limit).
-    pub limits: Option<finrs_drive::Limits>,
 }
 
 /// The firmware's limits, checked by [`finrs_drive::Limits::new`]; the
@@ -116,25 +142,32 @@ pub fn limits(limit_v: f64, slew_v_per_s: f64) -> Result<finrs_drive::Limits, Dr
 /// A voltage-only recording of the seed's strip driven by `wave`, with no
 /// ramps, offset nor limiter, and chirps sweeping over the whole duration.
 pub fn drive_recording(wave: &Wave, d: &Drive) -> Result<Recording, DriveError> {
-    drive_recording_shaped(wave, d, &Shaping::default())
+    drive_recording_shaped(wave, d, &WaveOptions::steady(d.duration_s), None)
 }
 
 /// A voltage-only recording of the seed's strip driven by `wave`, shaped by
-/// `shaping`. The wave starts on the first row at or after `rest_s` and
-/// its envelope (ramp in, hold, ramp out) lasts `duration_s`; every row's
+/// `options` as `finrs wave` shapes it on the firmware, and through the
+/// firmware's limiter if `limits` are given (else the generator's voltages
+/// as they are, within the hard limit). The wave starts on the first row
+/// at or after `rest_s` and its envelope lasts `duration_s`: ramp in, hold
+/// (an infinite `hold_s`: until the ramp out ends at `duration_s`; a
+/// finite one ends the wave early, at 0 V after), ramp out. Every row's
 /// voltages are the firmware generator's at that row's tick.
 pub fn drive_recording_shaped(
     wave: &Wave,
     d: &Drive,
-    shaping: &Shaping,
+    options: &WaveOptions,
+    limits: Option<finrs_drive::Limits>,
 ) -> Result<Recording, DriveError> {
     for (field, value) in [
         ("rest_s", d.rest_s),
         ("off_s", d.off_s),
-        ("ramp_in_s", shaping.ramp_in_s),
-        ("ramp_out_s", shaping.ramp_out_s),
+        ("ramp_in_s", options.ramp_in_s),
+        ("ramp_out_s", options.ramp_out_s),
+        ("hold_s", options.hold_s),
     ] {
-        if !(value.is_finite() && value >= 0.0) {
+        // An infinite hold is "until the ramp out".
+        if value.is_nan() || value < 0.0 || (value.is_infinite() && field != "hold_s") {
             return Err(DriveError::Negative { field, value });
         }
     }
@@ -148,21 +181,7 @@ pub fn drive_recording_shaped(
         return Err(DriveError::RateNotWhole(d.rate_hz));
     }
     let tick_hz = d.rate_hz as u32;
-    let hold_s = d.duration_s - shaping.ramp_in_s - shaping.ramp_out_s;
-    if hold_s < 0.0 {
-        return Err(DriveError::RampsTooLong {
-            ramp_in_s: shaping.ramp_in_s,
-            ramp_out_s: shaping.ramp_out_s,
-            duration_s: d.duration_s,
-        });
-    }
-    let options = WaveOptions {
-        offset_v: shaping.offset_v,
-        ramp_in_s: shaping.ramp_in_s,
-        hold_s,
-        ramp_out_s: shaping.ramp_out_s,
-        sweep_s: shaping.sweep_s.unwrap_or(d.duration_s),
-    };
+    let options = within_duration(options, d.duration_s)?;
     let generator = wave.generator(d.segments, &options)?;
     let total_s = d.rest_s + d.duration_s + d.off_s;
     // Counted in f64 first: a long drive overflows `usize`, or is infinite.
@@ -171,6 +190,12 @@ pub fn drive_recording_shaped(
         return Err(DriveError::TooManyRows(rows_f));
     }
     let rows = rows_f as usize;
+    if bytes_to_simulate(rows, d.segments) > MAX_BYTES {
+        return Err(DriveError::TooMuchMemory {
+            rows,
+            segments: d.segments,
+        });
+    }
     // First row at or after rest_s (the 1e-9 forgives rounding in the
     // product, e.g. 0.1 s × 1000 Hz).
     let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
@@ -178,7 +203,7 @@ pub fn drive_recording_shaped(
     let wave_rows = (rows - start_row) as u64;
     // A limiter through the rest would hold its outputs at 0 V: starting
     // it with the wave gives the same rows.
-    v_v.extend(generator.run(wave_rows, tick_hz, shaping.limits));
+    v_v.extend(generator.run(wave_rows, tick_hz, limits));
     let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
     let g = Geometry::THESIS_2006;
     Ok(Recording {
@@ -198,6 +223,37 @@ pub fn drive_recording_shaped(
         t_s,
         v_v,
         channels: Vec::new(),
+    })
+}
+
+/// `options` with an infinite hold made the one that ends the ramp out at
+/// `duration_s`; refused when the envelope does not fit in `duration_s`.
+fn within_duration(options: &WaveOptions, duration_s: f64) -> Result<WaveOptions, DriveError> {
+    let WaveOptions {
+        ramp_in_s,
+        hold_s,
+        ramp_out_s,
+        ..
+    } = *options;
+    let longest_hold_s = duration_s - ramp_in_s - ramp_out_s;
+    if longest_hold_s < 0.0 {
+        return Err(DriveError::RampsTooLong {
+            ramp_in_s,
+            ramp_out_s,
+            duration_s,
+        });
+    }
+    if hold_s.is_finite() && hold_s > longest_hold_s {
+        return Err(DriveError::HoldTooLong {
+            ramp_in_s,
+            hold_s,
+            ramp_out_s,
+            duration_s,
+        });
+    }
+    Ok(WaveOptions {
+        hold_s: hold_s.min(longest_hold_s),
+        ..*options
     })
 }
 
@@ -229,6 +285,32 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    #[test]
+    fn a_drive_under_the_row_cap_but_too_big_to_simulate_is_refused() {
+        // 7 million rows of 3 segments: under 50 million, over 2 GiB.
+        let d = Drive {
+            segments: 3,
+            fixture: Fixture::Free,
+            rest_s: 0.0,
+            duration_s: 7_000.0,
+            off_s: 0.0,
+            rate_hz: 1000.0,
+        };
+        let err = drive_recording(&Wave::parse("step:1").unwrap(), &d).unwrap_err();
+        assert_eq!(
+            err,
+            DriveError::TooMuchMemory {
+                rows: 7_000_001,
+                segments: 3
+            }
+        );
+        assert_eq!(
+            err.to_string(),
+            "7000001 rows of 3 segment(s) would take about 2.2 GiB to simulate (344 bytes a row); \
+             this tool refuses above 2 GiB: shorten the drive or lower its rate"
+        );
     }
 
     #[test]

@@ -111,9 +111,8 @@ impl MetaBuilder {
     /// Checks the collected keys; `header_line` is where a missing key is
     /// reported.
     pub fn finish(self, file: &str, header_line: usize) -> Result<Metadata, RecordingError> {
-        let get = |key: &str| self.values.iter().find(|(k, _, _)| k == key);
         for key in REQUIRED {
-            if get(key).is_none() {
+            if self.get(key).is_none() {
                 return Err(RecordingError::at(
                     file,
                     header_line,
@@ -121,106 +120,18 @@ impl MetaBuilder {
                 ));
             }
         }
-        let string = |key: &str| -> Result<Option<(String, usize)>, RecordingError> {
-            match get(key) {
-                None => Ok(None),
-                Some((_, toml::Value::String(s), l)) => Ok(Some((s.clone(), *l))),
-                Some((_, _, l)) => Err(RecordingError::at(
-                    file,
-                    *l,
-                    format!("`{key}` must be a quoted string"),
-                )),
-            }
-        };
-        let number = |key: &str| -> Result<f64, RecordingError> {
-            let (_, v, l) = get(key).expect("required");
-            let Some(x) = as_number(v) else {
-                return Err(RecordingError::at(
-                    file,
-                    *l,
-                    format!("`{key}` must be a number"),
-                ));
-            };
-            if !x.is_finite() || x <= 0.0 {
-                return Err(RecordingError::at(
-                    file,
-                    *l,
-                    format!("`{key}` must be positive and finite, got {x}"),
-                ));
-            }
-            Ok(x)
-        };
-
-        let (format, format_line) = string("format")?.expect("required");
-        if format != FORMAT {
-            return Err(RecordingError::at(
-                file,
-                format_line,
-                format!("format must be \"{FORMAT}\", got \"{format}\""),
-            ));
-        }
-        let (_, seg_value, seg_line) = get("segments").expect("required");
-        let segments = match seg_value {
-            toml::Value::Integer(n) if (1..=8).contains(n) => *n as usize,
-            _ => {
-                return Err(RecordingError::at(
-                    file,
-                    *seg_line,
-                    format!("`segments` must be a whole number from 1 to 8, got {seg_value}"),
-                ))
-            }
-        };
-        let length_m = number("length_m")?;
-        let width_m = number("width_m")?;
-        let thickness_m = number("thickness_m")?;
-        let (fixture, l) = string("fixture")?.expect("required");
-        let fixture = match fixture.as_str() {
-            "free" => Fixture::Free,
-            "blocked" => Fixture::Blocked,
-            other => {
-                return Err(RecordingError::at(
-                    file,
-                    l,
-                    format!("fixture must be \"free\" or \"blocked\", got \"{other}\""),
-                ))
-            }
-        };
-        let (medium, l) = string("medium")?.expect("required");
-        let medium = match medium.as_str() {
-            "air" => Medium::Air,
-            "water" => Medium::Water,
-            other => {
-                return Err(RecordingError::at(
-                    file,
-                    l,
-                    format!("medium must be \"air\" or \"water\", got \"{other}\""),
-                ))
-            }
-        };
-        let dots_s_m = match get("dots_s_m") {
+        self.check_format(file)?;
+        let segments = self.segments(file)?;
+        let length_m = self.number(file, "length_m")?;
+        let width_m = self.number(file, "width_m")?;
+        let thickness_m = self.number(file, "thickness_m")?;
+        let fixture = self.fixture(file)?;
+        let medium = self.medium(file)?;
+        let dots_s_m = match self.get("dots_s_m") {
             None => None,
             Some((_, v, l)) => Some(dots(file, *l, v, length_m)?),
         };
-        let t_session_start_s = match get("t_session_start_s") {
-            None => None,
-            Some((_, v, l)) => {
-                let Some(x) = as_number(v) else {
-                    return Err(RecordingError::at(
-                        file,
-                        *l,
-                        "`t_session_start_s` must be a number of seconds".to_string(),
-                    ));
-                };
-                if !x.is_finite() || x < 0.0 {
-                    return Err(RecordingError::at(
-                        file,
-                        *l,
-                        format!("`t_session_start_s` must be zero or positive and finite, got {x}"),
-                    ));
-                }
-                Some(x)
-            }
-        };
+        let t_session_start_s = self.session_start_s(file)?;
         Ok(Metadata {
             segments,
             length_m,
@@ -228,12 +139,127 @@ impl MetaBuilder {
             thickness_m,
             fixture,
             medium,
-            sample: string("sample")?.map(|s| s.0),
-            cation: string("cation")?.map(|s| s.0),
+            sample: self.string(file, "sample")?.map(|s| s.0),
+            cation: self.string(file, "cation")?.map(|s| s.0),
             dots_s_m,
-            notes: string("notes")?.map(|s| s.0),
+            notes: self.string(file, "notes")?.map(|s| s.0),
             t_session_start_s,
         })
+    }
+
+    /// The value of `key` and its line, if given.
+    fn get(&self, key: &str) -> Option<&(String, toml::Value, usize)> {
+        self.values.iter().find(|(k, _, _)| k == key)
+    }
+
+    /// A string value and its line, if given.
+    fn string(&self, file: &str, key: &str) -> Result<Option<(String, usize)>, RecordingError> {
+        match self.get(key) {
+            None => Ok(None),
+            Some((_, toml::Value::String(s), l)) => Ok(Some((s.clone(), *l))),
+            Some((_, _, l)) => Err(RecordingError::at(
+                file,
+                *l,
+                format!("`{key}` must be a quoted string"),
+            )),
+        }
+    }
+
+    /// A required string value and its line ([`Self::finish`] has checked
+    /// that every required key is there).
+    fn required_string(&self, file: &str, key: &str) -> Result<(String, usize), RecordingError> {
+        Ok(self.string(file, key)?.expect("required"))
+    }
+
+    /// A required positive, finite number.
+    fn number(&self, file: &str, key: &str) -> Result<f64, RecordingError> {
+        let (_, v, l) = self.get(key).expect("required");
+        let Some(x) = as_number(v) else {
+            return Err(RecordingError::at(
+                file,
+                *l,
+                format!("`{key}` must be a number"),
+            ));
+        };
+        if !x.is_finite() || x <= 0.0 {
+            return Err(RecordingError::at(
+                file,
+                *l,
+                format!("`{key}` must be positive and finite, got {x}"),
+            ));
+        }
+        Ok(x)
+    }
+
+    fn check_format(&self, file: &str) -> Result<(), RecordingError> {
+        let (format, format_line) = self.required_string(file, "format")?;
+        if format != FORMAT {
+            return Err(RecordingError::at(
+                file,
+                format_line,
+                format!("format must be \"{FORMAT}\", got \"{format}\""),
+            ));
+        }
+        Ok(())
+    }
+
+    fn segments(&self, file: &str) -> Result<usize, RecordingError> {
+        let (_, seg_value, seg_line) = self.get("segments").expect("required");
+        match seg_value {
+            toml::Value::Integer(n) if (1..=8).contains(n) => Ok(*n as usize),
+            _ => Err(RecordingError::at(
+                file,
+                *seg_line,
+                format!("`segments` must be a whole number from 1 to 8, got {seg_value}"),
+            )),
+        }
+    }
+
+    fn fixture(&self, file: &str) -> Result<Fixture, RecordingError> {
+        let (fixture, l) = self.required_string(file, "fixture")?;
+        match fixture.as_str() {
+            "free" => Ok(Fixture::Free),
+            "blocked" => Ok(Fixture::Blocked),
+            other => Err(RecordingError::at(
+                file,
+                l,
+                format!("fixture must be \"free\" or \"blocked\", got \"{other}\""),
+            )),
+        }
+    }
+
+    fn medium(&self, file: &str) -> Result<Medium, RecordingError> {
+        let (medium, l) = self.required_string(file, "medium")?;
+        match medium.as_str() {
+            "air" => Ok(Medium::Air),
+            "water" => Ok(Medium::Water),
+            other => Err(RecordingError::at(
+                file,
+                l,
+                format!("medium must be \"air\" or \"water\", got \"{other}\""),
+            )),
+        }
+    }
+
+    fn session_start_s(&self, file: &str) -> Result<Option<f64>, RecordingError> {
+        let Some((_, v, l)) = self.get("t_session_start_s") else {
+            return Ok(None);
+        };
+        let Some(x) = as_number(v) else {
+            return Err(RecordingError::at(
+                file,
+                *l,
+                "`t_session_start_s` must be a number of seconds".to_string(),
+            ));
+        };
+        if !x.is_finite() || x < 0.0 {
+            return Err(RecordingError::at(
+                file,
+                *l,
+                format!("`t_session_start_s` must be zero or positive and finite, got {x}"),
+            ));
+        }
+        Ok(Some(x))
     }
 }
 

@@ -107,34 +107,8 @@ pub fn analyse(session: &Session, score: &Score) -> Analyses {
             gain: median_gain(&channels),
         });
     }
-    let trend = {
-        let pts: Vec<(f64, f64)> = recordings
-            .iter()
-            .filter_map(|m| m.t_session_s.zip(m.gain))
-            .collect();
-        (pts.len() >= 4).then(|| Dependence {
-            spearman: spearman(&pts),
-            recordings: pts.len(),
-        })
-    };
-    let all_segments = |m: &RecordingMisfit| {
-        let segs = session
-            .recordings
-            .first()
-            .map_or(0, |r| r.rec.meta.segments);
-        m.driven.len() == segs
-    };
-    let amplitude = {
-        let pts: Vec<(f64, f64)> = recordings
-            .iter()
-            .filter(|m| all_segments(m) && m.fixture == "free")
-            .filter_map(|m| m.gain.map(|g| (m.max_abs_v, g)))
-            .collect();
-        (pts.len() >= 3).then(|| Dependence {
-            spearman: spearman(&pts),
-            recordings: pts.len(),
-        })
-    };
+    let trend = trend(&recordings);
+    let amplitude = amplitude(session, &recordings);
     let single_segments = recordings
         .iter()
         .filter(|m| m.driven.len() == 1)
@@ -147,6 +121,39 @@ pub fn analyse(session: &Session, score: &Score) -> Analyses {
         single_segments,
         immovable,
     }
+}
+
+/// The gain against the session clock, given four recordings with both.
+fn trend(recordings: &[RecordingMisfit]) -> Option<Dependence> {
+    let pts: Vec<(f64, f64)> = recordings
+        .iter()
+        .filter_map(|m| m.t_session_s.zip(m.gain))
+        .collect();
+    (pts.len() >= 4).then(|| Dependence {
+        spearman: spearman(&pts),
+        recordings: pts.len(),
+    })
+}
+
+/// The gain against the peak voltage over free recordings driving every
+/// segment, given three.
+fn amplitude(session: &Session, recordings: &[RecordingMisfit]) -> Option<Dependence> {
+    let all_segments = |m: &RecordingMisfit| {
+        let segs = session
+            .recordings
+            .first()
+            .map_or(0, |r| r.rec.meta.segments);
+        m.driven.len() == segs
+    };
+    let pts: Vec<(f64, f64)> = recordings
+        .iter()
+        .filter(|m| all_segments(m) && m.fixture == "free")
+        .filter_map(|m| m.gain.map(|g| (m.max_abs_v, g)))
+        .collect();
+    (pts.len() >= 3).then(|| Dependence {
+        spearman: spearman(&pts),
+        recordings: pts.len(),
+    })
 }
 
 /// Median gain over the mechanical channels that carry signal.

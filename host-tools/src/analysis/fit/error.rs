@@ -6,11 +6,12 @@ use crate::model::predict::PredictError;
 #[derive(Debug, thiserror::Error)]
 pub enum FitError {
     /// The model refused a parameter set the optimiser reached.
-    #[error("{recording}: {source}")]
+    #[error("{recording}")]
     Model {
         /// The recording.
         recording: String,
         /// Why.
+        #[source]
         source: PredictError,
     },
     /// Nothing to fit.

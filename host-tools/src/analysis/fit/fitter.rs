@@ -1,7 +1,7 @@
 //! The fit itself: a session's targets, the least-squares problem the
 //! optimiser sees, and its restarts.
 
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, MinimizationReport};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 
@@ -190,26 +190,7 @@ impl<'a> Fitter<'a> {
         start: Option<&ModelSpec>,
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
-        let n_data: usize = recordings
-            .iter()
-            .map(|&i| {
-                self.targets.recordings[i]
-                    .targets
-                    .iter()
-                    .map(|t| t.rows.len())
-                    .sum::<usize>()
-            })
-            .sum();
-        if n_data == 0 {
-            return Err(FitError::NoData);
-        }
-        let driven = recordings.iter().any(|&i| {
-            let v_v = &self.session.recordings[i].rec.v_v;
-            v_v.iter().flatten().any(|&v| v != 0.0)
-        });
-        if !driven {
-            return Err(FitError::NoDrive);
-        }
+        let n_data = self.data_to_fit(recordings)?;
         let space = Space::new(effects, fixed);
         let start = match start {
             Some(s) => *s,
@@ -231,32 +212,7 @@ impl<'a> Fitter<'a> {
             m: n_data,
         };
         problem.set_params(&theta0);
-        let (mut problem, mut report) = LevenbergMarquardt::new()
-            .with_patience(40)
-            .minimize(problem);
-        // Levenberg–Marquardt stops on a small step as readily as on a
-        // minimum: restart from where it stopped, with a fresh trust region,
-        // until a restart no longer lowers the cost by a millionth. Without
-        // this, a later model with one more term "gains" only by finishing
-        // this one's descent.
-        let mut evaluations = report.number_of_evaluations;
-        for _ in 0..MAX_RESTARTS {
-            let before = report.objective_function;
-            // Back onto the edge of any floor a term sank below: there the
-            // optimiser sees its gradient again.
-            let edge = DVector::from_vec(space.theta(&space.spec(problem.theta.as_slice())));
-            problem.set_params(&edge);
-            let (p, r) = LevenbergMarquardt::new()
-                .with_patience(40)
-                .minimize(problem);
-            evaluations += r.number_of_evaluations;
-            problem = p;
-            let gained = before - r.objective_function;
-            report = r;
-            if gained.is_nan() || gained <= 1e-6 * before.abs() {
-                break;
-            }
-        }
+        let (problem, report, evaluations) = descend(problem, &space);
         // One simulation at the optimiser's final point serves the score,
         // the information criteria and the Jacobian's base.
         let theta = problem.theta.clone();
@@ -284,6 +240,66 @@ impl<'a> Fitter<'a> {
             termination: format!("{:?}", report.termination),
         })
     }
+
+    /// The residual count of `recordings`, refused when it is 0 or when
+    /// no recording drives a segment (the data then say nothing).
+    fn data_to_fit(&self, recordings: &[usize]) -> Result<usize, FitError> {
+        let n_data: usize = recordings
+            .iter()
+            .map(|&i| {
+                self.targets.recordings[i]
+                    .targets
+                    .iter()
+                    .map(|t| t.rows.len())
+                    .sum::<usize>()
+            })
+            .sum();
+        if n_data == 0 {
+            return Err(FitError::NoData);
+        }
+        let driven = recordings.iter().any(|&i| {
+            let v_v = &self.session.recordings[i].rec.v_v;
+            v_v.iter().flatten().any(|&v| v != 0.0)
+        });
+        if !driven {
+            return Err(FitError::NoDrive);
+        }
+        Ok(n_data)
+    }
+}
+
+/// Levenberg–Marquardt from `problem`'s point, restarted: it stops on a
+/// small step as readily as on a minimum, so it restarts from where it
+/// stopped, with a fresh trust region, until a restart no longer lowers the
+/// cost by a millionth. Without this, a later model with one more term
+/// "gains" only by finishing this one's descent. Returns the problem at the
+/// end, the last report and the evaluations in all.
+fn descend<'a, 'b>(
+    problem: Problem<'a, 'b>,
+    space: &Space,
+) -> (Problem<'a, 'b>, MinimizationReport<f64>, usize) {
+    let (mut problem, mut report) = LevenbergMarquardt::new()
+        .with_patience(40)
+        .minimize(problem);
+    let mut evaluations = report.number_of_evaluations;
+    for _ in 0..MAX_RESTARTS {
+        let before = report.objective_function;
+        // Back onto the edge of any floor a term sank below: there the
+        // optimiser sees its gradient again.
+        let edge = DVector::from_vec(space.theta(&space.spec(problem.theta.as_slice())));
+        problem.set_params(&edge);
+        let (p, r) = LevenbergMarquardt::new()
+            .with_patience(40)
+            .minimize(problem);
+        evaluations += r.number_of_evaluations;
+        problem = p;
+        let gained = before - r.objective_function;
+        report = r;
+        if gained.is_nan() || gained <= 1e-6 * before.abs() {
+            break;
+        }
+    }
+    (problem, report, evaluations)
 }
 
 /// The least-squares problem the optimiser sees.

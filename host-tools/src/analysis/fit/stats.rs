@@ -175,27 +175,7 @@ pub fn estimates(
 ) -> Vec<Estimate> {
     let k = theta.len();
     let s2 = rss / (m.saturating_sub(k).max(1)) as f64;
-    // A knob the residuals do not move (a term held at its floor of zero)
-    // has a zero column: leave it out of the inverse, and give it an
-    // unbounded interval, so the others keep theirs.
-    let norms: Vec<f64> = (0..k).map(|j| jac.column(j).norm()).collect();
-    let top = norms.iter().fold(0.0f64, |m, &x| m.max(x));
-    let active: Vec<usize> = (0..k).filter(|&j| norms[j] > 1e-12 * top).collect();
-    let sub = DMatrix::from_fn(jac.nrows(), active.len(), |i, a| jac[(i, active[a])]);
-    let cov = (sub.transpose() * &sub).try_inverse().map(|c| {
-        let mut full = DMatrix::from_element(k, k, 0.0);
-        for (a, &ja) in active.iter().enumerate() {
-            for (b, &jb) in active.iter().enumerate() {
-                full[(ja, jb)] = c[(a, b)] * s2;
-            }
-        }
-        for j in 0..k {
-            if !active.contains(&j) {
-                full[(j, j)] = f64::INFINITY;
-            }
-        }
-        full
-    });
+    let (active, cov) = covariance(jac, k, s2);
     let here = space.spec(theta);
     space
         .knobs
@@ -221,28 +201,10 @@ pub fn estimates(
                 .collect();
             let se = cov
                 .as_ref()
-                .map(|c| {
-                    let mut v = 0.0;
-                    for a in 0..k {
-                        for b in 0..k {
-                            // 0 · ∞ from an inactive knob the value does not depend on.
-                            if grad[a] != 0.0 && grad[b] != 0.0 {
-                                v += grad[a] * c[(a, b)] * grad[b];
-                            }
-                        }
-                    }
-                    v.max(0.0).sqrt()
-                })
+                .map(|c| standard_error(&grad, c))
                 .filter(|s| s.is_finite())
                 .unwrap_or(f64::INFINITY);
-            let (low, high) = if !se.is_finite() {
-                (f64::NEG_INFINITY, f64::INFINITY)
-            } else if knob.positive() && value > 0.0 {
-                let f = (1.96 * se / value).exp();
-                (value / f, value * f)
-            } else {
-                (value - 1.96 * se, value + 1.96 * se)
-            };
+            let (low, high) = interval(knob.positive(), value, se);
             Estimate {
                 knob,
                 value,
@@ -251,4 +213,59 @@ pub fn estimates(
             }
         })
         .collect()
+}
+
+/// Of the first `k` columns of `jac`, the knobs the residuals move (a knob held at its floor of zero has a
+/// zero column: it is left out of the inverse, and gets an unbounded
+/// variance, so the others keep theirs), and the covariance of all knobs,
+/// `s2 (JᵀJ)⁻¹`, if the active part inverts.
+fn covariance(jac: &DMatrix<f64>, k: usize, s2: f64) -> (Vec<usize>, Option<DMatrix<f64>>) {
+    let norms: Vec<f64> = (0..k).map(|j| jac.column(j).norm()).collect();
+    let top = norms.iter().fold(0.0f64, |m, &x| m.max(x));
+    let active: Vec<usize> = (0..k).filter(|&j| norms[j] > 1e-12 * top).collect();
+    let sub = DMatrix::from_fn(jac.nrows(), active.len(), |i, a| jac[(i, active[a])]);
+    let cov = (sub.transpose() * &sub).try_inverse().map(|c| {
+        let mut full = DMatrix::from_element(k, k, 0.0);
+        for (a, &ja) in active.iter().enumerate() {
+            for (b, &jb) in active.iter().enumerate() {
+                full[(ja, jb)] = c[(a, b)] * s2;
+            }
+        }
+        for j in 0..k {
+            if !active.contains(&j) {
+                full[(j, j)] = f64::INFINITY;
+            }
+        }
+        full
+    });
+    (active, cov)
+}
+
+/// The standard error of a value with gradient `grad` over the knobs,
+/// `sqrt(gᵀ C g)`.
+fn standard_error(grad: &[f64], cov: &DMatrix<f64>) -> f64 {
+    let k = grad.len();
+    let mut v = 0.0;
+    for a in 0..k {
+        for b in 0..k {
+            // 0 · ∞ from an inactive knob the value does not depend on.
+            if grad[a] != 0.0 && grad[b] != 0.0 {
+                v += grad[a] * cov[(a, b)] * grad[b];
+            }
+        }
+    }
+    v.max(0.0).sqrt()
+}
+
+/// The 95 % interval of `value` with standard error `se`: unbounded for an
+/// infinite `se`, log-symmetric for a positive knob, else symmetric.
+fn interval(positive: bool, value: f64, se: f64) -> (f64, f64) {
+    if !se.is_finite() {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    } else if positive && value > 0.0 {
+        let f = (1.96 * se / value).exp();
+        (value / f, value * f)
+    } else {
+        (value - 1.96 * se, value + 1.96 * se)
+    }
 }

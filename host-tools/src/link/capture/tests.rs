@@ -30,7 +30,7 @@ enum Then {
 }
 
 impl Link for FakeLink {
-    fn read_force(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
         match self.chunks.pop_front() {
             Some(c) => {
                 buf[..c.len()].copy_from_slice(&c);
@@ -41,13 +41,13 @@ impl Link for FakeLink {
                     self.stop.store(true, Ordering::SeqCst);
                     Ok(0)
                 }
-                Then::Fail => bail!("probe unplugged"),
+                Then::Fail => Err(crate::link::probe::TargetError::new("probe unplugged").into()),
                 Then::Idle => Ok(0),
             },
         }
     }
 
-    fn read_log(&mut self, _buf: &mut [u8]) -> anyhow::Result<usize> {
+    fn read_log(&mut self, _buf: &mut [u8]) -> Result<usize, ProbeError> {
         self.log_reads += 1;
         Ok(0)
     }
@@ -136,7 +136,7 @@ fn a_failing_link_still_writes_what_came() {
     let (mut link, stop) = link(Then::Fail);
     let opts = options("fail", None);
     let e = capture(&mut link, None, &stop, &opts, &Silent).unwrap_err();
-    let text = format!("{e:#}");
+    let text = with_causes(&e);
     assert!(
         text.contains("the link failed; the samples so far are in"),
         "{text}"
@@ -170,7 +170,7 @@ fn a_hanging_read_ends_the_capture_within_its_bound_and_the_samples_are_written(
     let e = capture(&mut link, None, &stop, &opts, &Silent).unwrap_err();
     let took_s = started.elapsed().as_secs_f64();
     assert!((0.4..1.4).contains(&took_s), "took {took_s} s");
-    let text = format!("{e:#}");
+    let text = with_causes(&e);
     assert!(
         text.starts_with(&format!(
             "the link failed; the samples so far are in {}: \

@@ -28,17 +28,18 @@ use std::path::Path;
 use std::sync::mpsc;
 use std::time::Duration;
 
-use anyhow::{anyhow, bail, Context};
 use probe_rs::probe::list::Lister;
 use probe_rs::probe::{DebugProbeInfo, DebugProbeSelector, Probe};
 use probe_rs::rtt::find_rtt_control_block_in_raw_file;
 use probe_rs::{Permissions, Session};
 
+mod error;
 mod probe_rs_target;
 mod steps;
 mod target;
 mod worker;
 
+pub use error::{ProbeError, TargetError};
 pub use probe_rs_target::ProbeTarget;
 pub use steps::{attach_rtt, flash_and_run, write_all, RTT_ID_LEN};
 pub use target::Target;
@@ -80,26 +81,31 @@ fn bounded<T: Send + 'static>(
     what: &str,
     timeout: Duration,
     f: impl FnOnce() -> T + Send + 'static,
-) -> anyhow::Result<T> {
+) -> Result<T, ProbeError> {
     let (tx, rx) = mpsc::channel();
     std::thread::Builder::new()
         .name(what.to_string())
         .spawn(move || {
             let _ = tx.send(f());
         })
-        .with_context(|| format!("cannot start a thread for {what}"))?;
-    rx.recv_timeout(timeout).map_err(|_| {
-        anyhow!(
-            "{what} did not finish within {:.1} s (is the probe's USB connection stuck?)",
-            timeout.as_secs_f64()
-        )
-    })
+        .map_err(|source| ProbeError::Thread {
+            what: what.to_string(),
+            source,
+        })?;
+    rx.recv_timeout(timeout)
+        .map_err(|_| ProbeError::SetupTimeout {
+            what: what.to_string(),
+            timeout_s: timeout.as_secs_f64(),
+        })
 }
 
 /// Parses a probe selector, `VID:PID[:SERIAL]` in hex.
-pub fn parse_selector(text: &str) -> anyhow::Result<DebugProbeSelector> {
+pub fn parse_selector(text: &str) -> Result<DebugProbeSelector, ProbeError> {
     text.parse::<DebugProbeSelector>()
-        .map_err(|e| anyhow!("{text:?}: expected VID:PID[:SERIAL] in hex: {e}"))
+        .map_err(|e| ProbeError::Selector {
+            text: text.to_string(),
+            source: Box::new(e),
+        })
 }
 
 fn describe(probes: &[DebugProbeInfo]) -> String {
@@ -121,9 +127,10 @@ fn describe(probes: &[DebugProbeInfo]) -> String {
         .join(", ")
 }
 
-/// Finds and opens the probe: the one given by `--probe`, or the only one
-/// attached. Fails fast, naming what was looked for, when there is none.
-pub fn open_probe(opts: &ProbeOptions) -> anyhow::Result<Probe> {
+/// Finds and opens the probe: the one given by [`ProbeOptions::probe`], or
+/// the only one attached. Fails fast, naming what was looked for, when
+/// there is none.
+pub fn open_probe(opts: &ProbeOptions) -> Result<Probe, ProbeError> {
     let selector = opts.probe.as_deref().map(parse_selector).transpose()?;
     let probes = bounded("the debug probe search", opts.timeout, || {
         Lister::new().list_all()
@@ -137,36 +144,37 @@ pub fn open_probe(opts: &ProbeOptions) -> anyhow::Result<Probe> {
         None => match probes.as_slice() {
             [one] => Some(DebugProbeSelector::from(one)),
             [] => None,
-            many => bail!(
-                "{} debug probes found: {}; choose one with --probe VID:PID[:SERIAL]",
-                many.len(),
-                describe(many)
-            ),
+            many => {
+                return Err(ProbeError::ManyProbes {
+                    count: many.len(),
+                    found: describe(many),
+                })
+            }
         },
     };
     let Some(chosen) = chosen else {
-        let wanted = match &opts.probe {
-            Some(p) => format!("matching --probe {p}"),
-            None => "attached".to_string(),
-        };
         let seen = if probes.is_empty() {
             "none is visible over USB".to_string()
         } else {
             format!("visible: {}", describe(&probes))
         };
-        bail!(
-            "no debug probe found {wanted} ({seen}); connect the board's ST-LINK or another probe and check its USB permissions"
-        );
+        return Err(ProbeError::NoProbe {
+            selector: opts.probe.clone(),
+            seen,
+        });
     };
     let shown = chosen.to_string();
     bounded("opening the debug probe", opts.timeout, move || {
         Lister::new().open(chosen).map_err(|e| e.to_string())
     })?
-    .map_err(|e| anyhow!("cannot open debug probe {shown}: {e}"))
+    .map_err(|reason| ProbeError::Open {
+        probe: shown,
+        reason,
+    })
 }
 
 /// Opens the probe and attaches to the chip.
-pub fn attach(opts: &ProbeOptions) -> anyhow::Result<Session> {
+pub fn attach(opts: &ProbeOptions) -> Result<Session, ProbeError> {
     let probe = open_probe(opts)?;
     let chip = opts.chip.clone();
     bounded("attaching to the chip", opts.timeout, move || {
@@ -174,13 +182,16 @@ pub fn attach(opts: &ProbeOptions) -> anyhow::Result<Session> {
             .attach(chip, Permissions::default())
             .map_err(|e| e.to_string())
     })?
-    .map_err(|e| anyhow!("cannot attach to chip {}: {e}", opts.chip))
+    .map_err(|reason| ProbeError::Attach {
+        chip: opts.chip.clone(),
+        reason,
+    })
 }
 
 /// Moves the attached session onto its own thread: from here on every call
 /// to the target is bounded ([`Timeouts::call`] = `opts.timeout`, flashing
 /// `opts.flash_timeout`).
-pub fn connect(session: Session, opts: &ProbeOptions) -> anyhow::Result<Bounded<ProbeTarget>> {
+pub fn connect(session: Session, opts: &ProbeOptions) -> Result<Bounded<ProbeTarget>, ProbeError> {
     Bounded::new(
         ProbeTarget::new(session),
         Timeouts {
@@ -191,22 +202,33 @@ pub fn connect(session: Session, opts: &ProbeOptions) -> anyhow::Result<Bounded<
 }
 
 /// The address of `_SEGGER_RTT` in an ELF image.
-pub fn rtt_address(elf_name: &str, elf: &[u8]) -> anyhow::Result<u64> {
+pub fn rtt_address(elf_name: &str, elf: &[u8]) -> Result<u64, ProbeError> {
     match find_rtt_control_block_in_raw_file(elf) {
         Ok(Some(address)) => Ok(address),
-        Ok(None) => bail!("{elf_name}: no symbol `_SEGGER_RTT` (is the firmware built with RTT?)"),
-        Err(e) => bail!("{elf_name}: not a readable ELF file: {e}"),
+        Ok(None) => Err(ProbeError::NoRttSymbol {
+            elf: elf_name.to_string(),
+        }),
+        Err(e) => Err(ProbeError::NotElf {
+            elf: elf_name.to_string(),
+            source: Box::new(e),
+        }),
     }
+}
+
+/// Reads the ELF image at `path`.
+pub fn read_elf(path: &Path) -> Result<Vec<u8>, ProbeError> {
+    std::fs::read(path).map_err(|source| ProbeError::ReadElf {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Sends `bytes` (encoded commands) to the running firmware's command down
 /// channel: attach without reset, find RTT (at the ELF's `_SEGGER_RTT` if
 /// `elf` is given, else by scanning RAM), write.
-pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> anyhow::Result<()> {
+pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> Result<(), ProbeError> {
     // Read the file first so that a wrong path fails before any USB work.
-    let image = elf
-        .map(|p| std::fs::read(p).with_context(|| format!("reading {}", p.display())))
-        .transpose()?;
+    let image = elf.map(read_elf).transpose()?;
     let address = match (elf, &image) {
         (Some(p), Some(image)) => Some(rtt_address(&p.display().to_string(), image)?),
         _ => None,

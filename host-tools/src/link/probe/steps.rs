@@ -5,9 +5,7 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use anyhow::bail;
-
-use super::{Bounded, Target};
+use super::{Bounded, ProbeError, Target};
 
 /// Length of the RTT control block's ID (`"SEGGER RTT"` and NULs), bytes.
 pub const RTT_ID_LEN: usize = 16;
@@ -34,7 +32,7 @@ pub fn flash_and_run<T: Target>(
     link: &mut Bounded<T>,
     elf: &Path,
     rtt_at: u64,
-) -> anyhow::Result<()> {
+) -> Result<(), ProbeError> {
     link.flash(elf)?;
     link.reset_and_halt()?;
     link.write_memory(rtt_at, &[0; RTT_ID_LEN])?;
@@ -48,7 +46,7 @@ pub fn attach_rtt<T: Target>(
     link: &mut Bounded<T>,
     address: Option<u64>,
     timeout: Duration,
-) -> anyhow::Result<()> {
+) -> Result<(), ProbeError> {
     let started = Instant::now();
     loop {
         match link.attach_rtt_once(address) {
@@ -58,10 +56,11 @@ pub fn attach_rtt<T: Target>(
                 let at = address
                     .map(|a| format!("at {a:#010x}"))
                     .unwrap_or_else(|| "in RAM".to_string());
-                bail!(
-                    "no RTT control block {at} after {:.1} s (is the firmware running and built with RTT?): {e:#}",
-                    timeout.as_secs_f64()
-                );
+                return Err(ProbeError::NoRttBlock {
+                    at,
+                    timeout_s: timeout.as_secs_f64(),
+                    last: Box::new(e),
+                });
             }
             Err(_) => std::thread::sleep(Duration::from_millis(50)),
         }
@@ -75,17 +74,17 @@ pub fn write_all<T: Target>(
     channel: usize,
     mut bytes: &[u8],
     timeout: Duration,
-) -> anyhow::Result<()> {
+) -> Result<(), ProbeError> {
     let started = Instant::now();
     while !bytes.is_empty() {
         let n = link.write_down(channel, bytes)?;
         bytes = &bytes[n..];
         if n == 0 {
             if started.elapsed() >= timeout {
-                bail!(
-                    "RTT down channel {channel} stayed full for {:.1} s: is the firmware reading commands?",
-                    timeout.as_secs_f64()
-                );
+                return Err(ProbeError::DownFull {
+                    channel,
+                    timeout_s: timeout.as_secs_f64(),
+                });
             }
             std::thread::sleep(Duration::from_millis(5));
         }

@@ -7,9 +7,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use anyhow::bail;
-
 use super::*;
+use crate::link::causes::with_causes;
 
 /// Where the fake firmware's `_SEGGER_RTT` is (the real release build's).
 pub(crate) const RTT_AT: u64 = 0x2001_d970;
@@ -89,16 +88,16 @@ impl Drop for FakeTarget {
 }
 
 impl Target for FakeTarget {
-    fn flash(&mut self, elf: &Path) -> anyhow::Result<()> {
+    fn flash(&mut self, elf: &Path) -> Result<(), TargetError> {
         self.log(format!("flash {}", elf.display()));
         match self.flash {
             Act::Answer => Ok(()),
             Act::Hang => hang(),
-            Act::Fail => bail!("flash algorithm failed"),
+            Act::Fail => Err(TargetError::new("flash algorithm failed")),
         }
     }
 
-    fn reset_and_halt(&mut self) -> anyhow::Result<()> {
+    fn reset_and_halt(&mut self) -> Result<(), TargetError> {
         self.log("reset_and_halt".into());
         // RAM, and with it the old control block, survives the reset.
         self.running = false;
@@ -106,7 +105,7 @@ impl Target for FakeTarget {
         Ok(())
     }
 
-    fn write_memory(&mut self, address: u64, bytes: &[u8]) -> anyhow::Result<()> {
+    fn write_memory(&mut self, address: u64, bytes: &[u8]) -> Result<(), TargetError> {
         self.log(format!("write {bytes:?} at {address:#x}"));
         if address == RTT_AT && bytes.len() == 16 {
             self.id.copy_from_slice(bytes);
@@ -114,24 +113,24 @@ impl Target for FakeTarget {
         Ok(())
     }
 
-    fn run(&mut self) -> anyhow::Result<()> {
+    fn run(&mut self) -> Result<(), TargetError> {
         self.log("run".into());
         self.running = true;
         Ok(())
     }
 
-    fn attach_rtt(&mut self, address: Option<u64>) -> anyhow::Result<()> {
+    fn attach_rtt(&mut self, address: Option<u64>) -> Result<(), TargetError> {
         match self.attach {
             Act::Answer => {}
             Act::Hang => hang(),
-            Act::Fail => bail!("probe error"),
+            Act::Fail => return Err(TargetError::new("probe error")),
         }
         if self.running && self.init_after.is_some_and(|k| self.attempts >= k) {
             self.id = probe_rs::rtt::Rtt::RTT_ID;
         }
         self.attempts += 1;
         if address != Some(RTT_AT) || self.id != probe_rs::rtt::Rtt::RTT_ID {
-            bail!("control block not found");
+            return Err(TargetError::new("control block not found"));
         }
         let new = self.init_after.is_some_and(|k| self.attempts > k);
         self.log(format!(
@@ -141,7 +140,7 @@ impl Target for FakeTarget {
         Ok(())
     }
 
-    fn read_up(&mut self, channel: usize, buf: &mut [u8]) -> anyhow::Result<usize> {
+    fn read_up(&mut self, channel: usize, buf: &mut [u8]) -> Result<usize, TargetError> {
         if channel != FORCE_UP_CHANNEL {
             return Ok(0);
         }
@@ -153,16 +152,16 @@ impl Target for FakeTarget {
             None => match self.after_up {
                 Act::Answer => Ok(0),
                 Act::Hang => hang(),
-                Act::Fail => bail!("probe unplugged"),
+                Act::Fail => Err(TargetError::new("probe unplugged")),
             },
         }
     }
 
-    fn write_down(&mut self, _channel: usize, bytes: &[u8]) -> anyhow::Result<usize> {
+    fn write_down(&mut self, _channel: usize, bytes: &[u8]) -> Result<usize, TargetError> {
         match self.write {
             Act::Answer => {}
             Act::Hang => hang(),
-            Act::Fail => bail!("probe error"),
+            Act::Fail => return Err(TargetError::new("probe error")),
         }
         let n = bytes.len().min(self.room);
         self.received.lock().unwrap().extend_from_slice(&bytes[..n]);
@@ -297,7 +296,7 @@ fn without_new_firmware_the_attach_fails_naming_the_address_instead_of_reading_s
     let e = attach_rtt(&mut link, Some(RTT_AT), Duration::from_millis(300)).unwrap_err();
     within(started.elapsed(), Duration::from_millis(300));
     assert_eq!(
-        e.to_string(),
+        with_causes(&e),
         "no RTT control block at 0x2001d970 after 0.3 s (is the firmware running and \
          built with RTT?): control block not found"
     );
@@ -334,25 +333,25 @@ fn dropping_the_link_releases_the_target() {
 fn a_panicking_call_is_an_error_not_a_crash() {
     struct Panics;
     impl Target for Panics {
-        fn flash(&mut self, _: &Path) -> anyhow::Result<()> {
+        fn flash(&mut self, _: &Path) -> Result<(), TargetError> {
             panic!("inside probe-rs")
         }
-        fn reset_and_halt(&mut self) -> anyhow::Result<()> {
+        fn reset_and_halt(&mut self) -> Result<(), TargetError> {
             Ok(())
         }
-        fn write_memory(&mut self, _: u64, _: &[u8]) -> anyhow::Result<()> {
+        fn write_memory(&mut self, _: u64, _: &[u8]) -> Result<(), TargetError> {
             Ok(())
         }
-        fn run(&mut self) -> anyhow::Result<()> {
+        fn run(&mut self) -> Result<(), TargetError> {
             Ok(())
         }
-        fn attach_rtt(&mut self, _: Option<u64>) -> anyhow::Result<()> {
+        fn attach_rtt(&mut self, _: Option<u64>) -> Result<(), TargetError> {
             Ok(())
         }
-        fn read_up(&mut self, _: usize, _: &mut [u8]) -> anyhow::Result<usize> {
+        fn read_up(&mut self, _: usize, _: &mut [u8]) -> Result<usize, TargetError> {
             Ok(0)
         }
-        fn write_down(&mut self, _: usize, _: &[u8]) -> anyhow::Result<usize> {
+        fn write_down(&mut self, _: usize, _: &[u8]) -> Result<usize, TargetError> {
             Ok(0)
         }
     }

@@ -10,9 +10,7 @@ use std::path::Path;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
-use anyhow::{anyhow, bail, Context};
-
-use super::Target;
+use super::{ProbeError, Target};
 
 /// How long each kind of call may take.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,7 +37,7 @@ pub struct Bounded<T: Target> {
 
 impl<T: Target> Bounded<T> {
     /// Moves `target` onto a new thread that serves the calls.
-    pub fn new(target: T, timeouts: Timeouts) -> anyhow::Result<Self> {
+    pub fn new(target: T, timeouts: Timeouts) -> Result<Self, ProbeError> {
         let (jobs, inbox) = mpsc::channel::<Job<T>>();
         let (ended_tx, ended) = mpsc::channel::<()>();
         std::thread::Builder::new()
@@ -54,7 +52,10 @@ impl<T: Target> Bounded<T> {
                 // `_ended`: dropping the link waits for this.
                 drop(target);
             })
-            .context("cannot start the probe link's thread")?;
+            .map_err(|source| ProbeError::Thread {
+                what: "the probe link".to_string(),
+                source,
+            })?;
         Ok(Bounded {
             jobs: Some(jobs),
             ended,
@@ -79,19 +80,26 @@ impl<T: Target> Bounded<T> {
         &mut self,
         what: String,
         timeout: Duration,
-        f: impl FnOnce(&mut T) -> anyhow::Result<R> + Send + 'static,
-    ) -> anyhow::Result<R> {
+        f: impl FnOnce(&mut T) -> Result<R, ProbeError> + Send + 'static,
+    ) -> Result<R, ProbeError> {
         if let Some(earlier) = &self.stalled {
-            bail!("{what}: not tried, the probe link is stuck ({earlier})");
+            return Err(ProbeError::Stuck {
+                what,
+                earlier: earlier.clone(),
+            });
         }
         let (tx, rx) = mpsc::sync_channel(1);
         let job: Job<T> = Box::new(move |target| {
             let _ = tx.send(f(target));
         });
-        self.jobs
+        if self
+            .jobs
             .as_ref()
             .and_then(|jobs| jobs.send(job).ok())
-            .ok_or_else(|| anyhow!("{what}: the probe link's thread has ended"))?;
+            .is_none()
+        {
+            return Err(ProbeError::Ended { what });
+        }
         match rx.recv_timeout(timeout) {
             Ok(answer) => answer,
             Err(RecvTimeoutError::Timeout) => {
@@ -100,59 +108,58 @@ impl<T: Target> Bounded<T> {
                     timeout.as_secs_f64()
                 );
                 self.stalled = Some(stall.clone());
-                bail!("{stall}: the debug probe stopped answering (USB connection stalled?); the call was abandoned")
+                Err(ProbeError::Stalled { stall })
             }
             // The job was dropped unanswered: it panicked on the thread.
             Err(RecvTimeoutError::Disconnected) => {
-                let stall = format!("{what} panicked in the probe link's thread");
-                self.stalled = Some(stall.clone());
-                bail!(stall)
+                self.stalled = Some(format!("{what} panicked in the probe link's thread"));
+                Err(ProbeError::Panicked { what })
             }
         }
     }
 
     /// Writes the ELF image at `elf` into flash, within the flash bound.
-    pub fn flash(&mut self, elf: &Path) -> anyhow::Result<()> {
+    pub fn flash(&mut self, elf: &Path) -> Result<(), ProbeError> {
         let path = elf.to_path_buf();
         let what = format!("flashing {}", elf.display());
         let timeout = self.timeouts.flash;
-        self.call(what, timeout, move |t| t.flash(&path))
+        self.call(what, timeout, move |t| Ok(t.flash(&path)?))
     }
 
     /// Resets core 0 and halts it.
-    pub fn reset_and_halt(&mut self) -> anyhow::Result<()> {
+    pub fn reset_and_halt(&mut self) -> Result<(), ProbeError> {
         let timeout = self.timeouts.call;
         self.call("resetting and halting the core".into(), timeout, |t| {
-            t.reset_and_halt()
+            Ok(t.reset_and_halt()?)
         })
     }
 
     /// Writes `bytes` into target memory at `address`.
-    pub fn write_memory(&mut self, address: u64, bytes: &[u8]) -> anyhow::Result<()> {
+    pub fn write_memory(&mut self, address: u64, bytes: &[u8]) -> Result<(), ProbeError> {
         let bytes = bytes.to_vec();
         let what = format!("writing {} bytes at {address:#010x}", bytes.len());
         let timeout = self.timeouts.call;
-        self.call(what, timeout, move |t| t.write_memory(address, &bytes))
+        self.call(what, timeout, move |t| Ok(t.write_memory(address, &bytes)?))
     }
 
     /// Lets the halted core run.
-    pub fn run(&mut self) -> anyhow::Result<()> {
+    pub fn run(&mut self) -> Result<(), ProbeError> {
         let timeout = self.timeouts.call;
-        self.call("starting the core".into(), timeout, |t| t.run())
+        self.call("starting the core".into(), timeout, |t| Ok(t.run()?))
     }
 
     /// One attempt to attach to the RTT control block.
-    pub fn attach_rtt_once(&mut self, address: Option<u64>) -> anyhow::Result<()> {
+    pub fn attach_rtt_once(&mut self, address: Option<u64>) -> Result<(), ProbeError> {
         let what = match address {
             Some(a) => format!("looking for the RTT control block at {a:#010x}"),
             None => "scanning RAM for the RTT control block".to_string(),
         };
         let timeout = self.timeouts.call;
-        self.call(what, timeout, move |t| t.attach_rtt(address))
+        self.call(what, timeout, move |t| Ok(t.attach_rtt(address)?))
     }
 
     /// Reads what RTT up channel `channel` holds now into `buf`.
-    pub fn read_up(&mut self, channel: usize, buf: &mut [u8]) -> anyhow::Result<usize> {
+    pub fn read_up(&mut self, channel: usize, buf: &mut [u8]) -> Result<usize, ProbeError> {
         let len = buf.len();
         let timeout = self.timeouts.call;
         let got = self.call(
@@ -164,7 +171,11 @@ impl<T: Target> Bounded<T> {
                 // A target claiming more than it was given is refused, not
                 // sliced into a panic.
                 if n > len {
-                    bail!("RTT up channel {channel}: read returned {n} bytes into a {len}-byte buffer");
+                    return Err(ProbeError::ReadOverrun {
+                        channel,
+                        got: n,
+                        room: len,
+                    });
                 }
                 tmp.truncate(n);
                 Ok(tmp)
@@ -175,17 +186,21 @@ impl<T: Target> Bounded<T> {
     }
 
     /// Writes what fits now of `bytes` into RTT down channel `channel`.
-    pub fn write_down(&mut self, channel: usize, bytes: &[u8]) -> anyhow::Result<usize> {
+    pub fn write_down(&mut self, channel: usize, bytes: &[u8]) -> Result<usize, ProbeError> {
         let bytes = bytes.to_vec();
         let len = bytes.len();
         let timeout = self.timeouts.call;
         let n = self.call(
             format!("writing RTT down channel {channel}"),
             timeout,
-            move |t| t.write_down(channel, &bytes),
+            move |t| Ok(t.write_down(channel, &bytes)?),
         )?;
         if n > len {
-            bail!("RTT down channel {channel}: write claimed {n} bytes of {len}");
+            return Err(ProbeError::WriteOverrun {
+                channel,
+                got: n,
+                given: len,
+            });
         }
         Ok(n)
     }

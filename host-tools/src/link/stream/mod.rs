@@ -46,9 +46,11 @@
 
 mod clock;
 mod recorder;
+mod refusal;
 
 pub use clock::{Clock, ClockError, WRAP_US};
 pub use recorder::{Gap, GapSource, Recorder, Rejected, Restart, Setup, Summary};
+pub use refusal::Refusal;
 
 #[cfg(test)]
 mod tests;

@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode};
 
 use super::clock::{Clock, ClockError};
+use super::refusal::Refusal;
 use crate::recording::Geometry;
 use crate::recording::{
     Channel, Fixture, Medium, Metadata, Recording, RecordingError, SAFE_VOLTAGE_LIMIT_V,
@@ -55,12 +56,12 @@ pub struct Restart {
 }
 
 /// A Sample that decoded but cannot be a row of a valid recording.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Rejected {
     /// Its sequence number.
     pub seq: u32,
     /// The field and the rule it breaks.
-    pub reason: String,
+    pub reason: Refusal,
 }
 
 /// Totals for a live display and the final report.
@@ -230,42 +231,45 @@ impl Recorder {
 
     /// The Sample's unwrapped time in µs if it can be a row, else the field
     /// and the rule it breaks. The clock moves only for an accepted Sample.
-    fn check(&mut self, s: &DecodedSample) -> Result<u64, String> {
-        if let Some(n) = self.segments {
-            if s.n != n {
-                return Err(format!(
-                    "segment count {} differs from the first Sample's {n}",
-                    s.n
-                ));
+    fn check(&mut self, s: &DecodedSample) -> Result<u64, Refusal> {
+        if let Some(first) = self.segments {
+            if s.n != first {
+                return Err(Refusal::SegmentCount { got: s.n, first });
             }
         }
         if !s.force_n.is_finite() {
-            return Err(format!("force_N = {} is not a finite number", s.force_n));
+            return Err(Refusal::NotFinite {
+                column: "force_N".to_string(),
+                value: s.force_n,
+            });
         }
         for (k, (&v, &i)) in s.voltages().iter().zip(s.currents()).enumerate() {
             if !v.is_finite() {
-                return Err(format!("v{}_V = {v} is not a finite number", k + 1));
+                return Err(Refusal::NotFinite {
+                    column: format!("v{}_V", k + 1),
+                    value: v,
+                });
             }
             if f64::from(v).abs() > SAFE_VOLTAGE_LIMIT_V {
-                return Err(format!(
-                    "v{}_V = {v} V is beyond the safe range of ±{SAFE_VOLTAGE_LIMIT_V} V",
-                    k + 1
-                ));
+                return Err(Refusal::Unsafe {
+                    column: format!("v{}_V", k + 1),
+                    value_v: v,
+                });
             }
             if !i.is_finite() {
-                return Err(format!("i{}_A = {i} is not a finite number", k + 1));
+                return Err(Refusal::NotFinite {
+                    column: format!("i{}_A", k + 1),
+                    value: i,
+                });
             }
         }
         let mut clock = self.clock;
         let t_us = clock.unwrap(s.t_us).map_err(|e| match e {
-            ClockError::Stalled { .. } => format!(
-                "t_us = {} equals the previous Sample's; time must increase",
-                s.t_us
-            ),
-            ClockError::Backwards { previous_us } => format!(
-                "t_us = {} is before the previous Sample's {previous_us}; time must increase",
-                s.t_us
-            ),
+            ClockError::Stalled { .. } => Refusal::Stalled { t_us: s.t_us },
+            ClockError::Backwards { previous_us } => Refusal::Backwards {
+                t_us: s.t_us,
+                previous_us,
+            },
         })?;
         self.clock = clock;
         Ok(t_us)

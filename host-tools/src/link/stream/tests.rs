@@ -314,13 +314,16 @@ fn samples_that_cannot_be_rows_are_refused_by_field_and_rule() {
     bytes.extend(sample_bytes(&sample3(6, 1000)));
     bytes.extend(stream(7..8));
     let r = record(&bytes);
-    let reasons: Vec<(u32, &str)> = r
+    let reasons: Vec<(u32, String)> = r
         .rejected()
         .iter()
-        .map(|x| (x.seq, x.reason.as_str()))
+        .map(|x| (x.seq, x.reason.to_string()))
         .collect();
     assert_eq!(
-        reasons,
+        reasons
+            .iter()
+            .map(|(seq, why)| (*seq, why.as_str()))
+            .collect::<Vec<_>>(),
         [
             (2, "v2_V = 4.5 V is beyond the safe range of ±4 V"),
             (3, "force_N = NaN is not a finite number"),
