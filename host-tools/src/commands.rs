@@ -221,8 +221,7 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", path.display());
     }
     if let Some(dir) = &args.report {
-        finrs::analysis::diagnose::report::write(dir, &session, &d)
-            .with_context(|| dir.display().to_string())?;
+        finrs::analysis::diagnose::report::write(dir, &session, &d)?;
         eprintln!("wrote {}", dir.join("REPORT.md").display());
     }
     Ok(())

@@ -5,8 +5,8 @@ use std::path::Path;
 
 use super::{Diagnosis, ResidualTest, Verdict};
 use crate::analysis::fit::ChannelFit;
-use crate::model::simulate::simulate;
-use crate::plot;
+use crate::model::simulate::{simulate, SimulateError};
+use crate::plot::{self, PlotError};
 use crate::session::Session;
 
 /// A held-out channel under baseline and final model, with its whiteness.
@@ -16,9 +16,55 @@ type Tested<'a> = ((&'a ChannelFit, &'a ChannelFit), &'a ResidualTest);
 /// colour ([`plot::model_colour`]) from plot to plot.
 const MODELS: [&str; 2] = ["baseline", "final"];
 
+/// Why the report could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The folder or `REPORT.md` could not be written.
+    #[error("writing {path}")]
+    Io {
+        /// The folder or file.
+        path: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A held-out recording could not be simulated for its plot.
+    #[error("simulating {recording} for its plot")]
+    Simulate {
+        /// The recording.
+        recording: String,
+        /// Why.
+        #[source]
+        source: SimulateError,
+    },
+    /// A plot could not be drawn.
+    #[error("plotting {path}")]
+    Plot {
+        /// The PNG.
+        path: String,
+        /// Why.
+        #[source]
+        source: PlotError,
+    },
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
+    move |source| ReportError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+fn plotting(path: &Path) -> impl FnOnce(PlotError) -> ReportError + '_ {
+    move |source| ReportError::Plot {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
 /// Writes `REPORT.md` and its plots into `dir`.
-pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)?;
+pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> Result<(), ReportError> {
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
     let v = &d.verdict;
     let mut s = String::new();
     summary(&mut s, session, v);
@@ -32,8 +78,8 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> anyhow::Result<()>
     holdout_channels(&mut s, &tested);
     recording_plots(&mut s, dir, session, d)?;
     autocorrelation_plot(&mut s, dir, &tested)?;
-    std::fs::write(dir.join("REPORT.md"), s)?;
-    Ok(())
+    let md = dir.join("REPORT.md");
+    std::fs::write(&md, s).map_err(io(&md))
 }
 
 /// The verdict, the split and the two models' scores.
@@ -253,7 +299,7 @@ fn recording_plots(
     dir: &Path,
     session: &Session,
     d: &Diagnosis,
-) -> anyhow::Result<()> {
+) -> Result<(), ReportError> {
     let _ = writeln!(s, "\n## Plots\n");
     let _ = writeln!(
         s,
@@ -264,14 +310,24 @@ fn recording_plots(
         let stem = r.name.trim_end_matches(".csv");
         let png = format!("{stem}.png");
         let elements = crate::analysis::fit::FIT_ELEMENTS;
-        let base = simulate(&r.name, &r.rec, &d.baseline.spec, elements, &mut |_| {})?;
-        let fin = simulate(&r.name, &r.rec, &d.final_fit.spec, elements, &mut |_| {})?;
+        let run = |spec| {
+            simulate(&r.name, &r.rec, spec, elements, &mut |_| {}).map_err(|source| {
+                ReportError::Simulate {
+                    recording: r.name.clone(),
+                    source,
+                }
+            })
+        };
+        let base = run(&d.baseline.spec)?;
+        let fin = run(&d.final_fit.spec)?;
+        let path = dir.join(&png);
         plot::plot_models(
-            &dir.join(&png),
+            &path,
             &format!("{} (held out)", r.name),
             Some(&r.rec),
             &[(MODELS[0], &base), (MODELS[1], &fin)],
-        )?;
+        )
+        .map_err(plotting(&path))?;
         let _ = writeln!(s, "![{}]({png})\n", r.name);
     }
     Ok(())
@@ -279,7 +335,7 @@ fn recording_plots(
 
 /// The residual autocorrelation of the held-out channel whose baseline
 /// residuals are least white, under both models.
-fn autocorrelation_plot(s: &mut String, dir: &Path, tested: &[Tested]) -> anyhow::Result<()> {
+fn autocorrelation_plot(s: &mut String, dir: &Path, tested: &[Tested]) -> Result<(), ReportError> {
     // The held-out channel whose baseline residuals are least white.
     let worst = tested
         .iter()
@@ -288,8 +344,9 @@ fn autocorrelation_plot(s: &mut String, dir: &Path, tested: &[Tested]) -> anyhow
         let lags = 60.min(cb.residuals.len().saturating_sub(1));
         let band = 2.58 / (cb.residuals.len().max(1) as f64).sqrt();
         let png = "residual_autocorrelation.png";
+        let path = dir.join(png);
         plot::plot_autocorrelation(
-            &dir.join(png),
+            &path,
             &format!(
                 "residual autocorrelation, {} {} (held out)",
                 cb.recording,
@@ -306,7 +363,8 @@ fn autocorrelation_plot(s: &mut String, dir: &Path, tested: &[Tested]) -> anyhow
                 ),
             ],
             band,
-        )?;
+        )
+        .map_err(plotting(&path))?;
         let _ = writeln!(
             s,
             "The least white held-out channel under the baseline, {} of {}: residual \
