@@ -210,7 +210,8 @@ impl<'a> Fitter<'a> {
         if !driven {
             return Err(FitError::NoDrive);
         }
-        let space = Space::new(effects, fixed);
+        let segments = self.session.recordings[0].rec.meta.segments;
+        let space = Space::new(effects, segments, fixed);
         let start = match start {
             Some(s) => *s,
             None => start::from_data(
