@@ -122,6 +122,19 @@ fn crosstalk_is_named() {
     assert_eq!(v.verdict, "explained");
 }
 
+/// Segments 2 and 3 differ from segment 1 by 10 to 15 % in `R1`, `C` and
+/// `K`, as the rig's hand-cut electrodes do.
+#[test]
+fn segment_variation_is_named() {
+    let mut ext = Extensions::NONE;
+    let var = &mut ext.segment_variation;
+    (var.r1_deviation[1], var.c_deviation[1], var.k_deviation[1]) = (0.1, -0.12, 0.15);
+    (var.r1_deviation[2], var.c_deviation[2], var.k_deviation[2]) = (-0.15, 0.1, -0.1);
+    let v = verdict_for("variation", &sample(ext), 29);
+    assert_eq!(v.causes, ["segment-variation"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+}
+
 #[test]
 fn electrochemical_nonlinearity_is_named() {
     let ext = Extensions {

@@ -16,6 +16,7 @@
 //! | `electrochemical-nonlinearity` | the double layer sees `v (1 + a v²)`; the leak passes `v/R2 (1 + b v²)` | static input nonlinearity, exact under zero-order hold |
 //! | `dehydration` | the moment weakens over minutes | [`crate::Strip::set_moment_gain`], set by the caller from session time |
 //! | `large-deflection` | arc kinematics of the slope field | [`crate::Strip::position_at_m`]: the tip moves toward the clamp |
+//! | `segment-variation` | segment `i`'s `R1`, `C`, `K` times `1 + δ`, segment 1 the reference | per segment its own electrical block and coupling, each exact |
 //!
 //! ```
 //! use model_core::{Extensions, Fixture, Params, Strip};
@@ -59,6 +60,119 @@ pub struct Extensions {
     /// Positions along the strip follow the arc of the slope field instead
     /// of the small-deflection line.
     pub large_deflection: bool,
+    /// Segments that differ in `R1`, `C` and `K` (`segment-variation`).
+    pub segment_variation: SegmentVariation,
+}
+
+/// Most segments a strip has (as [`crate::Strip`] accepts).
+pub const MAX_SEGMENTS: usize = 8;
+
+/// `segment-variation`: segment `i` (index 0 at the clamp) has
+/// `R1 (1 + δᵢ)`, `C (1 + δᵢ)` and `K (1 + δᵢ)`, each with its own
+/// deviation `δᵢ > −1`.
+///
+/// Segment 1 (index 0) is the reference, with all its deviations 0: the
+/// shared [`crate::Params`] are its values, which is what keeps the
+/// parameters identifiable (scaling every segment alike is a change of
+/// `R1`, `C` or `K`). Entries past the strip's segments must be 0 too, so a
+/// deviation meant for a longer strip is refused rather than dropped.
+///
+/// ```
+/// use model_core::{Extensions, Fixture, Params, SegmentVariation, Strip};
+/// let mut var = SegmentVariation::NONE;
+/// var.k_deviation[2] = -0.1; // the third segment bends 10 % less
+/// let ext = Extensions { segment_variation: var, ..Extensions::NONE };
+/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::thesis_2006(), &ext, Fixture::Free, 1e-3);
+/// assert!(s.is_ok());
+/// var.k_deviation[3] = 0.1; // a fourth segment the strip does not have
+/// let ext = Extensions { segment_variation: var, ..Extensions::NONE };
+/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::thesis_2006(), &ext, Fixture::Free, 1e-3);
+/// assert!(s.is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentVariation {
+    /// Relative departure of each segment's `R1` from the reference's.
+    pub r1_deviation: [f64; MAX_SEGMENTS],
+    /// Relative departure of each segment's `C` from the reference's.
+    pub c_deviation: [f64; MAX_SEGMENTS],
+    /// Relative departure of each segment's moment gain `K` from the
+    /// reference's.
+    pub k_deviation: [f64; MAX_SEGMENTS],
+}
+
+impl SegmentVariation {
+    /// Every segment alike.
+    pub const NONE: SegmentVariation = SegmentVariation {
+        r1_deviation: [0.0; MAX_SEGMENTS],
+        c_deviation: [0.0; MAX_SEGMENTS],
+        k_deviation: [0.0; MAX_SEGMENTS],
+    };
+
+    /// The deviations by field name, in a fixed order.
+    pub fn fields(&self) -> [(&'static str, &[f64; MAX_SEGMENTS]); 3] {
+        [
+            ("r1_deviation", &self.r1_deviation),
+            ("c_deviation", &self.c_deviation),
+            ("k_deviation", &self.k_deviation),
+        ]
+    }
+
+    /// Whether every segment is alike.
+    pub fn is_none(&self) -> bool {
+        *self == SegmentVariation::NONE
+    }
+
+    /// Refuses a varied reference segment, a deviation at or below −1 (a
+    /// factor that is not positive), or one that is not finite.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        self.validate_for(MAX_SEGMENTS)
+    }
+
+    /// As [`SegmentVariation::validate`], and refuses a deviation on a
+    /// segment past the first `segments`.
+    pub fn validate_for(&self, segments: usize) -> Result<(), ParamError> {
+        for (field, values) in self.fields() {
+            for (i, &value) in values.iter().enumerate() {
+                let refuse = |rule| {
+                    Err(ParamError::SegmentDeviation {
+                        field,
+                        segment: i + 1,
+                        value,
+                        rule,
+                    })
+                };
+                if !value.is_finite() {
+                    return refuse("must be finite");
+                }
+                if i == 0 && value != 0.0 {
+                    return refuse("segment 1 is the reference, its deviations must be 0");
+                }
+                if i >= segments && value != 0.0 {
+                    return refuse("the strip has fewer segments, the deviation must be 0");
+                }
+                if value <= -1.0 {
+                    return refuse("must be above -1 (a positive factor)");
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Segment `i`'s `(R1, C, K)` from the shared ones: each times
+    /// `1 + δ`, which is exact (the shared value itself) at `δ = 0`.
+    pub(crate) fn segment(&self, i: usize, r1: f64, c: f64, k: f64) -> (f64, f64, f64) {
+        (
+            r1 * (1.0 + self.r1_deviation[i]),
+            c * (1.0 + self.c_deviation[i]),
+            k * (1.0 + self.k_deviation[i]),
+        )
+    }
+}
+
+impl Default for SegmentVariation {
+    fn default() -> Self {
+        SegmentVariation::NONE
+    }
 }
 
 impl Extensions {
@@ -73,6 +187,7 @@ impl Extensions {
         crosstalk: 0.0,
         back_relaxation: false,
         large_deflection: false,
+        segment_variation: SegmentVariation::NONE,
     };
 
     /// Refuses values outside each term's documented range.
@@ -93,7 +208,8 @@ impl Extensions {
             -1.0 / 48.0,
             f64::INFINITY,
         )?;
-        within("crosstalk", self.crosstalk, -1.0, 1.0)
+        within("crosstalk", self.crosstalk, -1.0, 1.0)?;
+        self.segment_variation.validate()
     }
 
     /// Modal damping `2ζω` of a mode at `omega_rad_s`, with `rho_a` the

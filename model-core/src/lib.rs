@@ -30,7 +30,7 @@ mod shape;
 mod strip;
 pub mod zoh;
 
-pub use extensions::Extensions;
+pub use extensions::{Extensions, SegmentVariation, MAX_SEGMENTS};
 pub use params::{Laminate, ParamError, Params};
 pub use real::Real;
 pub use strip::{state_len, Fixture, Strip};

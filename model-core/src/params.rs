@@ -225,6 +225,17 @@ pub enum ParamError {
     /// The beam's mass matrix is not positive definite (numerically
     /// degenerate geometry).
     SingularMass,
+    /// A `segment-variation` deviation is refused.
+    SegmentDeviation {
+        /// The deviation's field.
+        field: &'static str,
+        /// The segment, counted from 1 at the clamp.
+        segment: usize,
+        /// Its value.
+        value: f64,
+        /// The rule it breaks.
+        rule: &'static str,
+    },
 }
 
 impl fmt::Display for ParamError {
@@ -247,6 +258,12 @@ impl fmt::Display for ParamError {
                 max,
             } => write!(f, "{field} must lie between {min} and {max}, got {value}"),
             ParamError::SingularMass => write!(f, "beam mass matrix is not positive definite"),
+            ParamError::SegmentDeviation {
+                field,
+                segment,
+                value,
+                rule,
+            } => write!(f, "{field} of segment {segment} is {value}: {rule}"),
         }
     }
 }

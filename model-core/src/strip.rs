@@ -79,9 +79,10 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     /// Per segment, the columns of `Φ` (for `v_C` and `r`) and of `Γ` over
     /// the `η` and `ζ` rows (entries past `4NE` unused).
     drive: [[[T; S]; 3]; N],
-    /// The electrical block, the same for every segment:
+    /// The electrical block of every segment (all alike unless
+    /// `segment-variation` sets them apart):
     /// `v_C ← a v_C + g₀ v`, `r ← b v_C + c r + g₁ v`, as `[a, b, c, g₀, g₁]`.
-    elec: [T; 5],
+    elec: [[T; 5]; N],
     /// Row `d` (of `2NE`, see [`rows`]): freedom `d` (deflection in m,
     /// slope in rad) from `η`.
     dof_from_modal: DofMat<T, N, E, S>,
@@ -90,9 +91,11 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     /// Angular frequencies of the active modes, rad/s, ascending.
     omega_rad_s: [f64; S],
     modes: usize,
-    inv_r1: T,
+    /// `1/R1` of every segment.
+    inv_r1: [T; N],
     inv_r2: T,
-    kc: T,
+    /// `K C` of every segment.
+    kc: [T; N],
     z_minus_p: T,
     /// `a` of the double layer's `v (1 + a v²)`.
     charge_cubic: T,
@@ -128,6 +131,41 @@ struct Analysis<const N: usize, const E: usize, const S: usize> {
     modes: usize,
 }
 
+/// One segment's electrical and relaxation values: the shared ones, or
+/// its own under `segment-variation`.
+#[derive(Clone, Copy)]
+struct Segment {
+    r1_ohm: f64,
+    c_f: f64,
+    k_nm_per_c: f64,
+}
+
+impl Segment {
+    /// Every segment's values.
+    fn all<const N: usize>(params: &Params, ext: &Extensions) -> [Segment; N] {
+        core::array::from_fn(|i| {
+            let (r1_ohm, c_f, k_nm_per_c) =
+                ext.segment_variation
+                    .segment(i, params.r1_ohm, params.c_f, params.k_nm_per_c);
+            Segment {
+                r1_ohm,
+                c_f,
+                k_nm_per_c,
+            }
+        })
+    }
+
+    /// `1/τ1 = 1/(R1 C)`, 1/s.
+    fn inv_tau1(&self) -> f64 {
+        1.0 / (self.r1_ohm * self.c_f)
+    }
+
+    /// `K C`, the moment per volt of the double layer before relaxation.
+    fn kc(&self) -> f64 {
+        self.k_nm_per_c * self.c_f
+    }
+}
+
 impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> {
     /// Beam freedoms: deflection and slope of every node but the clamp.
     const DOF: usize = 2 * N * E;
@@ -139,12 +177,13 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// Builds the model and its exact discretisation at sample time `dt_s`.
     ///
     /// The exponential is taken block by block, which is exact because the
-    /// modes couple only through the electrical states, and every segment's
-    /// electrics are alike: one 4-state exponential per mode (its rotation
-    /// driven by one segment's electrics with unit coupling) gives the
-    /// mode's rotation and, scaled by each segment's coupling, its columns
-    /// of `Φ` and `Γ`. No `S × S` exponential is formed, which keeps the
-    /// stack small enough to re-discretise on the board.
+    /// modes couple only through the electrical states: one 4-state
+    /// exponential per mode (its rotation driven by one segment's electrics
+    /// with unit coupling) gives the mode's rotation and, scaled by each
+    /// segment's coupling, its columns of `Φ` and `Γ`. Segments whose `τ1`
+    /// differs (`segment-variation`) get their own exponential. No `S × S`
+    /// exponential is formed, which keeps the stack small enough to
+    /// re-discretise on the board.
     pub fn new(params: &Params, fixture: Fixture, dt_s: f64) -> Result<Self, ParamError> {
         Self::with_extensions(params, &Extensions::NONE, fixture, dt_s)
     }
@@ -164,17 +203,18 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
+        ext.segment_variation.validate_for(N)?;
         check_sample_time(dt_s)?;
         let an = Self::analyse(params, ext, fixture)?;
-        let kc = params.k_nm_per_c * params.c_f;
+        let segments = Segment::all::<N>(params, ext);
         let z_minus_p = params.z_per_s - params.p_per_s;
         // The pieces are inlined: the board re-discretises with the same
         // stack as when they were one function.
-        let elec = Self::electrical_step(params, dt_s);
-        let (rot, drive) = Self::modal_steps(&an, params, kc, dt_s);
+        let elec = segments.map(|seg| Self::electrical_step(params, seg.inv_tau1(), dt_s));
+        let (rot, drive) = Self::modal_steps(&an, params, &segments, dt_s);
         let dof_from_modal = Self::modal_to_dof(&an);
         let force_row = if fixture == Fixture::Blocked {
-            Self::blocking_force_row(&an, kc, z_minus_p)
+            Self::blocking_force_row(&an, &segments, z_minus_p)
         } else {
             [T::ZERO; S]
         };
@@ -191,9 +231,9 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             force_row,
             omega_rad_s: an.omega,
             modes: an.modes,
-            inv_r1: T::from_f64(1.0 / params.r1_ohm),
+            inv_r1: segments.map(|seg| T::from_f64(1.0 / seg.r1_ohm)),
             inv_r2: T::from_f64(1.0 / params.r2_ohm),
-            kc: T::from_f64(kc),
+            kc: segments.map(|seg| T::from_f64(seg.kc())),
             z_minus_p: T::from_f64(z_minus_p),
             charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
             leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
@@ -202,12 +242,11 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         })
     }
 
-    /// The electrical block alone, discretised at `dt_s`:
+    /// One segment's electrical block alone, discretised at `dt_s`:
     /// `v_C' = (v − v_C)/τ1`, `r' = v_C − p r`; its `Φ` (three entries, the
     /// other is 0) and `Γ`.
     #[inline(always)]
-    fn electrical_step(params: &Params, dt_s: f64) -> [T; 5] {
-        let inv_tau1 = 1.0 / params.tau1_s();
+    fn electrical_step(params: &Params, inv_tau1: f64, dt_s: f64) -> [T; 5] {
         let mut a_e = [[-inv_tau1, 0.0], [1.0, -params.p_per_s]];
         let (mut phi_e, mut gamma_e) = ([[0.0; 2]; 2], [[0.0; 1]; 2]);
         discretise(
@@ -228,17 +267,16 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     }
 
     /// Each mode's rotation over one step, and its columns of `Φ` and `Γ`
-    /// driven by each segment's electrics (`kc` = `K C`).
+    /// driven by each segment's electrics.
     #[inline(always)]
     #[allow(clippy::type_complexity)]
     fn modal_steps(
         an: &Analysis<N, E, S>,
         params: &Params,
-        kc: f64,
+        segments: &[Segment; N],
         dt_s: f64,
     ) -> ([[T; S]; 4], [[[T; S]; 3]; N]) {
         let z_minus_p = params.z_per_s - params.p_per_s;
-        let inv_tau1 = 1.0 / params.tau1_s();
         // A removed freedom's slot (blocked tip) keeps its value, as the
         // exponential of its zero rows would: the identity.
         let mut rot = [[T::ZERO; S]; 4];
@@ -249,22 +287,32 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         let mut drive = [[[T::ZERO; S]; 3]; N];
         for k in 0..an.modes {
             let w = an.omega[k];
-            // Mode k driven by one segment with unit modal coupling.
-            let mut a = [
-                [0.0, w, 0.0, 0.0],
-                [-w, -an.two_zeta_omega[k], 1.0 / w, z_minus_p / w],
-                [0.0, 0.0, -inv_tau1, 0.0],
-                [0.0, 0.0, 1.0, -params.p_per_s],
-            ];
-            let b = [[0.0], [0.0], [inv_tau1], [0.0]];
             let (mut phi, mut gamma) = ([[0.0; 4]; 4], [[0.0; 1]; 4]);
-            discretise(&mut a, &b, dt_s, &mut phi, &mut gamma);
-            rot[0][k] = T::from_f64(phi[0][0]);
-            rot[1][k] = T::from_f64(phi[0][1]);
-            rot[2][k] = T::from_f64(phi[1][0]);
-            rot[3][k] = T::from_f64(phi[1][1]);
-            for (i, cols) in drive.iter_mut().enumerate() {
-                let coupling = an.g[k][i] * kc;
+            // The τ1 of the last exponential: alike segments share it.
+            let mut done_inv_tau1 = f64::NAN;
+            for (i, (cols, seg)) in drive.iter_mut().zip(segments).enumerate() {
+                let inv_tau1 = seg.inv_tau1();
+                if inv_tau1 != done_inv_tau1 {
+                    // Mode k driven by this segment with unit modal coupling.
+                    let mut a = [
+                        [0.0, w, 0.0, 0.0],
+                        [-w, -an.two_zeta_omega[k], 1.0 / w, z_minus_p / w],
+                        [0.0, 0.0, -inv_tau1, 0.0],
+                        [0.0, 0.0, 1.0, -params.p_per_s],
+                    ];
+                    let b = [[0.0], [0.0], [inv_tau1], [0.0]];
+                    discretise(&mut a, &b, dt_s, &mut phi, &mut gamma);
+                    done_inv_tau1 = inv_tau1;
+                }
+                if i == 0 {
+                    // The rotation does not depend on the electrics: the
+                    // reference segment's exponential gives it.
+                    rot[0][k] = T::from_f64(phi[0][0]);
+                    rot[1][k] = T::from_f64(phi[0][1]);
+                    rot[2][k] = T::from_f64(phi[1][0]);
+                    rot[3][k] = T::from_f64(phi[1][1]);
+                }
+                let coupling = an.g[k][i] * seg.kc();
                 for (row, dof) in [(0, k), (1, Self::DOF + k)] {
                     cols[0][dof] = T::from_f64(coupling * phi[row][2]);
                     cols[1][dof] = T::from_f64(coupling * phi[row][3]);
@@ -294,7 +342,11 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// solved for the reaction, `F_t u − M_t q̈ − K_t q`, with
     /// `q̈ = Ψ (−Ω² η + g u)`; a row over the state.
     #[inline(always)]
-    fn blocking_force_row(an: &Analysis<N, E, S>, kc: f64, z_minus_p: f64) -> [T; S] {
+    fn blocking_force_row(
+        an: &Analysis<N, E, S>,
+        segments: &[Segment; N],
+        z_minus_p: f64,
+    ) -> [T; S] {
         let mut force_row = [T::ZERO; S];
         let (m_t, k_t, psi) = (&an.m_tip, &an.k_tip, &an.psi);
         let mut mt_psi = [0.0; S];
@@ -307,6 +359,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
         }
         for i in 0..N {
+            let kc = segments[i].kc();
             let mut per_moment = an.f_tip[i];
             for k in 0..an.modes {
                 per_moment -= mt_psi[k] * an.g[k][i];
@@ -401,10 +454,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     ) -> Result<(Mat<S, S>, Mat<S, N>), ParamError> {
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
+        ext.segment_variation.validate_for(N)?;
         let an = Self::analyse(params, ext, fixture)?;
-        let kc = params.k_nm_per_c * params.c_f;
+        let segments = Segment::all::<N>(params, ext);
         let z_minus_p = params.z_per_s - params.p_per_s;
-        let inv_tau1 = 1.0 / params.tau1_s();
         let mut a = [[0.0; S]; S];
         let mut b = [[0.0; N]; S];
         for k in 0..an.modes {
@@ -414,12 +467,14 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             a[zeta][zeta] = -an.two_zeta_omega[k];
             for i in 0..N {
                 let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
+                let kc = segments[i].kc();
                 a[zeta][vc] = an.g[k][i] * kc / w;
                 a[zeta][r] = an.g[k][i] * kc * z_minus_p / w;
             }
         }
         for i in 0..N {
             let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
+            let inv_tau1 = segments[i].inv_tau1();
             a[vc][vc] = -inv_tau1;
             b[vc][i] = inv_tau1;
             a[r][vc] = 1.0;
@@ -472,11 +527,11 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 *n += c0 * vc + c1 * r + c2 * vi;
             }
         }
-        let [a, b, c, g0, g1] = self.elec;
-        for ((n, e), &vi) in elec_next
+        for (((n, e), &vi), &[a, b, c, g0, g1]) in elec_next
             .chunks_exact_mut(2)
             .zip(elec.chunks_exact(2))
             .zip(v.iter())
+            .zip(&self.elec)
         {
             n[0] = a * e[0] + g0 * vi;
             n[1] = b * e[0] + c * e[1] + g1 * vi;
@@ -513,7 +568,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     pub fn moments_nm(&self, x: &[T; S]) -> [T; N] {
         let own: [T; N] = core::array::from_fn(|i| {
             let (vc, r) = (x[Self::ELEC + 2 * i], x[Self::ELEC + 2 * i + 1]);
-            self.kc * (vc + self.z_minus_p * r)
+            self.kc[i] * (vc + self.z_minus_p * r)
         });
         core::array::from_fn(|i| {
             let mut u = own[i];
@@ -535,7 +590,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             let (vi, vc) = (v[i], x[Self::ELEC + 2 * i]);
             let v2 = vi * vi;
             let leak = vi * self.inv_r2 * (T::from_f64(1.0) + self.leak_cubic * v2);
-            leak + (vi + self.charge_cubic * v2 * vi - vc) * self.inv_r1
+            leak + (vi + self.charge_cubic * v2 * vi - vc) * self.inv_r1[i]
         })
     }
 
@@ -608,8 +663,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             phi[dof + k][k] = self.rot[2][k];
             phi[dof + k][dof + k] = self.rot[3][k];
         }
-        let [a, b, c, _, _] = self.elec;
-        for (i, cols) in self.drive.iter().enumerate() {
+        for (i, (cols, &[a, b, c, _, _])) in self.drive.iter().zip(&self.elec).enumerate() {
             let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
             for row in 0..Self::ELEC {
                 phi[row][vc] = cols[0][row];
@@ -626,8 +680,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// blocks (for checks and export on the host).
     pub fn gamma(&self) -> [[T; N]; S] {
         let mut gamma = [[T::ZERO; N]; S];
-        let [_, _, _, g0, g1] = self.elec;
-        for (i, cols) in self.drive.iter().enumerate() {
+        for (i, (cols, &[_, _, _, g0, g1])) in self.drive.iter().zip(&self.elec).enumerate() {
             for row in 0..Self::ELEC {
                 gamma[row][i] = cols[2][row];
             }

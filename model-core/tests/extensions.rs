@@ -1,7 +1,7 @@
 //! The optional model terms: each off by default, each doing what its
 //! physics says, checked against an exact equivalence or a closed form.
 
-use model_core::{Extensions, Fixture, ParamError, Params, Strip};
+use model_core::{Extensions, Fixture, ParamError, Params, SegmentVariation, Strip};
 
 type S3 = Strip<f64, 3, 1, 18>;
 
@@ -289,4 +289,168 @@ fn out_of_range_terms_are_refused_by_name() {
         let err = S3::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap_err();
         assert!(err.to_string().starts_with(field), "{err}");
     }
+}
+
+/// Extensions with only `segment-variation` set.
+fn varied(var: SegmentVariation) -> Extensions {
+    Extensions {
+        segment_variation: var,
+        ..Extensions::NONE
+    }
+}
+
+/// Deviations of zero, given explicitly, are the baseline bit for bit:
+/// the same `Φ`, `Γ`, states, currents and force.
+#[test]
+fn segment_variation_of_zero_is_the_baseline_bit_for_bit() {
+    let p = Params::thesis_2006();
+    let zero = SegmentVariation {
+        r1_deviation: [0.0; 8],
+        c_deviation: [0.0; 8],
+        k_deviation: [0.0; 8],
+    };
+    for fixture in [Fixture::Free, Fixture::Blocked] {
+        let a = S3::new(&p, fixture, 1e-3).unwrap();
+        let b = S3::with_extensions(&p, &varied(zero), fixture, 1e-3).unwrap();
+        assert_eq!(a.phi(), b.phi());
+        assert_eq!(a.gamma(), b.gamma());
+        let (mut xa, mut xb) = (a.rest(), b.rest());
+        for k in 0..2000 {
+            let v = [2.0, -1.0, 1.5].map(|x: f64| x * ((k / 700) as f64 - 1.0));
+            assert_eq!(a.currents_a(&xa, &v), b.currents_a(&xb, &v));
+            a.step(&mut xa, &v);
+            b.step(&mut xb, &v);
+            assert_eq!(xa, xb);
+            assert_eq!(a.blocking_force_n(&xa), b.blocking_force_n(&xb));
+            assert_eq!(a.moments_nm(&xa), b.moments_nm(&xb));
+        }
+    }
+}
+
+/// A larger `C` on segment 2 slows its charging to `τ1 = R1 C (1 + δ)`
+/// and leaves segments 1 and 3 as they were: each current after a step
+/// from rest is `V/R2 + V/R1 e^{−t/τ1}` with its own segment's `τ1`.
+#[test]
+fn segment_two_capacitance_changes_segment_two_current_only() {
+    let p = Params::thesis_2006();
+    let delta = 0.3;
+    let mut var = SegmentVariation::NONE;
+    var.c_deviation[1] = delta;
+    let base = strip(&Extensions::NONE, Fixture::Free);
+    let s = strip(&varied(var), Fixture::Free);
+    let v = [2.0; 3];
+    let (mut xa, mut xb) = (base.rest(), s.rest());
+    let mut differs = 0.0f64;
+    for n in 0..200 {
+        let t_s = n as f64 * 1e-3;
+        let (ia, ib) = (base.currents_a(&xa, &v), s.currents_a(&xb, &v));
+        assert_eq!(ib[0], ia[0], "segment 1 at step {n}");
+        assert_eq!(ib[2], ia[2], "segment 3 at step {n}");
+        for (i, tau1_s) in [(0, p.tau1_s()), (1, p.tau1_s() * (1.0 + delta))] {
+            let want = 2.0 / p.r2_ohm + 2.0 / p.r1_ohm * (-t_s / tau1_s).exp();
+            assert!(
+                (ib[i] - want).abs() < 1e-12,
+                "segment {} at {t_s} s: {} A, want {want} A",
+                i + 1,
+                ib[i]
+            );
+        }
+        differs = differs.max((ib[1] - ia[1]).abs());
+        base.step(&mut xa, &v);
+        s.step(&mut xb, &v);
+    }
+    // A third more C: segment 2's current decays visibly slower.
+    assert!(differs > 1e-4, "largest difference {differs} A");
+}
+
+/// A segment's `R1` sets its current's jump at a step, `V/R2 + V/(R1 (1 + δ))`.
+#[test]
+fn segment_resistance_sets_that_segments_jump() {
+    let p = Params::thesis_2006();
+    let mut var = SegmentVariation::NONE;
+    var.r1_deviation[2] = -0.2;
+    let s = strip(&varied(var), Fixture::Blocked);
+    let i = s.currents_a(&s.rest(), &[1.0; 3]);
+    let jump = |r1: f64| 1.0 / p.r2_ohm + 1.0 / r1;
+    assert_eq!(i[0], jump(p.r1_ohm));
+    assert_eq!(i[1], jump(p.r1_ohm));
+    assert!((i[2] - jump(0.8 * p.r1_ohm)).abs() < 1e-15, "{i:?}");
+}
+
+/// The model is linear in the moments, so the static tip is the sum of each
+/// segment's share, `(1 + δK)(1 + δC) u₀ ((L − a)² − (L − b)²)/(2 EI)` for
+/// segment `[a, b]` under the DC moment `u₀ = K C z/p V` (the cubic
+/// elements are exact for a piecewise-constant moment). Damped so that the
+/// ringing dies; sampled at 10 ms (the discretisation is exact at any step).
+#[test]
+fn moment_gain_and_capacitance_scale_each_segments_share_of_the_static_tip() {
+    let p = Params::thesis_2006();
+    let mut var = SegmentVariation::NONE;
+    var.k_deviation[1] = 0.15;
+    var.k_deviation[2] = -0.1;
+    var.c_deviation[2] = 0.05;
+    var.r1_deviation[1] = 0.12;
+    let ext = Extensions {
+        damping_mass_per_s: 20.0,
+        ..varied(var)
+    };
+    let s = S3::with_extensions(&p, &ext, Fixture::Free, 1e-2).unwrap();
+    let volts = 2.0;
+    let mut x = s.rest();
+    for _ in 0..30_000 {
+        s.step(&mut x, &[volts; 3]);
+    }
+    let u0 = p.dc_moment_per_volt() * volts;
+    let seg_m = p.length_m / 3.0;
+    let want: f64 = (0..3)
+        .map(|i| {
+            let (a, b) = (i as f64 * seg_m, (i + 1) as f64 * seg_m);
+            let factor = (1.0 + var.k_deviation[i]) * (1.0 + var.c_deviation[i]);
+            factor * u0 * ((p.length_m - a).powi(2) - (p.length_m - b).powi(2)) / (2.0 * p.ei_nm2)
+        })
+        .sum();
+    let tip = s.tip_deflection_m(&x);
+    assert!(
+        (tip / want - 1.0).abs() < 1e-9,
+        "tip {tip} m, want {want} m"
+    );
+    // And not the baseline's: the variation moved it by about 4 %.
+    let uniform: f64 = u0 * p.length_m.powi(2) / (2.0 * p.ei_nm2);
+    assert!((tip / uniform - 1.0).abs() > 0.01, "{tip} vs {uniform}");
+}
+
+#[test]
+fn segment_deviations_are_refused_by_segment_and_rule() {
+    let p = Params::thesis_2006();
+    let mut reference = SegmentVariation::NONE;
+    reference.c_deviation[0] = 0.1;
+    let mut past_the_tip = SegmentVariation::NONE;
+    past_the_tip.k_deviation[3] = 0.1;
+    let mut negative = SegmentVariation::NONE;
+    negative.r1_deviation[1] = -1.0;
+    let mut nan = SegmentVariation::NONE;
+    nan.k_deviation[2] = f64::NAN;
+    let cases = [
+        (reference, "c_deviation of segment 1", "reference"),
+        (past_the_tip, "k_deviation of segment 4", "fewer segments"),
+        (negative, "r1_deviation of segment 2", "above -1"),
+        (nan, "k_deviation of segment 3", "finite"),
+    ];
+    for (var, head, rule) in cases {
+        let err = S3::with_extensions(&p, &varied(var), Fixture::Free, 1e-3).unwrap_err();
+        let text = err.to_string();
+        assert!(text.starts_with(head) && text.contains(rule), "{text}");
+        assert!(
+            matches!(err, ParamError::SegmentDeviation { .. }),
+            "{err:?}"
+        );
+    }
+    // The fourth segment is fine on a strip that has one.
+    assert!(Strip::<f64, 4, 1, 24>::with_extensions(
+        &p,
+        &varied(past_the_tip),
+        Fixture::Free,
+        1e-3
+    )
+    .is_ok());
 }

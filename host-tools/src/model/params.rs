@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use model_core::{Laminate, Params};
+use model_core::{Laminate, ParamError, Params, SegmentVariation, MAX_SEGMENTS};
 
 use crate::model::predict::ModelSpec;
 use crate::recording::Geometry;
@@ -35,7 +35,7 @@ pub struct ModelFile {
 
 /// The `[extensions]` section: the terms of [`model_core::Extensions`] and
 /// the dehydration rate, each off when omitted.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ExtensionsFile {
     /// Rayleigh mass-proportional damping `α`, 1/s.
@@ -61,12 +61,52 @@ pub struct ExtensionsFile {
     /// Drying curvature `c` (`≥ 0`): the gain is `(1 + c r t)^(−1/c)`,
     /// `e^{−r t}` at 0.
     pub dehydration_curvature: f64,
+    /// `segment-variation`: each segment's `R1` relative to segment 1's,
+    /// minus one, from segment 1 on (segment 1, the reference, is 0);
+    /// segments not listed are alike.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub segment_r1_deviation: Vec<f64>,
+    /// As `segment_r1_deviation`, for `C`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub segment_c_deviation: Vec<f64>,
+    /// As `segment_r1_deviation`, for the moment gain `K`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub segment_k_deviation: Vec<f64>,
 }
 
 impl ExtensionsFile {
-    /// The core's terms (the dehydration rate is the caller's).
-    pub fn core(&self) -> model_core::Extensions {
-        model_core::Extensions {
+    /// The core's terms (the dehydration rate is the caller's); refuses a
+    /// deviation list longer than a strip can be.
+    pub fn core(&self) -> Result<model_core::Extensions, ParamError> {
+        let mut var = SegmentVariation::NONE;
+        for (field, list, out) in [
+            (
+                "segment_r1_deviation",
+                &self.segment_r1_deviation,
+                &mut var.r1_deviation,
+            ),
+            (
+                "segment_c_deviation",
+                &self.segment_c_deviation,
+                &mut var.c_deviation,
+            ),
+            (
+                "segment_k_deviation",
+                &self.segment_k_deviation,
+                &mut var.k_deviation,
+            ),
+        ] {
+            if list.len() > MAX_SEGMENTS {
+                return Err(ParamError::SegmentDeviation {
+                    field,
+                    segment: list.len(),
+                    value: list[list.len() - 1],
+                    rule: "a strip has at most 8 segments",
+                });
+            }
+            out[..list.len()].copy_from_slice(list);
+        }
+        Ok(model_core::Extensions {
             damping_mass_per_s: self.damping_mass_per_s,
             damping_stiffness_s: self.damping_stiffness_s,
             added_mass_kg_per_m: self.added_mass_kg_per_m,
@@ -76,7 +116,8 @@ impl ExtensionsFile {
             crosstalk: self.crosstalk,
             back_relaxation: self.back_relaxation,
             large_deflection: self.large_deflection,
-        }
+            segment_variation: var,
+        })
     }
 
     /// The section for a model's terms and dehydration rate.
@@ -97,8 +138,20 @@ impl ExtensionsFile {
             large_deflection: ext.large_deflection,
             dehydration_per_s,
             dehydration_curvature,
+            segment_r1_deviation: listed(&ext.segment_variation.r1_deviation),
+            segment_c_deviation: listed(&ext.segment_variation.c_deviation),
+            segment_k_deviation: listed(&ext.segment_variation.k_deviation),
         }
     }
+}
+
+/// A deviation per segment up to the last that is not 0 (none when all are).
+fn listed(deviations: &[f64; MAX_SEGMENTS]) -> Vec<f64> {
+    let len = deviations
+        .iter()
+        .rposition(|&d| d != 0.0)
+        .map_or(0, |last| last + 1);
+    deviations[..len].to_vec()
 }
 
 /// `R1`, `R2`, `C`.
@@ -285,10 +338,10 @@ impl ModelFile {
             ei_nm2,
             mass_per_length_kg_per_m,
         };
-        let ext = self.extensions.unwrap_or_default();
+        let ext = self.extensions.clone().unwrap_or_default();
         p.validate_relaxation(ext.back_relaxation)
             .map_err(invalid)?;
-        ext.core().validate().map_err(invalid)?;
+        ext.core().and_then(|c| c.validate()).map_err(invalid)?;
         for (field, value) in [
             ("dehydration_per_s", ext.dehydration_per_s),
             ("dehydration_curvature", ext.dehydration_curvature),
@@ -312,10 +365,14 @@ impl ModelFile {
     /// terms and dehydration rate, validated.
     pub fn spec_for(&self, g: &Geometry) -> Result<ModelSpec, ParamsError> {
         let params = self.params_for(g)?;
-        let ext = self.extensions.unwrap_or_default();
+        let ext = self.extensions.clone().unwrap_or_default();
+        let core = ext.core().map_err(|source| ParamsError::Invalid {
+            context: "[extensions]".to_string(),
+            source,
+        })?;
         Ok(ModelSpec {
             params,
-            ext: ext.core(),
+            ext: core,
             dehydration_per_s: ext.dehydration_per_s,
             dehydration_curvature: ext.dehydration_curvature,
         })
@@ -378,5 +435,43 @@ mod tests {
         assert!(err.to_string().starts_with("strip of length"), "{err}");
         let rule = err.source().unwrap().to_string();
         assert!(rule.contains("core_thickness_m must be positive"), "{rule}");
+    }
+
+    #[test]
+    fn segment_deviations_round_trip_and_are_refused_by_segment() {
+        let mut ext = model_core::Extensions::NONE;
+        ext.segment_variation.k_deviation[2] = -0.1;
+        ext.segment_variation.r1_deviation[1] = 0.05;
+        let mut f = ModelFile::thesis_2006();
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        let text = f.to_toml();
+        assert!(
+            text.contains("segment_k_deviation = [0.0, 0.0, -0.1]")
+                && !text.contains("segment_c_deviation"),
+            "{text}"
+        );
+        let back = ModelFile::parse("p.toml", &text).unwrap();
+        let spec = back.spec_for(&Geometry::THESIS_2006).unwrap();
+        assert_eq!(spec.ext, ext);
+        let err = ModelFile::parse(
+            "p.toml",
+            &text.replace("[0.0, 0.0, -0.1]", "[0.1, 0.0, -0.1]"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.starts_with("p.toml: k_deviation of segment 1 is 0.1: segment 1 is the reference"),
+            "{err}"
+        );
+        let err = ModelFile::parse(
+            "p.toml",
+            &text.replace("[0.0, 0.0, -0.1]", &format!("{:?}", [0.0; 9])),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("segment_k_deviation of segment 9") && err.contains("at most 8"),
+            "{err}"
+        );
     }
 }

@@ -13,6 +13,7 @@
 //! | `hydrodynamic-loading` | only in water: never named in air |
 //! | `dehydration` | where the session's start times are known |
 //! | `large-deflection` | where free runs track the tip along the strip |
+//! | `segment-variation` | names it when a segment's `R1`, `C` or `K` is off segment 1's by more than 4 %; within that, may |
 //! | hum, 1/f noise, mains pickup | no catalogue name; reported as the bench (`bench:mains-hum`, `bench:coloured-noise`): the opening rests show them; `unexplained` allowed |
 //! | a compliant load cell, exposure | no catalogue name for them; `unexplained` allowed |
 //! | crosstalk through a lag, quadratic drag, a `sinh` leak | the name, `unexplained` beside it allowed (forms the fit only approximates) |

@@ -11,6 +11,7 @@ use finrs::model::params::ModelFile;
 use finrs::session::Session;
 use finrs_rig::{
     short_protocol, write_session, Bench, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE,
+    SEGMENT_VARIATION,
 };
 use rand::{Rng, SeedableRng};
 
@@ -150,6 +151,13 @@ fn dehydration() {
 #[test]
 fn segment_crosstalk() {
     named("segment-crosstalk", 109);
+}
+
+/// Segments 2 and 3 depart from segment 1 by 5 to 15 % in each of `R1`,
+/// `C` and `K` (hand-cut electrodes, uneven plating).
+#[test]
+fn segment_variation() {
+    named(SEGMENT_VARIATION, 114);
 }
 
 #[test]

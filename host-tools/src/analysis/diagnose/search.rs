@@ -42,8 +42,8 @@ pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
 }
 
 /// The catalogue effects `session` cannot show, and why (docs/FORMAT.md):
-/// `hydrodynamic-loading` needs water around the strip, `dehydration` the
-/// session time of every recording. They are not tried, and the verdict
+/// `hydrodynamic-loading` needs water around the strip, `segment-variation`
+/// two segments or more, `dehydration` the session time of every recording. They are not tried, and the verdict
 /// says so.
 pub fn untestable(session: &Session) -> Vec<Untestable> {
     let mut out = Vec::new();
@@ -52,6 +52,12 @@ pub fn untestable(session: &Session) -> Vec<Untestable> {
         out.push(Untestable {
             effect: Effect::HydrodynamicLoading.name().to_string(),
             why: "the session is in air (`medium`): air's density is 1/800 of water's, so it cannot show added mass or drag".to_string(),
+        });
+    }
+    if recs.first().is_some_and(|r| r.rec.meta.segments < 2) {
+        out.push(Untestable {
+            effect: Effect::SegmentVariation.name().to_string(),
+            why: "the strip has one segment: there is no other to differ from it".to_string(),
         });
     }
     let without: Vec<&str> = recs
@@ -390,6 +396,11 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bo
             .any(|est| est.knob == Knob::Z && est.high < 0.0),
         Effect::Dehydration => excludes(Knob::Dehydration, 0.0),
         Effect::SegmentCrosstalk => excludes(Knob::Crosstalk, 0.0),
+        // Some segment differs from the reference in some value.
+        Effect::SegmentVariation => fit
+            .estimates
+            .iter()
+            .any(|est| est.knob.is_segment_deviation() && (est.low > 0.0 || est.high < 0.0)),
     }
 }
 

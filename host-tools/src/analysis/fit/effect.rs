@@ -22,11 +22,13 @@ pub enum Effect {
     Dehydration,
     /// Driving one segment bends its neighbours.
     SegmentCrosstalk,
+    /// The segments differ in `R1`, `C` and moment gain.
+    SegmentVariation,
 }
 
 impl Effect {
     /// Every effect, in the catalogue's order.
-    pub const ALL: [Effect; 8] = [
+    pub const ALL: [Effect; 9] = [
         Effect::LargeDeflection,
         Effect::BeamStiffness,
         Effect::Damping,
@@ -35,6 +37,7 @@ impl Effect {
         Effect::BackRelaxation,
         Effect::Dehydration,
         Effect::SegmentCrosstalk,
+        Effect::SegmentVariation,
     ];
 
     /// The catalogue's name.
@@ -48,6 +51,7 @@ impl Effect {
             Effect::BackRelaxation => "back-relaxation",
             Effect::Dehydration => "dehydration",
             Effect::SegmentCrosstalk => "segment-crosstalk",
+            Effect::SegmentVariation => "segment-variation",
         }
     }
 

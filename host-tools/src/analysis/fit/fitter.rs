@@ -191,7 +191,8 @@ impl<'a> Fitter<'a> {
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
         let n_data = self.data_to_fit(recordings)?;
-        let space = Space::new(effects, fixed);
+        let segments = self.session.recordings[0].rec.meta.segments;
+        let space = Space::new(effects, segments, fixed);
         let start = match start {
             Some(s) => *s,
             None => start::from_data(

@@ -2,7 +2,7 @@
 //! them physical: the optimiser moves freely in `θ`, the model sees values
 //! inside their bounds.
 
-use model_core::Extensions;
+use model_core::{Extensions, MAX_SEGMENTS};
 
 use super::effect::Effect;
 use crate::model::predict::ModelSpec;
@@ -42,7 +42,47 @@ pub enum Knob {
     Dehydration,
     /// Dehydration curvature (0: constant rate).
     DryingCurvature,
+    /// Segment `i`'s (index from 0 at the clamp, never 0: the reference)
+    /// relative departure of `R1` (segment variation).
+    SegmentR1(usize),
+    /// Segment `i`'s relative departure of `C` (segment variation).
+    SegmentC(usize),
+    /// Segment `i`'s relative departure of the moment gain `K` (segment
+    /// variation).
+    SegmentK(usize),
 }
+
+/// The per-segment knobs' names, by segment index.
+const SEGMENT_R1_NAMES: [&str; MAX_SEGMENTS] = [
+    "segment_1_r1_deviation",
+    "segment_2_r1_deviation",
+    "segment_3_r1_deviation",
+    "segment_4_r1_deviation",
+    "segment_5_r1_deviation",
+    "segment_6_r1_deviation",
+    "segment_7_r1_deviation",
+    "segment_8_r1_deviation",
+];
+const SEGMENT_C_NAMES: [&str; MAX_SEGMENTS] = [
+    "segment_1_c_deviation",
+    "segment_2_c_deviation",
+    "segment_3_c_deviation",
+    "segment_4_c_deviation",
+    "segment_5_c_deviation",
+    "segment_6_c_deviation",
+    "segment_7_c_deviation",
+    "segment_8_c_deviation",
+];
+const SEGMENT_K_NAMES: [&str; MAX_SEGMENTS] = [
+    "segment_1_k_deviation",
+    "segment_2_k_deviation",
+    "segment_3_k_deviation",
+    "segment_4_k_deviation",
+    "segment_5_k_deviation",
+    "segment_6_k_deviation",
+    "segment_7_k_deviation",
+    "segment_8_k_deviation",
+];
 
 impl Knob {
     /// Whether the baseline fits it.
@@ -78,7 +118,18 @@ impl Knob {
             Knob::Crosstalk => "crosstalk",
             Knob::Dehydration => "dehydration_per_s",
             Knob::DryingCurvature => "dehydration_curvature",
+            Knob::SegmentR1(i) => SEGMENT_R1_NAMES[*i],
+            Knob::SegmentC(i) => SEGMENT_C_NAMES[*i],
+            Knob::SegmentK(i) => SEGMENT_K_NAMES[*i],
         }
+    }
+
+    /// Whether it is one of segment variation's deviations.
+    pub fn is_segment_deviation(&self) -> bool {
+        matches!(
+            self,
+            Knob::SegmentR1(_) | Knob::SegmentC(_) | Knob::SegmentK(_)
+        )
     }
 }
 
@@ -107,6 +158,10 @@ const CUBIC_SCALE: f64 = 1e-2;
 const CROSSTALK_SCALE: f64 = 0.1;
 /// Dehydration rate, 1/s.
 const DEHYDRATION_SCALE: f64 = 1e-3;
+/// Segment deviations: the factor is `e^{s θ}`, so it stays positive and
+/// is exactly 1 at `θ = 0`; a tenth is the rig's and the bench's typical
+/// spread (5 to 15 %).
+const SEGMENT_SCALE: f64 = 0.1;
 
 /// A non-negative term: `s θ` above zero, zero below (the optimiser sees
 /// a flat floor, and steps back from it).
@@ -126,8 +181,9 @@ pub struct Space {
 }
 
 impl Space {
-    /// The space of the baseline plus `effects`, around the fixed parts of `fixed`.
-    pub fn new(effects: &[Effect], fixed: ModelSpec) -> Space {
+    /// The space of the baseline plus `effects` for a strip of `segments`
+    /// segments, around the fixed parts of `fixed`.
+    pub fn new(effects: &[Effect], segments: usize, fixed: ModelSpec) -> Space {
         let mut knobs = BASELINE.to_vec();
         let mut effects = effects.to_vec();
         effects.sort();
@@ -141,7 +197,14 @@ impl Space {
                 Effect::ElectrochemicalNonlinearity => &[Knob::ChargeCubic, Knob::LeakCubic],
                 Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
                 Effect::SegmentCrosstalk => &[Knob::Crosstalk],
+                Effect::SegmentVariation => &[],
             });
+            if *e == Effect::SegmentVariation {
+                // Segment 1 is the reference: its values are the shared ones.
+                for i in 1..segments.min(MAX_SEGMENTS) {
+                    knobs.extend([Knob::SegmentR1(i), Knob::SegmentC(i), Knob::SegmentK(i)]);
+                }
+            }
         }
         Space {
             knobs,
@@ -196,6 +259,15 @@ impl Space {
                 Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
                 Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
                 Knob::DryingCurvature => spec.dehydration_curvature = ramp(t, 1.0),
+                Knob::SegmentR1(i) => {
+                    spec.ext.segment_variation.r1_deviation[*i] = (t * SEGMENT_SCALE).exp_m1()
+                }
+                Knob::SegmentC(i) => {
+                    spec.ext.segment_variation.c_deviation[*i] = (t * SEGMENT_SCALE).exp_m1()
+                }
+                Knob::SegmentK(i) => {
+                    spec.ext.segment_variation.k_deviation[*i] = (t * SEGMENT_SCALE).exp_m1()
+                }
             }
         }
         if let Some(t) = z_theta {
@@ -241,6 +313,9 @@ impl Space {
                 Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
                 Knob::Dehydration => spec.dehydration_per_s / DEHYDRATION_SCALE,
                 Knob::DryingCurvature => spec.dehydration_curvature,
+                Knob::SegmentR1(_) | Knob::SegmentC(_) | Knob::SegmentK(_) => {
+                    Space::value(*knob, spec).max(-1.0 + 1e-9).ln_1p() / SEGMENT_SCALE
+                }
             })
             .collect()
     }
@@ -265,6 +340,9 @@ impl Space {
             Knob::Crosstalk => spec.ext.crosstalk,
             Knob::Dehydration => spec.dehydration_per_s,
             Knob::DryingCurvature => spec.dehydration_curvature,
+            Knob::SegmentR1(i) => spec.ext.segment_variation.r1_deviation[i],
+            Knob::SegmentC(i) => spec.ext.segment_variation.c_deviation[i],
+            Knob::SegmentK(i) => spec.ext.segment_variation.k_deviation[i],
         }
     }
 }
