@@ -156,7 +156,7 @@ impl Run<'_> {
         };
         let length_m = spec.params.length_m;
         let mut x = strip.rest();
-        for (row, (v_row, &t_s)) in self.rec.v_v.iter().zip(&self.rec.t_s).enumerate() {
+        for (row, (v_row, &t_s)) in self.rec.v_v.rows().zip(&self.rec.t_s).enumerate() {
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
             if spec.dehydration_per_s != 0.0 {
