@@ -367,7 +367,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::{Medium, Metadata};
+    use crate::recording::{Medium, Metadata, Voltages};
 
     /// Squared distance between two colours in RGB.
     fn distance2(a: RGBColor, b: RGBColor) -> i32 {
@@ -410,7 +410,7 @@ mod tests {
                 t_session_start_s: None,
             },
             t_s: (0..rows).map(|k| k as f64 * 1e-3).collect(),
-            v_v: vec![vec![1.0]; rows],
+            v_v: Voltages::from_rows(1, std::iter::repeat_n([1.0], rows)),
             channels: vec![
                 (
                     Channel::Current(0),

@@ -116,7 +116,7 @@ impl Session {
         })?;
         let rest_rows = rec
             .v_v
-            .iter()
+            .rows()
             .position(|v| v.iter().any(|&x| x != 0.0))
             .unwrap_or(rec.v_v.len());
         let rest_s = rest_rows as f64 * dt_s;

@@ -1,7 +1,9 @@
 //! The reader on arbitrary and on nearly valid input: it never panics, and
 //! whatever it accepts is a recording that passes every rule.
 
-use finrs::recording::{max_written_error, Channel, Fixture, Medium, Metadata, Recording};
+use finrs::recording::{
+    max_written_error, Channel, Fixture, Medium, Metadata, Recording, Voltages,
+};
 use proptest::prelude::*;
 
 const VALID: &str = include_str!("data/good/free_camera.csv");
@@ -54,12 +56,12 @@ proptest! {
     ) {
         let mut t = 0.0;
         let mut t_s = Vec::new();
-        let mut v_v = Vec::new();
+        let mut v_v = Voltages::with_capacity(segments, rows.len());
         let mut meas = Vec::new();
         for (dt, v, m) in &rows {
             t += dt;
             t_s.push(t);
-            v_v.push(vec![*v; segments]);
+            v_v.push(&vec![*v; segments]);
             meas.push(*m);
         }
         let fixture = if blocked { Fixture::Blocked } else { Fixture::Free };

@@ -6,7 +6,7 @@
 
 use finrs::link::command::wave_command;
 use finrs::model::synth::{drive_recording, drive_recording_shaped, Drive};
-use finrs::recording::Fixture;
+use finrs::recording::{Fixture, Voltages};
 use finrs::wave::{Wave, WaveOptions};
 use finrs_drive::{Envelope, Generator, Limiter, Limits, Program, SINE_MAX_ERROR};
 use finrs_frames::Command;
@@ -120,9 +120,9 @@ fn firmware_n(
     }
 }
 
-fn assert_same_rows(what: &str, simulated: &[Vec<f64>], expected: &[Vec<f64>]) {
+fn assert_same_rows(what: &str, simulated: &Voltages, expected: &[Vec<f64>]) {
     assert_eq!(simulated.len(), expected.len(), "{what}: rows");
-    for (row, (s, e)) in simulated.iter().zip(expected).enumerate() {
+    for (row, (s, e)) in simulated.rows().zip(expected).enumerate() {
         assert_eq!(s, e, "{what}: row {row}");
     }
 }
@@ -145,12 +145,14 @@ fn simulate_and_the_firmware_generator_agree_sample_by_sample() {
             let expected = firmware_n(n, program, envelope, start_row, rows, None);
             assert_same_rows(&what, &rec.v_v, &expected);
             // Not vacuous: the wave is on in its window and off outside.
-            let on = &rec.v_v[start_row as usize..end_row as usize];
-            assert!(on.iter().flatten().any(|v| v.abs() > 0.4), "{what}");
-            assert!(rec.v_v[..start_row as usize]
+            let (flat, on) = (
+                rec.v_v.as_flat(),
+                start_row as usize * n..end_row as usize * n,
+            );
+            assert!(flat[on.clone()].iter().any(|v| v.abs() > 0.4), "{what}");
+            assert!(flat[..on.start]
                 .iter()
-                .chain(&rec.v_v[end_row as usize..])
-                .flatten()
+                .chain(&flat[on.end..])
                 .all(|&v| v == 0.0));
             // `finrs wave` sends that very program for the same text.
             let options = WaveOptions {
@@ -209,14 +211,14 @@ fn ramps_offset_and_limiter_are_the_firmwares() {
         let expected = firmware_n(n, program, envelope, start_row, rows, Some(limits));
         assert_same_rows(&format!("{text}, N = {n}"), &rec.v_v, &expected);
         // The limiter acted: clipped at 1.8 V, and slewed back to 0 after.
-        let peak = rec.v_v.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let peak = rec.v_v.as_flat().iter().fold(0.0f64, |m, v| m.max(v.abs()));
         assert!((peak - 1.8).abs() < 1e-6, "{peak}");
-        for w in rec.v_v.windows(2) {
-            for (a, b) in w[0].iter().zip(&w[1]) {
+        for (before, after) in rec.v_v.rows().zip(rec.v_v.rows().skip(1)) {
+            for (a, b) in before.iter().zip(after) {
                 assert!((b - a).abs() <= 40.0 / 1000.0 + 1e-6);
             }
         }
-        assert!(rec.v_v.last().unwrap().iter().all(|&v| v == 0.0));
+        assert!(rec.v_v.rows().last().unwrap().iter().all(|&v| v == 0.0));
     }
 }
 

@@ -155,8 +155,12 @@ impl Run<'_> {
             force_n: Vec::with_capacity(if free { 0 } else { rows }),
         };
         let length_m = spec.params.length_m;
+        // Without the large-deflection term the tip moves straight across
+        // by its node's deflection: one dot product, where the general
+        // `position_at_m` interpolates two nodes (at ξ = 1, up to rounding).
+        let tip_is_node = !strip.extensions().large_deflection;
         let mut x = strip.rest();
-        for (row, (v_row, &t_s)) in self.rec.v_v.iter().zip(&self.rec.t_s).enumerate() {
+        for (row, (v_row, &t_s)) in self.rec.v_v.rows().zip(&self.rec.t_s).enumerate() {
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
             if spec.dehydration_per_s != 0.0 {
@@ -172,7 +176,11 @@ impl Run<'_> {
             }
             if free {
                 if self.camera_rows.is_none_or(|c| c[row]) {
-                    let (along, across) = strip.position_at_m(&x, length_m).unwrap_or((0.0, 0.0));
+                    let (along, across) = if tip_is_node {
+                        (0.0, strip.tip_deflection_m(&x))
+                    } else {
+                        strip.position_at_m(&x, length_m).unwrap_or((0.0, 0.0))
+                    };
                     t.tip_x_m[row] = along;
                     t.tip_y_m[row] = across;
                     for (j, &s) in dots.iter().enumerate() {

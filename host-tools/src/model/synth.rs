@@ -5,7 +5,7 @@
 //! firmware's controller counts its sample ticks, and, if asked, they pass
 //! through the firmware's [`finrs_drive::Limiter`] on every row.
 
-use crate::recording::{Fixture, Geometry, Medium, Metadata, Recording};
+use crate::recording::{Fixture, Geometry, Medium, Metadata, Recording, Voltages};
 use crate::wave::{Wave, WaveError, WaveOptions};
 
 /// Why a drive was refused; each names the field of [`Drive`] or
@@ -199,11 +199,13 @@ pub fn drive_recording_shaped(
     // First row at or after rest_s (the 1e-9 forgives rounding in the
     // product, e.g. 0.1 s × 1000 Hz).
     let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
-    let mut v_v = vec![vec![0.0; d.segments]; start_row];
+    let mut v_v = Voltages::zeros(d.segments, start_row);
     let wave_rows = (rows - start_row) as u64;
     // A limiter through the rest would hold its outputs at 0 V: starting
     // it with the wave gives the same rows.
-    v_v.extend(generator.run(wave_rows, tick_hz, limits));
+    for row in generator.run(wave_rows, tick_hz, limits) {
+        v_v.push(&row);
+    }
     let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
     let g = Geometry::THESIS_2006;
     Ok(Recording {

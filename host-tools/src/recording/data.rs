@@ -2,6 +2,7 @@
 
 use super::channel::Channel;
 use super::meta::Metadata;
+use super::voltages::Voltages;
 
 /// The seed's Nafion samples' safe range, V: no valid recording exceeds it.
 pub const SAFE_VOLTAGE_LIMIT_V: f64 = 4.0;
@@ -13,8 +14,9 @@ pub struct Recording {
     pub meta: Metadata,
     /// Time of every row, s, strictly increasing from ≥ 0.
     pub t_s: Vec<f64>,
-    /// Voltage per row and segment, V (`v_v[row][segment]`), never missing.
-    pub v_v: Vec<Vec<f64>>,
+    /// Voltage per row and segment, V (`v_v[row][segment]`), never missing;
+    /// as many segments as `meta.segments`.
+    pub v_v: Voltages,
     /// Measured channels in header order; `None` where not sampled.
     pub channels: Vec<(Channel, Vec<Option<f64>>)>,
 }

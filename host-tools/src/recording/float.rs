@@ -56,9 +56,9 @@ impl Formatter {
         // rounds, and below 1e5 distinct such decimals are distinct f64s,
         // so the decimal is also the shortest.
         if x.abs() < 1e5 {
-            let quanta = (x * SCALE).round();
-            if quanta / SCALE == x {
-                return self.quanta(out, quanta as i64);
+            let quanta = round(x * SCALE);
+            if quanta as f64 / SCALE == x {
+                return self.quanta(out, quanta);
             }
         }
         let s = self.ryu.format_finite(x);
@@ -70,12 +70,11 @@ impl Formatter {
     /// trailing zeros dropped (`0.0125`, `-3`, `0`); `x` must be finite.
     pub fn measured(&mut self, out: &mut Vec<u8>, x: f64) {
         debug_assert!(x.is_finite());
-        let quanta = (x * SCALE).round();
-        if quanta.abs() >= MAX_QUANTA {
+        let scaled = x * SCALE;
+        if scaled.abs() >= MAX_QUANTA {
             return self.exact(out, x);
         }
-        // Exact: |quanta| < 1e12 < 2^53.
-        self.quanta(out, quanta as i64)
+        self.quanta(out, round(scaled))
     }
 
     /// Appends `quanta * MEASURED_QUANTUM` as a decimal, trailing zeros
@@ -85,20 +84,56 @@ impl Formatter {
             out.push(b'-');
         }
         let q = quanta.unsigned_abs();
-        out.extend_from_slice(self.itoa.format(q / FRACTION).as_bytes());
-        let mut frac = q % FRACTION;
+        let (whole, mut frac) = (q / FRACTION, q % FRACTION);
+        if whole < 10 {
+            out.push(b'0' + whole as u8);
+        } else {
+            out.extend_from_slice(self.itoa.format(whole).as_bytes());
+        }
         if frac == 0 {
             return;
         }
-        let mut decimals = MEASURED_DECIMALS as usize;
-        while frac % 10 == 0 {
-            frac /= 10;
-            decimals -= 1;
+        // The point and all ten decimals, two digits at a time from the
+        // right, then the trailing zeros cut: no division per digit.
+        let mut text = [b'0'; 1 + MEASURED_DECIMALS as usize];
+        text[0] = b'.';
+        for at in (1..text.len()).rev().step_by(2) {
+            let pair = 2 * (frac % 100) as usize;
+            frac /= 100;
+            text[at - 1..=at].copy_from_slice(&DIGIT_PAIRS[pair..pair + 2]);
         }
-        let digits = self.itoa.format(frac).as_bytes();
-        out.push(b'.');
-        out.extend(std::iter::repeat_n(b'0', decimals - digits.len()));
-        out.extend_from_slice(digits);
+        let zeros = text.iter().rev().take_while(|&&b| b == b'0').count();
+        // A fixed-size copy, then the zeros cut: no call to `memcpy`.
+        out.extend_from_slice(&text);
+        out.truncate(out.len() - zeros);
+    }
+}
+
+/// `00`, `01`, … `99` back to back.
+const DIGIT_PAIRS: [u8; 200] = {
+    let mut pairs = [0u8; 200];
+    let mut i = 0;
+    while i < 100 {
+        pairs[2 * i] = b'0' + (i / 10) as u8;
+        pairs[2 * i + 1] = b'0' + (i % 10) as u8;
+        i += 1;
+    }
+    pairs
+};
+
+/// `y` rounded to the nearest integer, halves away from zero, as
+/// `f64::round` does, for `|y| < 2^62`; `f64::round` is a library call on
+/// x86-64 without SSE4.1, this is a truncation and one exact subtraction.
+fn round(y: f64) -> i64 {
+    let t = y as i64;
+    // Exact: y and its truncation share their leading bits.
+    let rest = y - t as f64;
+    if rest >= 0.5 {
+        t + 1
+    } else if rest <= -0.5 {
+        t - 1
+    } else {
+        t
     }
 }
 
@@ -152,6 +187,27 @@ mod tests {
                 assert_eq!(exact(x), r.strip_suffix(".0").unwrap_or(r), "{x}");
             }
         }
+    }
+
+    #[test]
+    fn round_is_f64_round() {
+        let mut y = 1e-3f64;
+        while y < 1e12 {
+            for v in [
+                y,
+                -y,
+                y.floor() + 0.5,
+                -(y.floor() + 0.5),
+                0.5 - f64::EPSILON / 4.0,
+            ] {
+                assert_eq!(round(v), v.round() as i64, "{v}");
+            }
+            y *= 1.011;
+        }
+        assert_eq!(
+            (round(0.0), round(-0.0), round(2.5), round(-2.5)),
+            (0, 0, 3, -3)
+        );
     }
 
     #[test]

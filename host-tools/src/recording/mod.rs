@@ -21,6 +21,7 @@ mod geometry;
 mod meta;
 mod read;
 mod timing;
+mod voltages;
 mod write;
 
 pub use channel::Channel;
@@ -30,3 +31,4 @@ pub use float::{max_written_error, MEASURED_DECIMALS, MEASURED_QUANTUM};
 pub use geometry::Geometry;
 pub use meta::{Fixture, Medium, Metadata, FORMAT};
 pub use timing::SampleTimeError;
+pub use voltages::Voltages;

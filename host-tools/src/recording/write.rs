@@ -39,12 +39,12 @@ impl Recording {
     fn to_csv_bytes(&self) -> Vec<u8> {
         let head = self.head_text();
         let width = 1 + self.meta.segments + self.channels.len();
-        let mut out = Vec::with_capacity(head.len() + self.t_s.len() * width * 12);
+        let mut out = Vec::with_capacity(head.len() + self.t_s.len() * width * 20);
         out.extend_from_slice(head.as_bytes());
         let mut f = Formatter::default();
         for (row, &t) in self.t_s.iter().enumerate() {
             finite(&mut out, t, |out, x| f.exact(out, x));
-            for &v in self.v_v.get(row).into_iter().flatten() {
+            for &v in self.v_v.row(row).into_iter().flatten() {
                 out.push(b',');
                 finite(&mut out, v, |out, x| f.exact(out, x));
             }
@@ -65,6 +65,16 @@ impl Recording {
     /// rows by the reader's own rules, on the numbers themselves.
     pub fn validate(&self, name: &str) -> Result<(), RecordingError> {
         let rows = self.t_s.len();
+        if self.v_v.segments() != self.meta.segments {
+            return Err(RecordingError::file(
+                name,
+                format!(
+                    "{} voltages per row for segments = {}",
+                    self.v_v.segments(),
+                    self.meta.segments
+                ),
+            ));
+        }
         if self.v_v.len() != rows {
             return Err(RecordingError::file(
                 name,
@@ -97,41 +107,50 @@ impl Recording {
             ));
         }
         let n = self.meta.segments;
-        let mut rules = RowRules::default();
-        for (row, (&t, v)) in self.t_s.iter().zip(&self.v_v).enumerate() {
-            let line = header_line + 1 + row;
-            let finite = |j: usize, x: f64| {
-                if x.is_finite() {
-                    Ok(())
-                } else {
-                    Err(BadNumber::NotFinite.at(
-                        name,
-                        line,
-                        &column_name(n, &columns, j),
-                        &x.to_string(),
-                    ))
-                }
-            };
-            if v.len() != n {
-                return Err(RecordingError::at(
-                    name,
-                    line,
-                    format!("row has {} voltages for {n} segments", v.len()),
-                ));
-            }
-            finite(0, t)?;
-            rules.time(name, line, t)?;
-            for (k, &x) in v.iter().enumerate() {
-                finite(1 + k, x)?;
-                voltage(name, line, k, x)?;
-            }
-            for (j, (_, values)) in self.channels.iter().enumerate() {
-                if let Some(x) = values[row] {
-                    finite(1 + n + j, x)?;
-                }
+        let not_finite = |row: usize, j: usize, x: f64| {
+            BadNumber::NotFinite.at(
+                name,
+                header_line + 1 + row,
+                &column_name(n, &columns, j),
+                &x.to_string(),
+            )
+        };
+        // Measured channels column by column, a tight loop each; the first
+        // NaN or infinity by row, then by column, is where the reader would
+        // stop, unless time or voltages break a rule on that row or before.
+        let mut bad_channel: Option<(usize, usize, f64)> = None;
+        for (j, (_, values)) in self.channels.iter().enumerate() {
+            let rows = bad_channel.map_or(rows, |(row, _, _)| row);
+            if let Some(row) = values[..rows]
+                .iter()
+                .position(|x| x.is_some_and(|x| !x.is_finite()))
+            {
+                let x = values[row].unwrap_or_default();
+                bad_channel = Some((row, 1 + n + j, x));
             }
         }
-        Ok(())
+        let checked_rows = bad_channel.map_or(rows, |(row, _, _)| row + 1);
+        let mut rules = RowRules::default();
+        for (row, (&t, v)) in self.t_s.iter().zip(self.v_v.rows()).enumerate() {
+            if row == checked_rows {
+                break;
+            }
+            let line = header_line + 1 + row;
+            if !t.is_finite() {
+                return Err(not_finite(row, 0, t));
+            }
+            rules.time(name, line, t)?;
+            for (k, &x) in v.iter().enumerate() {
+                if !x.is_finite() {
+                    return Err(not_finite(row, 1 + k, x));
+                }
+                voltage(name, line, k, x)?;
+            }
+        }
+        match bad_channel {
+            Some((row, j, x)) => Err(not_finite(row, j, x)),
+            None => Ok(()),
+        }
     }
 
     /// Checks and writes the recording to `path`.

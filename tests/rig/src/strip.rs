@@ -5,6 +5,7 @@
 //! models' zero-order hold. Modes above [`DYNAMIC_LIMIT_HZ`] answer
 //! statically. Every recording starts with the strip at rest.
 
+use finrs::recording::Voltages;
 use nalgebra::{DVector, Matrix4};
 
 use crate::beam::{Beam, Tip};
@@ -252,13 +253,13 @@ pub fn run(
     hidden: &Hidden,
     mesh: Mesh,
     tip: Tip,
-    volts: &[Vec<f64>],
+    volts: &Voltages,
     dt_s: f64,
     t_session_s: f64,
     camera: &[bool],
     points_s_m: &[f64],
 ) -> Truth {
-    let n = volts.first().map_or(0, Vec::len);
+    let n = volts.segments();
     let width = sample.width_m;
     let (ei, mass) = section(sample, hidden);
     let beam = Beam::new(sample.length_m, n, mesh.per_segment, ei, mass, tip);
@@ -308,7 +309,7 @@ pub fn run(
     let modal_force =
         |u: &[f64], k: usize| -> f64 { (0..n).map(|i| beam.forcing[(k, i)] * u[i]).sum() };
     let mut drag_modal = vec![0.0; dynamic.len()];
-    for (row, v_row) in volts.iter().enumerate() {
+    for (row, v_row) in volts.rows().enumerate() {
         let t_s = t_session_s + row as f64 * dt_s;
         let gain = hidden.drying_s.map_or(1.0, |tau| 1.0 / (1.0 + t_s / tau));
         // Outputs at the row's instant, with the row's voltage just applied.

@@ -3,6 +3,7 @@
 //! a lag, a load cell that gives, and the board-only protocol. Short runs
 //! of the rig's own strip, no diagnosis.
 
+use finrs::recording::Voltages;
 use finrs_rig::beam::Beam;
 use finrs_rig::strip::{run, Truth, BLOCKED_MESH, MESH};
 use finrs_rig::{
@@ -15,21 +16,16 @@ fn rng(seed: u64) -> rand::rngs::StdRng {
 }
 
 /// `rest_s` at 0 V, then `volts` on the segments for `hold_s`, at 1 kHz.
-fn step(volts: [f64; 3], rest_s: f64, hold_s: f64) -> Vec<Vec<f64>> {
+fn step(volts: [f64; 3], rest_s: f64, hold_s: f64) -> Voltages {
     let rest = (rest_s * 1000.0) as usize;
     let hold = (hold_s * 1000.0) as usize;
-    (0..rest + hold)
-        .map(|r| {
-            if r < rest {
-                vec![0.0; 3]
-            } else {
-                volts.to_vec()
-            }
-        })
-        .collect()
+    Voltages::from_rows(
+        3,
+        (0..rest + hold).map(|r| if r < rest { [0.0; 3] } else { volts }),
+    )
 }
 
-fn held(sample: &Sample, hidden: &Hidden, tip: Tip, volts: &[Vec<f64>]) -> Truth {
+fn held(sample: &Sample, hidden: &Hidden, tip: Tip, volts: &Voltages) -> Truth {
     let camera = vec![false; volts.len()];
     run(
         sample,
@@ -44,7 +40,7 @@ fn held(sample: &Sample, hidden: &Hidden, tip: Tip, volts: &[Vec<f64>]) -> Truth
     )
 }
 
-fn free_tip(sample: &Sample, hidden: &Hidden, volts: &[Vec<f64>]) -> Vec<f64> {
+fn free_tip(sample: &Sample, hidden: &Hidden, volts: &Voltages) -> Vec<f64> {
     let camera = vec![true; volts.len()];
     let t = run(
         sample,

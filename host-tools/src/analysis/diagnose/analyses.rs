@@ -84,14 +84,14 @@ pub fn analyse(session: &Session, score: &Score) -> Analyses {
         }
         let segments = r.rec.meta.segments;
         let driven: Vec<usize> = (0..segments)
-            .filter(|&s| r.rec.v_v.iter().any(|v| v[s] != 0.0))
+            .filter(|&s| r.rec.v_v.rows().any(|v| v[s] != 0.0))
             .map(|s| s + 1)
             .collect();
         let max_abs_v = r
             .rec
             .v_v
+            .as_flat()
             .iter()
-            .flatten()
             .fold(0.0f64, |m, v| m.max(v.abs()));
         recordings.push(RecordingMisfit {
             recording: r.name.clone(),

@@ -260,7 +260,7 @@ impl<'a> Fitter<'a> {
         }
         let driven = recordings.iter().any(|&i| {
             let v_v = &self.session.recordings[i].rec.v_v;
-            v_v.iter().flatten().any(|&v| v != 0.0)
+            v_v.as_flat().iter().any(|&v| v != 0.0)
         });
         if !driven {
             return Err(FitError::NoDrive);

@@ -58,7 +58,7 @@ pub fn measured_blocked_hz(
         }
         // The drive must hold over the window, or its own steps dominate.
         let v0 = &r.rec.v_v[start];
-        if r.rec.v_v[start..start + len].iter().any(|v| v != v0) {
+        if (start..start + len).any(|row| &r.rec.v_v[row] != v0) {
             continue;
         }
         let y: Option<Vec<f64>> = force[start..start + len].iter().copied().collect();

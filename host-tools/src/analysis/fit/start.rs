@@ -65,7 +65,7 @@ fn electrical(session: &Session, recordings: &[usize]) -> Option<(f64, f64, f64)
                 continue;
             };
             let values = &r.rec.channels[k].1;
-            let v0 = r.rec.v_v.get(start)?[seg];
+            let v0 = r.rec.v_v.row(start)?[seg];
             if v0.abs() < 0.5 {
                 continue;
             }

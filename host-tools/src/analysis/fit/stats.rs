@@ -5,7 +5,7 @@ use nalgebra::DMatrix;
 
 use super::data::Target;
 use super::space::{Knob, Space};
-use crate::recording::Channel;
+use crate::recording::{Channel, Voltages};
 
 /// A fitted parameter with its 95 % confidence interval.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,7 +67,7 @@ pub struct ChannelFit {
 impl ChannelFit {
     /// From a target, its weighted residuals `r = (ŷ − y)/σ` and the
     /// recording's voltages per row and segment.
-    pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &[Vec<f64>]) -> ChannelFit {
+    pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &Voltages) -> ChannelFit {
         let model = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
         let e = nrmse(&t.values, model.clone());
         // ŷ is rebuilt from y and the residual, so "zero" is up to rounding.

@@ -9,7 +9,7 @@ use super::clock::{Clock, ClockError};
 use super::refusal::Refusal;
 use crate::recording::Geometry;
 use crate::recording::{
-    Channel, Fixture, Medium, Metadata, Recording, RecordingError, SAFE_VOLTAGE_LIMIT_V,
+    Channel, Fixture, Medium, Metadata, Recording, RecordingError, Voltages, SAFE_VOLTAGE_LIMIT_V,
 };
 
 /// What the recording's metadata says that the stream does not.
@@ -422,7 +422,7 @@ impl Recorder {
                 t_session_start_s: None,
             },
             t_s: self.t_s.clone(),
-            v_v: self.v_v.clone(),
+            v_v: Voltages::from_rows(segments, &self.v_v),
             channels,
         };
         rec.validate(name)?;
