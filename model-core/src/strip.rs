@@ -10,8 +10,10 @@
 //!   `ζₖ = η̇ₖ/ωₖ`, so that every mode is a rotation `[[0, ω], [-ω, 0]]` and
 //!   the whole matrix stays well scaled for the exponential and for `f32`;
 //! - `e` (`2N`): per segment `v_C` (the capacitor's voltage `Q/C`, V) and
-//!   `r` (the lead network's state, V·s), with `r' = -p r + v_C` and
-//!   moment `u = K C (v_C + (z - p) r)`, which is `u/Q = K (s+z)/(s+p)`.
+//!   `r` (the relaxation network's state, V·s), with `r' = -p r + v_C` and
+//!   moment `u = C (a v_C + (b − a p) r)`, which is
+//!   `u/Q = (a s + b)/(s + p)`, the seed's `K (s+z)/(s+p)` with `a = K`,
+//!   `b = K z`.
 //!
 //! The seed's `x = {q, q̇, Z}` is this state in other coordinates; the modal
 //! form is what keeps the stiff beam accurate (see `DESIGN.md`).
@@ -57,7 +59,7 @@ pub const fn state_len(n: usize, e: usize) -> usize {
 ///
 /// ```
 /// use model_core::{Fixture, Params, Strip};
-/// let strip = Strip::<f64, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3).unwrap();
+/// let strip = Strip::<f64, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3).unwrap();
 /// let mut x = strip.rest();
 /// for _ in 0..60_000 {
 ///     strip.step(&mut x, &[2.5; 3]);
@@ -92,8 +94,10 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     modes: usize,
     inv_r1: T,
     inv_r2: T,
-    kc: T,
-    z_minus_p: T,
+    /// `C a`: moment per volt of `v_C`, N·m/V.
+    instant: T,
+    /// `C (b − a p)`: moment per unit of `r`, N·m/(V·s).
+    lag: T,
     /// `a` of the double layer's `v (1 + a v²)`.
     charge_cubic: T,
     /// `b` of the leak's `v/R2 (1 + b v²)`.
@@ -166,15 +170,14 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         ext.validate()?;
         check_sample_time(dt_s)?;
         let an = Self::analyse(params, ext, fixture)?;
-        let kc = params.k_nm_per_c * params.c_f;
-        let z_minus_p = params.z_per_s - params.p_per_s;
+        let (instant, lag) = moment_coefficients(params);
         // The pieces are inlined: the board re-discretises with the same
         // stack as when they were one function.
         let elec = Self::electrical_step(params, dt_s);
-        let (rot, drive) = Self::modal_steps(&an, params, kc, dt_s);
+        let (rot, drive) = Self::modal_steps(&an, params, instant, lag, dt_s);
         let dof_from_modal = Self::modal_to_dof(&an);
         let force_row = if fixture == Fixture::Blocked {
-            Self::blocking_force_row(&an, kc, z_minus_p)
+            Self::blocking_force_row(&an, instant, lag)
         } else {
             [T::ZERO; S]
         };
@@ -193,8 +196,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             modes: an.modes,
             inv_r1: T::from_f64(1.0 / params.r1_ohm),
             inv_r2: T::from_f64(1.0 / params.r2_ohm),
-            kc: T::from_f64(kc),
-            z_minus_p: T::from_f64(z_minus_p),
+            instant: T::from_f64(instant),
+            lag: T::from_f64(lag),
             charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
             leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
             crosstalk: T::from_f64(ext.crosstalk),
@@ -228,16 +231,16 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     }
 
     /// Each mode's rotation over one step, and its columns of `Φ` and `Γ`
-    /// driven by each segment's electrics (`kc` = `K C`).
+    /// driven by each segment's electrics (moment `instant v_C + lag r`).
     #[inline(always)]
     #[allow(clippy::type_complexity)]
     fn modal_steps(
         an: &Analysis<N, E, S>,
         params: &Params,
-        kc: f64,
+        instant: f64,
+        lag: f64,
         dt_s: f64,
     ) -> ([[T; S]; 4], [[[T; S]; 3]; N]) {
-        let z_minus_p = params.z_per_s - params.p_per_s;
         let inv_tau1 = 1.0 / params.tau1_s();
         // A removed freedom's slot (blocked tip) keeps its value, as the
         // exponential of its zero rows would: the identity.
@@ -252,7 +255,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             // Mode k driven by one segment with unit modal coupling.
             let mut a = [
                 [0.0, w, 0.0, 0.0],
-                [-w, -an.two_zeta_omega[k], 1.0 / w, z_minus_p / w],
+                [-w, -an.two_zeta_omega[k], instant / w, lag / w],
                 [0.0, 0.0, -inv_tau1, 0.0],
                 [0.0, 0.0, 1.0, -params.p_per_s],
             ];
@@ -264,7 +267,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             rot[2][k] = T::from_f64(phi[1][0]);
             rot[3][k] = T::from_f64(phi[1][1]);
             for (i, cols) in drive.iter_mut().enumerate() {
-                let coupling = an.g[k][i] * kc;
+                let coupling = an.g[k][i];
                 for (row, dof) in [(0, k), (1, Self::DOF + k)] {
                     cols[0][dof] = T::from_f64(coupling * phi[row][2]);
                     cols[1][dof] = T::from_f64(coupling * phi[row][3]);
@@ -294,7 +297,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// solved for the reaction, `F_t u − M_t q̈ − K_t q`, with
     /// `q̈ = Ψ (−Ω² η + g u)`; a row over the state.
     #[inline(always)]
-    fn blocking_force_row(an: &Analysis<N, E, S>, kc: f64, z_minus_p: f64) -> [T; S] {
+    fn blocking_force_row(an: &Analysis<N, E, S>, instant: f64, lag: f64) -> [T; S] {
         let mut force_row = [T::ZERO; S];
         let (m_t, k_t, psi) = (&an.m_tip, &an.k_tip, &an.psi);
         let mut mt_psi = [0.0; S];
@@ -311,8 +314,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             for k in 0..an.modes {
                 per_moment -= mt_psi[k] * an.g[k][i];
             }
-            force_row[Self::ELEC + 2 * i] = T::from_f64(per_moment * kc);
-            force_row[Self::ELEC + 2 * i + 1] = T::from_f64(per_moment * kc * z_minus_p);
+            force_row[Self::ELEC + 2 * i] = T::from_f64(per_moment * instant);
+            force_row[Self::ELEC + 2 * i + 1] = T::from_f64(per_moment * lag);
         }
         force_row
     }
@@ -402,8 +405,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
         let an = Self::analyse(params, ext, fixture)?;
-        let kc = params.k_nm_per_c * params.c_f;
-        let z_minus_p = params.z_per_s - params.p_per_s;
+        let (instant, lag) = moment_coefficients(params);
         let inv_tau1 = 1.0 / params.tau1_s();
         let mut a = [[0.0; S]; S];
         let mut b = [[0.0; N]; S];
@@ -414,8 +416,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             a[zeta][zeta] = -an.two_zeta_omega[k];
             for i in 0..N {
                 let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
-                a[zeta][vc] = an.g[k][i] * kc / w;
-                a[zeta][r] = an.g[k][i] * kc * z_minus_p / w;
+                a[zeta][vc] = an.g[k][i] * instant / w;
+                a[zeta][r] = an.g[k][i] * lag / w;
             }
         }
         for i in 0..N {
@@ -513,7 +515,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     pub fn moments_nm(&self, x: &[T; S]) -> [T; N] {
         let own: [T; N] = core::array::from_fn(|i| {
             let (vc, r) = (x[Self::ELEC + 2 * i], x[Self::ELEC + 2 * i + 1]);
-            self.kc * (vc + self.z_minus_p * r)
+            self.instant * vc + self.lag * r
         });
         core::array::from_fn(|i| {
             let mut u = own[i];
@@ -636,6 +638,15 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
         gamma
     }
+}
+
+/// The moment's coefficients on `v_C` and `r`: `C a` and `C (b − a p)`.
+fn moment_coefficients(params: &Params) -> (f64, f64) {
+    let c = params.c_f;
+    (
+        c * params.a_nm_per_c,
+        c * (params.b_nm_per_c_s - params.a_nm_per_c * params.p_per_s),
+    )
 }
 
 #[inline]
