@@ -16,8 +16,8 @@ pub enum Knob {
     R2,
     /// `C`, F.
     C,
-    /// `a`, the instant moment per charge, N·m/C (fitted as the fraction
-    /// `a p/b` of the DC moment per charge, `≥ 0`; as `ln a` with
+    /// `a`, the instant moment per charge, N·m/C (fitted as `|θ|` times the
+    /// fixed model's DC moment per charge, `≥ 0`; as `ln a` with
     /// back-relaxation).
     A,
     /// `b = K z`, N·m/(C·s) (fitted as `ln(b/p)`, the DC moment per charge;
@@ -177,6 +177,12 @@ impl Space {
         self.knobs.len() + usize::from(self.has(Effect::BackRelaxation))
     }
 
+    /// The unit of the baseline's instant-moment knob: the fixed model's
+    /// DC moment per charge, N·m/C.
+    fn instant_unit(&self) -> f64 {
+        dc_per_charge(&self.fixed.params)
+    }
+
     /// The model at `θ`.
     pub fn spec(&self, theta: &[f64]) -> ModelSpec {
         let mut spec = self.fixed;
@@ -221,13 +227,14 @@ impl Space {
                 p.a_nm_per_c = ta.exp();
                 p.b_nm_per_c_s = tb * p.a_nm_per_c * p.p_per_s;
             } else {
-                // The DC moment per charge b/p > 0 and the instant part as
-                // its fraction: 0 is the pure lag, 1 is z = p, and the fit
-                // passes through it smoothly. |θ| keeps a ≥ 0 without a
-                // floor the optimiser could not climb back from.
-                let dc_nm_per_c = tb.exp();
-                p.b_nm_per_c_s = dc_nm_per_c * p.p_per_s;
-                p.a_nm_per_c = ta.abs() * dc_nm_per_c;
+                // The DC moment per charge b/p > 0 on a log scale and the
+                // instant part a on its own, in units of the fixed model's
+                // DC moment per charge: a = 0 is the pure lag, z = p is an
+                // ordinary point, and z → 0 (b → 0 with a held) is one knob
+                // going to −∞, not two. |θ| keeps a ≥ 0 without a floor the
+                // optimiser could not climb back from.
+                p.b_nm_per_c_s = tb.exp() * p.p_per_s;
+                p.a_nm_per_c = ta.abs() * self.instant_unit();
             }
         }
         spec
@@ -247,7 +254,7 @@ impl Space {
                     if self.has(Effect::BackRelaxation) {
                         ln(instant_or_gain(p), 1e-15)
                     } else {
-                        p.a_nm_per_c.max(0.0) / dc_per_charge(p)
+                        p.a_nm_per_c.max(0.0) / self.instant_unit()
                     }
                 }
                 Knob::B => {
