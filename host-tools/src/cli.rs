@@ -24,8 +24,13 @@ pub struct Cli {
 pub enum Command {
     /// Predict what the model does for a recording's drive, or for a wave.
     Simulate(SimulateArgs),
-    /// Print a parameter file (the `thesis_2006` preset) to edit.
-    Params,
+    /// Print a parameter file (one of the seed's presets) to edit.
+    Params {
+        /// Which of the seed's parameter sets: main_m_2006 (Appendix B
+        /// main.m, the 13 mm calibration) or table_4_2_2006 (Table 4-2).
+        #[arg(long, default_value = "main_m_2006")]
+        preset: String,
+    },
     /// Fit the model's free parameters jointly over a session's recordings.
     Fit(FitArgs),
     /// Find what the baseline gets wrong in a session and name the cause.
@@ -324,7 +329,7 @@ pub struct SimulateArgs {
     pub wave: Option<String>,
     #[command(flatten)]
     pub drive: SimWaveArgs,
-    /// Parameter file (TOML); default: the thesis_2006 preset.
+    /// Parameter file (TOML); default: the main_m_2006 preset.
     #[arg(long)]
     pub params: Option<PathBuf>,
     /// Finite elements per segment (1, 2 or 4).

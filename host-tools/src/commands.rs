@@ -11,7 +11,7 @@ use anyhow::{anyhow, bail, Context};
 use finrs::analysis::fit::{Effect, Fitter};
 use finrs::link::capture::{self, CaptureError, Firmware, Monitor};
 use finrs::link::probe::ProbeError;
-use finrs::model::params::ModelFile;
+use finrs::model::params::{ModelFile, Preset};
 use finrs::model::simulate::simulate as simulate_recording;
 use finrs::model::synth::{self, DriveError};
 use finrs::plot;
@@ -31,7 +31,7 @@ use crate::cli::{
 pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     let model = match &args.params {
         Some(p) => ModelFile::read(p)?,
-        None => ModelFile::thesis_2006(),
+        None => ModelFile::main_m_2006(),
     };
     // clap refuses the wave's options with --input, and requires one of
     // --input and --wave.
@@ -151,8 +151,15 @@ fn wave_flags(e: WaveError) -> anyhow::Error {
 }
 
 /// `finrs params`.
-pub fn params() -> anyhow::Result<()> {
-    print!("{}", ModelFile::thesis_2006().to_toml());
+pub fn params(preset: &str) -> anyhow::Result<()> {
+    let Some(preset) = Preset::parse(preset) else {
+        let known: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
+        bail!(
+            "--preset: unknown preset {preset:?}; known: {}",
+            known.join(", ")
+        );
+    };
+    print!("{}", ModelFile::preset(preset).to_toml());
     Ok(())
 }
 
@@ -172,7 +179,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let session = Session::read(&args.session)?;
-    let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
+    let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let fitter = Fitter::new(&session);
     let all: Vec<usize> = (0..session.recordings.len()).collect();
     let bar = spinner("fitting");
@@ -208,7 +215,7 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
         check_writable(&dir.join("REPORT.md"))?;
     }
     let session = Session::read(&args.session)?;
-    let fixed = ModelFile::thesis_2006().spec_for(&session.geometry())?;
+    let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let bar = spinner("diagnosing");
     let started = Instant::now();
     let d = finrs::analysis::diagnose::diagnose(&session, fixed, &|msg| {

@@ -28,7 +28,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Simulate(args) => commands::simulate(args),
-        Command::Params => commands::params(),
+        Command::Params { preset } => commands::params(&preset),
         Command::Fit(args) => commands::fit(args),
         Command::Diagnose(args) => commands::diagnose(args),
         Command::SeedCheck { json } => commands::seed_check(json),

@@ -687,7 +687,7 @@ impl ParamsSpec {
             let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
             return (0..rng.gen_range(0..500)).map(|_| rng.gen()).collect();
         }
-        let mut text = finrs::model::params::ModelFile::thesis_2006().to_toml();
+        let mut text = finrs::model::params::ModelFile::main_m_2006().to_toml();
         if self.beam {
             text += "\n[beam]\nei_nm2 = 1e-4\nmass_per_length_kg_per_m = 0.01\n";
         }

@@ -17,10 +17,10 @@ fn sample(ext: Extensions) -> ModelSpec {
             r1_ohm: 190.0,
             r2_ohm: 610.0,
             c_f: 1.3e-4,
-            k_nm_per_c: 5.2,
-            z_per_s: 0.07,
+            a_nm_per_c: 5.2,
+            b_nm_per_c_s: 5.2 * 0.07,
             p_per_s: 0.12,
-            ..Params::thesis_2006()
+            ..Params::main_m_2006()
         },
         ext,
         dehydration_per_s: 0.0,
@@ -41,7 +41,7 @@ fn verdict_and_report(
     let dir = std::env::temp_dir().join(format!("finrs-diag-{label}-{}", std::process::id()));
     common::write_session(&dir, spec, &common::short_protocol(), seed);
     let session = Session::read(&dir).unwrap();
-    let fixed = ModelFile::thesis_2006()
+    let fixed = ModelFile::main_m_2006()
         .spec_for(&session.geometry())
         .unwrap();
     let d = diagnose(&session, fixed, &|_| {}).unwrap();
@@ -153,7 +153,8 @@ fn back_relaxation_is_named() {
         back_relaxation: true,
         ..Extensions::NONE
     });
-    spec.params.z_per_s = -0.04;
+    // z = −0.04/s: the strip ends bent the other way.
+    spec.params.b_nm_per_c_s = spec.params.a_nm_per_c * -0.04;
     let v = verdict_for("back", &spec, 26);
     assert_eq!(v.causes, ["back-relaxation"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
@@ -213,7 +214,7 @@ fn one_recording_is_refused_with_the_reason() {
         31,
     );
     let session = Session::read(&dir).unwrap();
-    let fixed = ModelFile::thesis_2006()
+    let fixed = ModelFile::main_m_2006()
         .spec_for(&session.geometry())
         .unwrap();
     let err = diagnose(&session, fixed, &|_| {})

@@ -16,7 +16,7 @@ use model_core::{Extensions, Params};
 fn clean_session(label: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("finrs-rests-{label}-{}", std::process::id()));
     let spec = ModelSpec {
-        params: Params::thesis_2006(),
+        params: Params::main_m_2006(),
         ext: Extensions::NONE,
         dehydration_per_s: 0.0,
         dehydration_curvature: 0.0,

@@ -12,7 +12,7 @@ use finrs::recording::{max_written_error, Channel, Fixture, Recording};
 use finrs::wave::Wave;
 
 fn seed_params() -> model_core::Params {
-    ModelFile::thesis_2006()
+    ModelFile::main_m_2006()
         .params_for(&Geometry::THESIS_2006)
         .unwrap()
 }
@@ -103,7 +103,7 @@ fn example_session_is_reproduced_within_noise() {
     for path in files {
         let name = path.display().to_string();
         let measured = Recording::read(&path).unwrap();
-        let p = ModelFile::thesis_2006()
+        let p = common::baseline_air_model()
             .params_for(&Geometry {
                 length_m: measured.meta.length_m,
                 width_m: measured.meta.width_m,

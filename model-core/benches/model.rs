@@ -10,7 +10,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use model_core::{state_len, Fixture, Params, Real, Strip};
 
 fn step_one<T: Real, const N: usize, const S: usize>(c: &mut Criterion, label: &str) {
-    let strip = Strip::<T, N, 1, S>::new(&Params::thesis_2006(), Fixture::Free, 1e-3).unwrap();
+    let strip = Strip::<T, N, 1, S>::new(&Params::main_m_2006(), Fixture::Free, 1e-3).unwrap();
     let mut x = strip.rest();
     let v = [T::from_f64(2.5); N];
     c.bench_with_input(BenchmarkId::new("step", label), &v, |b, v| {
@@ -38,7 +38,7 @@ pub fn travelling_sine_20s() -> Vec<[f64; 3]> {
 }
 
 fn run_20s(c: &mut Criterion) {
-    let strip = Strip::<f64, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3).unwrap();
+    let strip = Strip::<f64, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3).unwrap();
     let input = travelling_sine_20s();
     let mut tip = vec![0.0; input.len()];
     c.bench_function("run 20 s at 1 kHz, N=3 f64", |b| {
@@ -54,7 +54,7 @@ fn run_20s(c: &mut Criterion) {
 }
 
 fn discretise(c: &mut Criterion) {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     c.bench_function("discretise N=3 E=1", |b| {
         b.iter(|| Strip::<f64, 3, 1, 18>::new(black_box(&p), Fixture::Free, 1e-3).unwrap())
     });

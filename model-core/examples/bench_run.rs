@@ -24,7 +24,7 @@ fn matrix<const R: usize, const C: usize>(m: &[[f64; C]; R]) -> String {
 fn main() -> std::io::Result<()> {
     let dir = std::env::args().nth(1).unwrap_or_else(|| ".".to_string());
     let dir = std::path::Path::new(&dir);
-    let strip = Strip::<f64, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3)
+    let strip = Strip::<f64, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3)
         .expect("the seed's parameters are valid");
     let input: Vec<[f64; 3]> = (0..20_000)
         .map(|k| {

@@ -5,7 +5,7 @@
 use model_core::{Fixture, Params, Strip};
 
 fn main() {
-    let strip = Strip::<f64, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3)
+    let strip = Strip::<f64, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3)
         .expect("the seed's parameters are valid");
     let v = [2.0, 1.0, -2.0];
     let mut x = strip.rest();

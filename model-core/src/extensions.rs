@@ -11,7 +11,7 @@
 //! | `damping` | Rayleigh `C = α M + β K` | each mode's 2×2 block gets `−2ζₖωₖ`, `2ζₖωₖ = α + β ωₖ²` |
 //! | `hydrodynamic-loading` | added mass `m_a` per length, linear drag `c_d` per length | `ρA + m_a` in the mass matrix; drag `c_d/(ρA + m_a)` like `α` |
 //! | `beam-stiffness` | `EI` differs from the laminate's | a parameter ([`crate::Params::ei_nm2`]), no term |
-//! | `back-relaxation` | the lead network's zero may be `z ≤ 0` | the moment relaxes past zero under a held voltage |
+//! | `back-relaxation` | the relaxation network's `b = K z` may be `≤ 0` (`z ≤ 0`) | the moment relaxes past zero under a held voltage |
 //! | `segment-crosstalk` | a segment's moment spreads to its neighbours by `κ` | `uᵢ ← uᵢ + κ (uᵢ₋₁ + uᵢ₊₁)` in the modal couplings |
 //! | `electrochemical-nonlinearity` | the double layer sees `v (1 + a v²)`; the leak passes `v/R2 (1 + b v²)` | static input nonlinearity, exact under zero-order hold |
 //! | `dehydration` | the moment weakens over minutes | [`crate::Strip::set_moment_gain`], set by the caller from session time |
@@ -20,7 +20,7 @@
 //!
 //! ```
 //! use model_core::{Extensions, Fixture, Params, Strip};
-//! let p = Params::thesis_2006();
+//! let p = Params::main_m_2006();
 //! let damped = Extensions { damping_mass_per_s: 20.0, ..Extensions::NONE };
 //! let s = Strip::<f64, 3, 1, 18>::with_extensions(&p, &damped, Fixture::Free, 1e-3).unwrap();
 //! let mut x = s.rest();
@@ -54,7 +54,7 @@ pub struct Extensions {
     /// Fraction `κ` of a segment's moment that acts on each neighbour
     /// (`|κ| < 1`).
     pub crosstalk: f64,
-    /// Allows the lead network's zero at `z ≤ 0` (still `z < p`): the
+    /// Allows `b ≤ 0` in the relaxation network (the zero `z ≤ 0`): the
     /// moment relaxes back past zero under a held voltage.
     pub back_relaxation: bool,
     /// Positions along the strip follow the arc of the slope field instead
@@ -82,11 +82,11 @@ pub const MAX_SEGMENTS: usize = 8;
 /// let mut var = SegmentVariation::NONE;
 /// var.k_deviation[2] = -0.1; // the third segment bends 10 % less
 /// let ext = Extensions { segment_variation: var, ..Extensions::NONE };
-/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::thesis_2006(), &ext, Fixture::Free, 1e-3);
+/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::main_m_2006(), &ext, Fixture::Free, 1e-3);
 /// assert!(s.is_ok());
 /// var.k_deviation[3] = 0.1; // a fourth segment the strip does not have
 /// let ext = Extensions { segment_variation: var, ..Extensions::NONE };
-/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::thesis_2006(), &ext, Fixture::Free, 1e-3);
+/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::main_m_2006(), &ext, Fixture::Free, 1e-3);
 /// assert!(s.is_err());
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -10,7 +10,7 @@
 //!
 //! ```
 //! use model_core::{Fixture, Params, Strip};
-//! let p = Params::thesis_2006();
+//! let p = Params::main_m_2006();
 //! let blocked = Strip::<f32, 3, 1, 18>::new(&p, Fixture::Blocked, 1e-3).unwrap();
 //! let mut x = blocked.rest();
 //! for _ in 0..100 {

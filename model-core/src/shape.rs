@@ -11,7 +11,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     ///
     /// ```
     /// use model_core::{Fixture, Params, Strip};
-    /// let s = Strip::<f64, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3).unwrap();
+    /// let s = Strip::<f64, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3).unwrap();
     /// let mut x = s.rest();
     /// s.step(&mut x, &[1.0; 3]);
     /// let tip = s.tip_deflection_m(&x);
@@ -71,7 +71,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// ```
     /// use model_core::{Extensions, Fixture, Params, Strip};
     /// let ext = Extensions { large_deflection: true, ..Extensions::NONE };
-    /// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::thesis_2006(), &ext, Fixture::Free, 1e-3).unwrap();
+    /// let s = Strip::<f64, 3, 1, 18>::with_extensions(&Params::main_m_2006(), &ext, Fixture::Free, 1e-3).unwrap();
     /// let mut x = s.rest();
     /// for _ in 0..200 {
     ///     s.step(&mut x, &[2.5; 3]);

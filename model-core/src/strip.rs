@@ -10,8 +10,10 @@
 //!   `ζₖ = η̇ₖ/ωₖ`, so that every mode is a rotation `[[0, ω], [-ω, 0]]` and
 //!   the whole matrix stays well scaled for the exponential and for `f32`;
 //! - `e` (`2N`): per segment `v_C` (the capacitor's voltage `Q/C`, V) and
-//!   `r` (the lead network's state, V·s), with `r' = -p r + v_C` and
-//!   moment `u = K C (v_C + (z - p) r)`, which is `u/Q = K (s+z)/(s+p)`.
+//!   `r` (the relaxation network's state, V·s), with `r' = -p r + v_C` and
+//!   moment `u = C (a v_C + (b − a p) r)`, which is
+//!   `u/Q = (a s + b)/(s + p)`, the seed's `K (s+z)/(s+p)` with `a = K`,
+//!   `b = K z`.
 //!
 //! The seed's `x = {q, q̇, Z}` is this state in other coordinates; the modal
 //! form is what keeps the stiff beam accurate (see `DESIGN.md`).
@@ -57,7 +59,7 @@ pub const fn state_len(n: usize, e: usize) -> usize {
 ///
 /// ```
 /// use model_core::{Fixture, Params, Strip};
-/// let strip = Strip::<f64, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3).unwrap();
+/// let strip = Strip::<f64, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3).unwrap();
 /// let mut x = strip.rest();
 /// for _ in 0..60_000 {
 ///     strip.step(&mut x, &[2.5; 3]);
@@ -94,9 +96,10 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     /// `1/R1` of every segment.
     inv_r1: [T; N],
     inv_r2: T,
-    /// `K C` of every segment.
-    kc: [T; N],
-    z_minus_p: T,
+    /// `C a` of every segment: moment per volt of `v_C`, N·m/V.
+    instant: [T; N],
+    /// `C (b − a p)` of every segment: moment per unit of `r`, N·m/(V·s).
+    lag: [T; N],
     /// `a` of the double layer's `v (1 + a v²)`.
     charge_cubic: T,
     /// `b` of the leak's `v/R2 (1 + b v²)`.
@@ -137,21 +140,18 @@ struct Analysis<const N: usize, const E: usize, const S: usize> {
 struct Segment {
     r1_ohm: f64,
     c_f: f64,
-    k_nm_per_c: f64,
+    /// The moment gain's factor over the shared network's.
+    gain: f64,
 }
 
 impl Segment {
     /// Every segment's values.
     fn all<const N: usize>(params: &Params, ext: &Extensions) -> [Segment; N] {
         core::array::from_fn(|i| {
-            let (r1_ohm, c_f, k_nm_per_c) =
+            let (r1_ohm, c_f, gain) =
                 ext.segment_variation
-                    .segment(i, params.r1_ohm, params.c_f, params.k_nm_per_c);
-            Segment {
-                r1_ohm,
-                c_f,
-                k_nm_per_c,
-            }
+                    .segment(i, params.r1_ohm, params.c_f, 1.0);
+            Segment { r1_ohm, c_f, gain }
         })
     }
 
@@ -160,9 +160,15 @@ impl Segment {
         1.0 / (self.r1_ohm * self.c_f)
     }
 
-    /// `K C`, the moment per volt of the double layer before relaxation.
-    fn kc(&self) -> f64 {
-        self.k_nm_per_c * self.c_f
+    /// The moment's coefficients on `v_C` and `r`: `C a` and
+    /// `C (b − a p)`, times the segment's gain (exactly the shared
+    /// network's at gain 1).
+    fn moment(&self, params: &Params) -> (f64, f64) {
+        let c = self.c_f;
+        (
+            c * params.a_nm_per_c * self.gain,
+            c * (params.b_nm_per_c_s - params.a_nm_per_c * params.p_per_s) * self.gain,
+        )
     }
 }
 
@@ -207,14 +213,13 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         check_sample_time(dt_s)?;
         let an = Self::analyse(params, ext, fixture)?;
         let segments = Segment::all::<N>(params, ext);
-        let z_minus_p = params.z_per_s - params.p_per_s;
         // The pieces are inlined: the board re-discretises with the same
         // stack as when they were one function.
         let elec = segments.map(|seg| Self::electrical_step(params, seg.inv_tau1(), dt_s));
         let (rot, drive) = Self::modal_steps(&an, params, &segments, dt_s);
         let dof_from_modal = Self::modal_to_dof(&an);
         let force_row = if fixture == Fixture::Blocked {
-            Self::blocking_force_row(&an, &segments, z_minus_p)
+            Self::blocking_force_row(&an, params, &segments)
         } else {
             [T::ZERO; S]
         };
@@ -233,8 +238,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             modes: an.modes,
             inv_r1: segments.map(|seg| T::from_f64(1.0 / seg.r1_ohm)),
             inv_r2: T::from_f64(1.0 / params.r2_ohm),
-            kc: segments.map(|seg| T::from_f64(seg.kc())),
-            z_minus_p: T::from_f64(z_minus_p),
+            instant: segments.map(|seg| T::from_f64(seg.moment(params).0)),
+            lag: segments.map(|seg| T::from_f64(seg.moment(params).1)),
             charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
             leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
             crosstalk: T::from_f64(ext.crosstalk),
@@ -276,7 +281,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         segments: &[Segment; N],
         dt_s: f64,
     ) -> ([[T; S]; 4], [[[T; S]; 3]; N]) {
-        let z_minus_p = params.z_per_s - params.p_per_s;
+        // The reference segment's moment drives each exponential; another
+        // segment's columns are those times its moment over the reference's
+        // (both coefficients scale alike: `C` and the gain).
+        let (instant, lag) = segments[0].moment(params);
         // A removed freedom's slot (blocked tip) keeps its value, as the
         // exponential of its zero rows would: the identity.
         let mut rot = [[T::ZERO; S]; 4];
@@ -296,7 +304,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                     // Mode k driven by this segment with unit modal coupling.
                     let mut a = [
                         [0.0, w, 0.0, 0.0],
-                        [-w, -an.two_zeta_omega[k], 1.0 / w, z_minus_p / w],
+                        [-w, -an.two_zeta_omega[k], instant / w, lag / w],
                         [0.0, 0.0, -inv_tau1, 0.0],
                         [0.0, 0.0, 1.0, -params.p_per_s],
                     ];
@@ -312,7 +320,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                     rot[2][k] = T::from_f64(phi[1][0]);
                     rot[3][k] = T::from_f64(phi[1][1]);
                 }
-                let coupling = an.g[k][i] * seg.kc();
+                let scale = seg.c_f * seg.gain / (segments[0].c_f * segments[0].gain);
+                let coupling = an.g[k][i] * scale;
                 for (row, dof) in [(0, k), (1, Self::DOF + k)] {
                     cols[0][dof] = T::from_f64(coupling * phi[row][2]);
                     cols[1][dof] = T::from_f64(coupling * phi[row][3]);
@@ -344,8 +353,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     #[inline(always)]
     fn blocking_force_row(
         an: &Analysis<N, E, S>,
+        params: &Params,
         segments: &[Segment; N],
-        z_minus_p: f64,
     ) -> [T; S] {
         let mut force_row = [T::ZERO; S];
         let (m_t, k_t, psi) = (&an.m_tip, &an.k_tip, &an.psi);
@@ -359,13 +368,13 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
         }
         for i in 0..N {
-            let kc = segments[i].kc();
+            let (instant, lag) = segments[i].moment(params);
             let mut per_moment = an.f_tip[i];
             for k in 0..an.modes {
                 per_moment -= mt_psi[k] * an.g[k][i];
             }
-            force_row[Self::ELEC + 2 * i] = T::from_f64(per_moment * kc);
-            force_row[Self::ELEC + 2 * i + 1] = T::from_f64(per_moment * kc * z_minus_p);
+            force_row[Self::ELEC + 2 * i] = T::from_f64(per_moment * instant);
+            force_row[Self::ELEC + 2 * i + 1] = T::from_f64(per_moment * lag);
         }
         force_row
     }
@@ -457,7 +466,6 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         ext.segment_variation.validate_for(N)?;
         let an = Self::analyse(params, ext, fixture)?;
         let segments = Segment::all::<N>(params, ext);
-        let z_minus_p = params.z_per_s - params.p_per_s;
         let mut a = [[0.0; S]; S];
         let mut b = [[0.0; N]; S];
         for k in 0..an.modes {
@@ -467,9 +475,9 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             a[zeta][zeta] = -an.two_zeta_omega[k];
             for i in 0..N {
                 let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
-                let kc = segments[i].kc();
-                a[zeta][vc] = an.g[k][i] * kc / w;
-                a[zeta][r] = an.g[k][i] * kc * z_minus_p / w;
+                let (instant, lag) = segments[i].moment(params);
+                a[zeta][vc] = an.g[k][i] * instant / w;
+                a[zeta][r] = an.g[k][i] * lag / w;
             }
         }
         for i in 0..N {
@@ -568,7 +576,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     pub fn moments_nm(&self, x: &[T; S]) -> [T; N] {
         let own: [T; N] = core::array::from_fn(|i| {
             let (vc, r) = (x[Self::ELEC + 2 * i], x[Self::ELEC + 2 * i + 1]);
-            self.kc[i] * (vc + self.z_minus_p * r)
+            self.instant[i] * vc + self.lag[i] * r
         });
         core::array::from_fn(|i| {
             let mut u = own[i];

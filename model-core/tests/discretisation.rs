@@ -99,7 +99,7 @@ fn zoh_of_a_scalar_is_exact() {
 /// whole model, not just of the exponential.
 #[test]
 fn held_input_is_exact_across_step_sizes() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     for fixture in [Fixture::Free, Fixture::Blocked] {
         let coarse = Strip::<f64, 3, 1, 18>::new(&p, fixture, 1e-3).unwrap();
         let fine = Strip::<f64, 3, 1, 18>::new(&p, fixture, 1e-4).unwrap();
@@ -129,7 +129,7 @@ fn held_input_is_exact_across_step_sizes() {
 /// discretisation is stable at any step, even 0.1 s.
 #[test]
 fn long_steps_stay_bounded() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let s = Strip::<f64, 3, 1, 18>::new(&p, Fixture::Free, 0.1).unwrap();
     let mut x = s.rest();
     for _ in 0..10_000 {
@@ -144,7 +144,7 @@ fn long_steps_stay_bounded() {
 #[test]
 fn block_discretisation_equals_the_dense_one() {
     fn check<const N: usize, const E: usize, const S: usize>(fixture: Fixture, h: f64) {
-        let p = Params::thesis_2006();
+        let p = Params::main_m_2006();
         // Every linear term on, so the blocks carry damping, added mass
         // and crosstalk too.
         let ext = Extensions {

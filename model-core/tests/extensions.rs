@@ -6,7 +6,7 @@ use model_core::{Extensions, Fixture, ParamError, Params, SegmentVariation, Stri
 type S3 = Strip<f64, 3, 1, 18>;
 
 fn strip(ext: &Extensions, fixture: Fixture) -> S3 {
-    S3::with_extensions(&Params::thesis_2006(), ext, fixture, 1e-3).unwrap()
+    S3::with_extensions(&Params::main_m_2006(), ext, fixture, 1e-3).unwrap()
 }
 
 /// Runs `steps` samples of `v` and returns the tip after each.
@@ -22,7 +22,7 @@ fn tips(s: &S3, v: [f64; 3], steps: usize) -> Vec<f64> {
 
 #[test]
 fn no_extension_is_the_baseline_bit_for_bit() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     for fixture in [Fixture::Free, Fixture::Blocked] {
         let a = S3::new(&p, fixture, 1e-3).unwrap();
         let b = S3::with_extensions(&p, &Extensions::NONE, fixture, 1e-3).unwrap();
@@ -43,16 +43,25 @@ fn no_extension_is_the_baseline_bit_for_bit() {
 #[test]
 fn rayleigh_mass_damping_decays_the_ringing_at_alpha_over_two() {
     let alpha = 4.0;
-    let ringing = strip(
+    // main.m's pure lag barely excites the ringing; z = p (a pure gain, the
+    // moment follows the 16 ms charge) rings as a step.
+    let lag = Params::main_m_2006();
+    let p = Params {
+        a_nm_per_c: lag.b_nm_per_c_s / lag.p_per_s,
+        ..lag
+    };
+    let ringing = S3::with_extensions(
+        &p,
         &Extensions {
             damping_mass_per_s: alpha,
             ..Extensions::NONE
         },
         Fixture::Free,
-    );
+        1e-3,
+    )
+    .unwrap();
     // The quasi-static tip under the uniform moment, u L²/(2 EI): the
     // difference from it is the ringing alone.
-    let p = Params::thesis_2006();
     let mut x = ringing.rest();
     let ring: Vec<f64> = (0..1200)
         .map(|_| {
@@ -77,7 +86,7 @@ fn rayleigh_mass_damping_decays_the_ringing_at_alpha_over_two() {
 /// Added mass lowers every frequency by `√(ρA/(ρA + m_a))`.
 #[test]
 fn added_mass_lowers_the_frequencies() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let m_a = 10.0 * p.mass_per_length_kg_per_m;
     let dry = strip(&Extensions::NONE, Fixture::Free);
     let wet = strip(
@@ -145,26 +154,24 @@ fn electrochemical_terms_are_static_input_nonlinearities() {
     for _ in 0..2000 {
         nl.step(&mut s, &[v; 3]);
     }
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let want = v / p.r2_ohm * (1.0 + b * v * v);
     let got = nl.currents_a(&s, &[v; 3])[0];
     assert!((got - want).abs() < 1e-9, "{got} A, want {want} A");
 }
 
-/// With `z < 0` the moment relaxes back past zero under a held voltage;
-/// only the back-relaxation extension accepts such a zero.
+/// With `z < 0` (`b < 0`) the moment relaxes back past zero under a held
+/// voltage; only the back-relaxation extension accepts such a network.
 #[test]
 fn back_relaxation_needs_the_extension_and_reverses_the_moment() {
+    let lead = Params::table_4_2_2006();
     let p = Params {
-        z_per_s: -0.03,
-        ..Params::thesis_2006()
+        b_nm_per_c_s: lead.a_nm_per_c * -0.03,
+        ..lead
     };
     assert!(matches!(
         S3::new(&p, Fixture::Free, 1e-3),
-        Err(ParamError::NotPositive {
-            field: "z_per_s",
-            ..
-        })
+        Err(ParamError::BackRelaxation { .. })
     ));
     let ext = Extensions {
         back_relaxation: true,
@@ -181,14 +188,18 @@ fn back_relaxation_needs_the_extension_and_reverses_the_moment() {
     }
     let late = s.moments_nm(&x)[0];
     assert!(first_peak > 0.0 && late < 0.0, "{first_peak} then {late}");
-    // z ≥ p stays refused even so.
+    // Without an instant part, b <= 0 is no relaxation at all: refused
+    // even so.
     let bad = Params {
-        z_per_s: 0.2,
-        ..Params::thesis_2006()
+        a_nm_per_c: 0.0,
+        ..p
     };
     assert!(matches!(
         S3::with_extensions(&bad, &ext, Fixture::Free, 1e-3),
-        Err(ParamError::RelaxationOrder { .. })
+        Err(ParamError::NotPositive {
+            field: "a_nm_per_c",
+            ..
+        })
     ));
 }
 
@@ -254,7 +265,7 @@ fn large_deflection_follows_the_circular_arc() {
 
 #[test]
 fn out_of_range_terms_are_refused_by_name() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let cases = [
         (
             Extensions {
@@ -303,7 +314,7 @@ fn varied(var: SegmentVariation) -> Extensions {
 /// the same `Φ`, `Γ`, states, currents and force.
 #[test]
 fn segment_variation_of_zero_is_the_baseline_bit_for_bit() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let zero = SegmentVariation {
         r1_deviation: [0.0; 8],
         c_deviation: [0.0; 8],
@@ -332,7 +343,7 @@ fn segment_variation_of_zero_is_the_baseline_bit_for_bit() {
 /// from rest is `V/R2 + V/R1 e^{−t/τ1}` with its own segment's `τ1`.
 #[test]
 fn segment_two_capacitance_changes_segment_two_current_only() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let delta = 0.3;
     let mut var = SegmentVariation::NONE;
     var.c_deviation[1] = delta;
@@ -366,7 +377,7 @@ fn segment_two_capacitance_changes_segment_two_current_only() {
 /// A segment's `R1` sets its current's jump at a step, `V/R2 + V/(R1 (1 + δ))`.
 #[test]
 fn segment_resistance_sets_that_segments_jump() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let mut var = SegmentVariation::NONE;
     var.r1_deviation[2] = -0.2;
     let s = strip(&varied(var), Fixture::Blocked);
@@ -384,7 +395,7 @@ fn segment_resistance_sets_that_segments_jump() {
 /// ringing dies; sampled at 10 ms (the discretisation is exact at any step).
 #[test]
 fn moment_gain_and_capacitance_scale_each_segments_share_of_the_static_tip() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let mut var = SegmentVariation::NONE;
     var.k_deviation[1] = 0.15;
     var.k_deviation[2] = -0.1;
@@ -421,7 +432,7 @@ fn moment_gain_and_capacitance_scale_each_segments_share_of_the_static_tip() {
 
 #[test]
 fn segment_deviations_are_refused_by_segment_and_rule() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let mut reference = SegmentVariation::NONE;
     reference.c_deviation[0] = 0.1;
     let mut past_the_tip = SegmentVariation::NONE;

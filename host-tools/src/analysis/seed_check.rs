@@ -146,7 +146,7 @@ fn step_response(
 
 /// Runs the check.
 pub fn seed_check() -> Result<SeedCheck, SeedCheckError> {
-    let file = ModelFile::thesis_2006();
+    let file = ModelFile::main_m_2006();
     let base = file.spec_for(&Geometry::THESIS_2006)?;
     let tip = Tip::of(&base)?;
     let mut rows = tip.rows();

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 pub struct ModelFile {
     /// RC circuit, eq. 2.1–2.2.
     pub electrical: Electrical,
-    /// Lead network, eq. 2.3.
+    /// Relaxation network, eq. 2.3.
     pub relaxation: Relaxation,
     /// Laminate materials, Appendix B.
     pub material: Material,
@@ -52,7 +52,7 @@ pub struct ExtensionsFile {
     pub leak_cubic_per_v2: f64,
     /// Fraction of a segment's moment on each neighbour.
     pub crosstalk: f64,
-    /// Lets the relaxation zero lie at or below 0.
+    /// Lets the relaxation's `b = K z` lie at or below 0 (`z ≤ 0`).
     pub back_relaxation: bool,
     /// Arc kinematics for positions along the strip.
     pub large_deflection: bool,
@@ -166,16 +166,52 @@ pub struct Electrical {
     pub c_f: f64,
 }
 
-/// `K`, `z`, `p` of `u/Q = K (s+z)/(s+p)`.
+/// `a`, `b`, `p` of `u/Q = (a s + b)/(s + p)`, the seed's
+/// `K (s+z)/(s+p)` with `a = K`, `b = K z` (see [`model_core::Params`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Relaxation {
-    /// Gain, N·m/C.
-    pub k_nm_per_c: f64,
-    /// Zero, 1/s.
-    pub z_per_s: f64,
-    /// Pole, 1/s.
+    /// `a`: instant moment per charge, N·m/C (`≥ 0`; 0 is the pure lag).
+    pub a_nm_per_c: f64,
+    /// `b = K z`, N·m/(C·s) (`> 0`; `b/p` is the DC moment per charge).
+    pub b_nm_per_c_s: f64,
+    /// `p`: pole, 1/s.
     pub p_per_s: f64,
+}
+
+/// The seed's parameter sets, by the name `finrs params --preset` takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// Appendix B `main.m` ([`Params::main_m_2006`]): the 13 mm calibration.
+    MainM2006,
+    /// Table 4-2 ([`Params::table_4_2_2006`]).
+    Table4_2_2006,
+}
+
+impl Preset {
+    /// Every preset, the default first.
+    pub const ALL: [Preset; 2] = [Preset::MainM2006, Preset::Table4_2_2006];
+
+    /// Its name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Preset::MainM2006 => "main_m_2006",
+            Preset::Table4_2_2006 => "table_4_2_2006",
+        }
+    }
+
+    /// The preset of that name, if any.
+    pub fn parse(name: &str) -> Option<Preset> {
+        Preset::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The core's parameters.
+    pub fn params(&self) -> Params {
+        match self {
+            Preset::MainM2006 => Params::main_m_2006(),
+            Preset::Table4_2_2006 => Params::table_4_2_2006(),
+        }
+    }
 }
 
 /// Core and film materials; the film's thickness is a material property of
@@ -237,9 +273,16 @@ pub enum ParamsError {
 }
 
 impl ModelFile {
-    /// The seed's preset (`Params::thesis_2006`).
-    pub fn thesis_2006() -> ModelFile {
-        let p = Params::thesis_2006();
+    /// `main.m`'s preset ([`Params::main_m_2006`]), the default of every
+    /// command.
+    pub fn main_m_2006() -> ModelFile {
+        ModelFile::preset(Preset::MainM2006)
+    }
+
+    /// A preset of the seed. Both share the sample's materials; Table 4-2's
+    /// thinner core (0.28 mm) is geometry, which recordings state.
+    pub fn preset(preset: Preset) -> ModelFile {
+        let p = preset.params();
         let lam = Laminate::THESIS_2006;
         ModelFile {
             electrical: Electrical {
@@ -248,8 +291,8 @@ impl ModelFile {
                 c_f: p.c_f,
             },
             relaxation: Relaxation {
-                k_nm_per_c: p.k_nm_per_c,
-                z_per_s: p.z_per_s,
+                a_nm_per_c: p.a_nm_per_c,
+                b_nm_per_c_s: p.b_nm_per_c_s,
                 p_per_s: p.p_per_s,
             },
             material: Material {
@@ -331,8 +374,8 @@ impl ModelFile {
             r1_ohm: self.electrical.r1_ohm,
             r2_ohm: self.electrical.r2_ohm,
             c_f: self.electrical.c_f,
-            k_nm_per_c: self.relaxation.k_nm_per_c,
-            z_per_s: self.relaxation.z_per_s,
+            a_nm_per_c: self.relaxation.a_nm_per_c,
+            b_nm_per_c_s: self.relaxation.b_nm_per_c_s,
             p_per_s: self.relaxation.p_per_s,
             length_m: g.length_m,
             ei_nm2,
@@ -385,20 +428,48 @@ mod tests {
     use std::error::Error;
 
     #[test]
-    fn preset_round_trips_and_matches_the_core() {
-        let f = ModelFile::thesis_2006();
-        let back = ModelFile::parse("preset.toml", &f.to_toml()).unwrap();
-        assert_eq!(back, f);
-        let p = back.params_for(&Geometry::THESIS_2006).unwrap();
-        let core = Params::thesis_2006();
+    fn presets_round_trip_and_match_the_core() {
+        for preset in Preset::ALL {
+            assert_eq!(Preset::parse(preset.name()), Some(preset));
+            let f = ModelFile::preset(preset);
+            let back = ModelFile::parse("preset.toml", &f.to_toml()).unwrap();
+            assert_eq!(back, f);
+            let p = back.params_for(&Geometry::THESIS_2006).unwrap();
+            let core = preset.params();
+            assert_eq!(
+                (p.r1_ohm, p.r2_ohm, p.c_f),
+                (core.r1_ohm, core.r2_ohm, core.c_f)
+            );
+            assert_eq!(
+                (p.a_nm_per_c, p.b_nm_per_c_s, p.p_per_s),
+                (core.a_nm_per_c, core.b_nm_per_c_s, core.p_per_s)
+            );
+        }
+        // main.m's sample is the recordings' geometry: the same beam.
+        let p = ModelFile::main_m_2006()
+            .params_for(&Geometry::THESIS_2006)
+            .unwrap();
+        let core = Params::main_m_2006();
         assert!((p.ei_nm2 / core.ei_nm2 - 1.0).abs() < 1e-12);
         assert!((p.mass_per_length_kg_per_m / core.mass_per_length_kg_per_m - 1.0).abs() < 1e-12);
-        assert_eq!(p.k_nm_per_c, core.k_nm_per_c);
+        assert_eq!(Preset::parse("thesis_2006"), None);
+    }
+
+    #[test]
+    fn old_relaxation_keys_are_named() {
+        let text = ModelFile::main_m_2006()
+            .to_toml()
+            .replace("a_nm_per_c = 0.0", "k_nm_per_c = 4.87");
+        let err = ModelFile::parse("old.toml", &text).unwrap_err().to_string();
+        assert!(
+            err.starts_with("old.toml:") && err.contains("k_nm_per_c"),
+            "{err}"
+        );
     }
 
     #[test]
     fn unknown_and_missing_fields_are_named() {
-        let text = ModelFile::thesis_2006()
+        let text = ModelFile::main_m_2006()
             .to_toml()
             .replace("r1_ohm", "r1_ohms");
         let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
@@ -406,7 +477,7 @@ mod tests {
             err.starts_with("p.toml:") && err.contains("r1_ohms"),
             "{err}"
         );
-        let text = ModelFile::thesis_2006()
+        let text = ModelFile::main_m_2006()
             .to_toml()
             .replace("c_f = 0.0001\n", "");
         let err = ModelFile::parse("p.toml", &text).unwrap_err().to_string();
@@ -415,18 +486,18 @@ mod tests {
 
     #[test]
     fn non_physical_values_are_refused_by_name() {
-        let text = ModelFile::thesis_2006()
+        let text = ModelFile::main_m_2006()
             .to_toml()
-            .replace("z_per_s = 0.077", "z_per_s = 0.5");
+            .replace("b_nm_per_c_s = 0.487", "b_nm_per_c_s = -0.5");
         let err = ModelFile::parse("p.toml", &text).unwrap_err();
         // The file is the message, the rule its source: each said once.
         assert_eq!(err.to_string(), "p.toml");
         let rule = err.source().unwrap().to_string();
         assert!(
-            rule.starts_with("relaxation needs its zero below its pole, z < p"),
+            rule.starts_with("b_nm_per_c_s must be positive") && rule.contains("back-relaxation"),
             "{rule}"
         );
-        let f = ModelFile::thesis_2006();
+        let f = ModelFile::main_m_2006();
         let thin = Geometry {
             thickness_m: 3e-6,
             ..Geometry::THESIS_2006
@@ -442,7 +513,7 @@ mod tests {
         let mut ext = model_core::Extensions::NONE;
         ext.segment_variation.k_deviation[2] = -0.1;
         ext.segment_variation.r1_deviation[1] = 0.05;
-        let mut f = ModelFile::thesis_2006();
+        let mut f = ModelFile::main_m_2006();
         f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
         let text = f.to_toml();
         assert!(

@@ -21,6 +21,18 @@ pub fn baseline_air_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/baseline-air")
 }
 
+/// The parameters `baseline-air` was written with (its README), as a file.
+pub fn baseline_air_model() -> finrs::model::params::ModelFile {
+    let mut f = finrs::model::params::ModelFile::main_m_2006();
+    let p = model_core::Params::baseline_air_example();
+    f.relaxation = finrs::model::params::Relaxation {
+        a_nm_per_c: p.a_nm_per_c,
+        b_nm_per_c_s: p.b_nm_per_c_s,
+        p_per_s: p.p_per_s,
+    };
+    f
+}
+
 /// The `.csv` files of [`baseline_air_dir`], in name order; a missing
 /// folder fails the test (the data ship with the repository).
 pub fn baseline_air_files() -> Vec<std::path::PathBuf> {

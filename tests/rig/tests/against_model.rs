@@ -21,8 +21,9 @@ fn spec(s: &Sample) -> ModelSpec {
         r1_ohm: s.r1_ohm,
         r2_ohm: s.r2_ohm,
         c_f: s.c_f,
-        k_nm_per_c: s.k_nm_per_c,
-        z_per_s: s.z_per_s,
+        // The rig keeps the seed's K (s + z)/(s + p): a = K, b = K z.
+        a_nm_per_c: s.k_nm_per_c,
+        b_nm_per_c_s: s.k_nm_per_c * s.z_per_s,
         p_per_s: s.p_per_s,
         length_m: s.length_m,
         ei_nm2: s.laminate_ei_nm2(),

@@ -43,7 +43,7 @@ fn hide(names: &[&str], default_seed: u64) -> Verdict {
     )
     .unwrap();
     let session = Session::read(&dir).unwrap();
-    let fixed = ModelFile::thesis_2006()
+    let fixed = ModelFile::main_m_2006()
         .spec_for(&session.geometry())
         .unwrap();
     let d = diagnose(&session, fixed, &|_| {}).unwrap();

@@ -175,7 +175,7 @@ fn run<T: Real + fmt::LowerExp, W: Write, const N: usize, const S: usize>(
     sc: &Scenario,
     w: &mut W,
 ) -> fmt::Result {
-    let strip = match Strip::<T, N, 1, S>::new(&Params::thesis_2006(), sc.fixture, DT_S) {
+    let strip = match Strip::<T, N, 1, S>::new(&Params::main_m_2006(), sc.fixture, DT_S) {
         Ok(s) => s,
         Err(e) => return writeln!(w, "{} error {e}", sc.name),
     };

@@ -44,7 +44,7 @@ fn seed_4_2_matches_expected_file() {
 
 #[test]
 fn seed_4_2_obeys_the_analytic_facts() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let mut out = String::new();
     run_scenario::<f64, _>(&SCENARIOS[0], &mut out).unwrap();
     let levels = [2.0, 1.0, -2.0];
@@ -66,11 +66,14 @@ fn seed_4_2_obeys_the_analytic_facts() {
             }
         }
     }
-    // Moment of segment 1 after 10 s: the DC value plus the relaxation's
-    // remaining overshoot (p/z − 1) e^{−p t}.
+    // Moment of segment 1 after 10 s: u = C (a v_C + (b − a p) r), with
+    // v_C = V (1 − e^{−λt}), λ = 1/τ1, and the network's state
+    // r = V ((1 − e^{−pt})/p − (e^{−λt} − e^{−pt})/(p − λ)).
     let (_, last) = numbers(out.lines().last().unwrap());
-    let dc = p.dc_moment_per_volt() * 2.0;
-    let expected = dc * (1.0 + (p.p_per_s / p.z_per_s - 1.0) * (-p.p_per_s * 10.0).exp());
+    let (v, t, l, pp) = (2.0, 10.0, 1.0 / p.tau1_s(), p.p_per_s);
+    let v_c = v * (1.0 - (-l * t).exp());
+    let r = v * ((1.0 - (-pp * t).exp()) / pp - ((-l * t).exp() - (-pp * t).exp()) / (pp - l));
+    let expected = p.c_f * (p.a_nm_per_c * v_c + (p.b_nm_per_c_s - p.a_nm_per_c * pp) * r);
     assert!(
         (last[2] / expected - 1.0).abs() < 2e-3,
         "{} vs {expected}",

@@ -7,7 +7,7 @@ use model_core::{Fixture, Params, Strip};
 
 #[test]
 fn sixty_seconds_of_f32_stay_close_to_f64() {
-    let p = Params::thesis_2006();
+    let p = Params::main_m_2006();
     let s32 = Strip::<f32, 3, 1, 18>::new(&p, Fixture::Free, 1e-3).unwrap();
     let s64 = Strip::<f64, 3, 1, 18>::new(&p, Fixture::Free, 1e-3).unwrap();
     let (mut x32, mut x64) = (s32.rest(), s64.rest());

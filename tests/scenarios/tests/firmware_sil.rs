@@ -380,9 +380,12 @@ fn check_run<const N: usize, const S: usize>() {
     );
 
     // Force against the host's plant, driven by the logged voltages.
-    let plant =
-        Strip::<f32, N, 1, S>::new(&Params::thesis_2006(), Fixture::Blocked, f64::from(dt_s))
-            .unwrap();
+    let plant = Strip::<f32, N, 1, S>::new(
+        &Params::baseline_air_example(),
+        Fixture::Blocked,
+        f64::from(dt_s),
+    )
+    .unwrap();
     let mut x = plant.rest();
     let bound_n = (2 * sim::LOAD_CELL_NOISE_COUNTS) as f32 * config::NEWTONS_PER_COUNT
         + 0.5 * config::NEWTONS_PER_COUNT;

@@ -1,7 +1,7 @@
 //! The simulated board: QEMU's netduinoplus2 (STM32F405, the same Cortex-M4F
 //! and memory map as the STM32F407) with the model core as plant.
 //!
-//! - The segment outputs feed `model_core::Strip` (the seed's parameters,
+//! - The segment outputs feed `model_core::Strip` (the example session's parameters,
 //!   blocked fixture, stepped once per sample with the voltages the
 //!   controller commanded); the load-cell ADC reads the plant's blocking
 //!   force in counts ([`NEWTONS_PER_COUNT`], zero at
@@ -147,13 +147,13 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
     // hang); SysTick runs at 168 MHz regardless.
     Mono::start(core.SYST, SYSCLK_HZ);
     let built = Strip::new(
-        &Params::thesis_2006(),
+        &Params::baseline_air_example(),
         Fixture::Blocked,
         1.0 / f64::from(SAMPLE_HZ),
     );
     let plant = match built {
         Ok(p) => cortex_m::singleton!(: Strip<f32, N, 1, S> = p),
-        Err(_) => defmt::panic!("the seed's parameters do not make a plant"),
+        Err(_) => defmt::panic!("the example session's parameters do not make a plant"),
     };
     let Some(plant) = plant else {
         defmt::panic!("board init ran twice");

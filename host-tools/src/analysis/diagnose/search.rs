@@ -389,11 +389,12 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bo
         Effect::ElectrochemicalNonlinearity => {
             excludes(Knob::ChargeCubic, 0.0) || excludes(Knob::LeakCubic, 0.0)
         }
-        // The zero below zero is what makes the bending relax past the start.
+        // b = K z below zero is what makes the bending relax past the
+        // start; any z > 0 (a creep too) is the baseline's.
         Effect::BackRelaxation => fit
             .estimates
             .iter()
-            .any(|est| est.knob == Knob::Z && est.high < 0.0),
+            .any(|est| est.knob == Knob::B && est.high < 0.0),
         Effect::Dehydration => excludes(Knob::Dehydration, 0.0),
         Effect::SegmentCrosstalk => excludes(Knob::Crosstalk, 0.0),
         // Some segment differs from the reference in some value.

@@ -65,7 +65,7 @@ impl FitResult {
     /// the fit freed `EI` (its `ρA` from the laminate of the fitted
     /// strip); `[extensions]` when any effect is on.
     pub fn model_file(&self) -> ModelFile {
-        let mut f = ModelFile::thesis_2006();
+        let mut f = ModelFile::main_m_2006();
         let p = &self.spec.params;
         f.electrical = Electrical {
             r1_ohm: p.r1_ohm,
@@ -73,8 +73,8 @@ impl FitResult {
             c_f: p.c_f,
         };
         f.relaxation = Relaxation {
-            k_nm_per_c: p.k_nm_per_c,
-            z_per_s: p.z_per_s,
+            a_nm_per_c: p.a_nm_per_c,
+            b_nm_per_c_s: p.b_nm_per_c_s,
             p_per_s: p.p_per_s,
         };
         if self.effects.contains(&Effect::BeamStiffness) {

@@ -16,10 +16,13 @@ pub enum Knob {
     R2,
     /// `C`, F.
     C,
-    /// `K`, N·m/C.
-    K,
-    /// `z`, 1/s (as a fraction of `p`, or below `p` with back-relaxation).
-    Z,
+    /// `a`, the instant moment per charge, N·m/C (fitted as `|θ|` times the
+    /// fixed model's DC moment per charge, `≥ 0`; as `ln a` with
+    /// back-relaxation).
+    A,
+    /// `b = K z`, N·m/(C·s) (fitted as `ln(b/p)`, the DC moment per charge;
+    /// as `z/p = b/(a p)`, of either sign, with back-relaxation).
+    B,
     /// `p`, 1/s.
     P,
     /// `EI`, N·m² (beam-stiffness).
@@ -93,10 +96,7 @@ impl Knob {
     /// Whether the parameter is positive by its nature (its interval is
     /// then reported on a log scale).
     pub fn positive(&self) -> bool {
-        matches!(
-            self,
-            Knob::R1 | Knob::R2 | Knob::C | Knob::K | Knob::P | Knob::Ei
-        )
+        matches!(self, Knob::R1 | Knob::R2 | Knob::C | Knob::P | Knob::Ei)
     }
 
     /// Name and unit, as reports and the TOML file say them.
@@ -105,8 +105,8 @@ impl Knob {
             Knob::R1 => "r1_ohm",
             Knob::R2 => "r2_ohm",
             Knob::C => "c_f",
-            Knob::K => "k_nm_per_c",
-            Knob::Z => "z_per_s",
+            Knob::A => "a_nm_per_c",
+            Knob::B => "b_nm_per_c_s",
             Knob::P => "p_per_s",
             Knob::Ei => "ei_nm2",
             Knob::Alpha => "damping_mass_per_s",
@@ -134,7 +134,7 @@ impl Knob {
 }
 
 /// The knobs of the baseline: the seed's electrical and relaxation parameters.
-pub const BASELINE: [Knob; 6] = [Knob::R1, Knob::R2, Knob::C, Knob::K, Knob::Z, Knob::P];
+pub const BASELINE: [Knob; 6] = [Knob::R1, Knob::R2, Knob::C, Knob::A, Knob::B, Knob::P];
 
 /// Lowest value of the cubic terms: `v (1 + a v²)` must rise up to 4 V.
 const CUBIC_MIN: f64 = -1.0 / 48.0;
@@ -167,6 +167,22 @@ const SEGMENT_SCALE: f64 = 0.1;
 /// a flat floor, and steps back from it).
 fn ramp(t: f64, scale: f64) -> f64 {
     (t * scale).max(0.0)
+}
+
+/// The DC moment per charge `b/p`, N·m/C, floored above zero (a
+/// back-relaxed start has none).
+fn dc_per_charge(p: &model_core::Params) -> f64 {
+    (p.b_nm_per_c_s / p.p_per_s.max(1e-9)).max(1e-15)
+}
+
+/// `a`, or for the pure lag (no instant part to scale `z` by) the DC
+/// moment per charge, which starts the back-relaxed fit at `z = p`.
+fn instant_or_gain(p: &model_core::Params) -> f64 {
+    if p.a_nm_per_c > 0.0 {
+        p.a_nm_per_c
+    } else {
+        dc_per_charge(p)
+    }
 }
 
 /// A model structure (baseline plus effects) and its parameter space.
@@ -219,9 +235,15 @@ impl Space {
     }
 
     /// Parameters the information criteria count: the knobs, plus one for
-    /// back-relaxation, which frees `z`'s bound rather than adding a knob.
+    /// back-relaxation, which frees `b`'s sign rather than adding a knob.
     pub fn counted_parameters(&self) -> usize {
         self.knobs.len() + usize::from(self.has(Effect::BackRelaxation))
+    }
+
+    /// The unit of the baseline's instant-moment knob: the fixed model's
+    /// DC moment per charge, N·m/C.
+    fn instant_unit(&self) -> f64 {
+        dc_per_charge(&self.fixed.params)
     }
 
     /// The model at `θ`.
@@ -235,15 +257,15 @@ impl Space {
         spec.dehydration_per_s = 0.0;
         spec.dehydration_curvature = 0.0;
         let p = &mut spec.params;
-        // p first: z is relative to it.
-        let mut z_theta = None;
+        // p first: a and b are relative to it (and to each other).
+        let (mut a_theta, mut b_theta) = (None, None);
         for (knob, &t) in self.knobs.iter().zip(theta) {
             match knob {
                 Knob::R1 => p.r1_ohm = t.exp(),
                 Knob::R2 => p.r2_ohm = t.exp(),
                 Knob::C => p.c_f = t.exp(),
-                Knob::K => p.k_nm_per_c = t.exp(),
-                Knob::Z => z_theta = Some(t),
+                Knob::A => a_theta = Some(t),
+                Knob::B => b_theta = Some(t),
                 Knob::P => p.p_per_s = t.exp(),
                 Knob::Ei => p.ei_nm2 = t.exp(),
                 Knob::Alpha => spec.ext.damping_mass_per_s = ramp(t, ALPHA_SCALE),
@@ -270,14 +292,22 @@ impl Space {
                 }
             }
         }
-        if let Some(t) = z_theta {
-            p.z_per_s = if self.has(Effect::BackRelaxation) {
-                // Any z below p.
-                p.p_per_s * (1.0 - t.exp())
+        if let (Some(ta), Some(tb)) = (a_theta, b_theta) {
+            if self.has(Effect::BackRelaxation) {
+                // a > 0 and any z = b/a: through zero to the strip that
+                // ends bent the other way.
+                p.a_nm_per_c = ta.exp();
+                p.b_nm_per_c_s = tb * p.a_nm_per_c * p.p_per_s;
             } else {
-                // 0 < z < p, the seed's lead network.
-                p.p_per_s / (1.0 + (-t).exp())
-            };
+                // The DC moment per charge b/p > 0 on a log scale and the
+                // instant part a on its own, in units of the fixed model's
+                // DC moment per charge: a = 0 is the pure lag, z = p is an
+                // ordinary point, and z → 0 (b → 0 with a held) is one knob
+                // going to −∞, not two. |θ| keeps a ≥ 0 without a floor the
+                // optimiser could not climb back from.
+                p.b_nm_per_c_s = tb.exp() * p.p_per_s;
+                p.a_nm_per_c = ta.abs() * self.instant_unit();
+            }
         }
         spec
     }
@@ -292,14 +322,18 @@ impl Space {
                 Knob::R1 => ln(p.r1_ohm, 1e-9),
                 Knob::R2 => ln(p.r2_ohm, 1e-9),
                 Knob::C => ln(p.c_f, 1e-15),
-                Knob::K => ln(p.k_nm_per_c, 1e-15),
-                Knob::Z => {
-                    let ratio = p.z_per_s / p.p_per_s;
+                Knob::A => {
                     if self.has(Effect::BackRelaxation) {
-                        ln(1.0 - ratio, 1e-9)
+                        ln(instant_or_gain(p), 1e-15)
                     } else {
-                        let r = ratio.clamp(1e-6, 1.0 - 1e-6);
-                        (r / (1.0 - r)).ln()
+                        p.a_nm_per_c.max(0.0) / self.instant_unit()
+                    }
+                }
+                Knob::B => {
+                    if self.has(Effect::BackRelaxation) {
+                        p.b_nm_per_c_s / (instant_or_gain(p) * p.p_per_s.max(1e-9))
+                    } else {
+                        dc_per_charge(p).ln()
                     }
                 }
                 Knob::P => ln(p.p_per_s, 1e-9),
@@ -327,8 +361,8 @@ impl Space {
             Knob::R1 => p.r1_ohm,
             Knob::R2 => p.r2_ohm,
             Knob::C => p.c_f,
-            Knob::K => p.k_nm_per_c,
-            Knob::Z => p.z_per_s,
+            Knob::A => p.a_nm_per_c,
+            Knob::B => p.b_nm_per_c_s,
             Knob::P => p.p_per_s,
             Knob::Ei => p.ei_nm2,
             Knob::Alpha => spec.ext.damping_mass_per_s,

@@ -3,8 +3,9 @@
 //!
 //! Electrical: at a voltage step from rest the current jumps to
 //! `V/R1 + V/R2` and settles to `V/R2` with `τ1 = R1 C`. Mechanical: with
-//! the electrics fixed, every deflection and force is proportional to `K`,
-//! so `K` follows by linear least squares.
+//! the electrics fixed, every deflection and force is proportional to the
+//! relaxation network's gain (`a` and `b` together), so the gain follows by
+//! linear least squares.
 
 use super::data::SessionTargets;
 use super::error::FitError;
@@ -31,7 +32,7 @@ pub fn from_data(
         spec.params.r2_ohm = r2;
         spec.params.c_f = c;
     }
-    // K by linear least squares over the mechanical channels.
+    // The network's gain by linear least squares over the mechanical channels.
     let (mut num, mut den) = (0.0, 0.0);
     for &i in recordings {
         let res = residuals_of(i, &spec)?;
@@ -47,7 +48,8 @@ pub fn from_data(
         }
     }
     if num > 0.0 && den > 0.0 {
-        spec.params.k_nm_per_c *= num / den;
+        spec.params.a_nm_per_c *= num / den;
+        spec.params.b_nm_per_c_s *= num / den;
     }
     Ok(spec)
 }

@@ -18,7 +18,7 @@ pub fn finrs_step_n3(strip: &Strip<f32, 3, 1, 18>, x: &mut [f32; 18], v: &[f32; 
 
 #[entry]
 fn main() -> ! {
-    let ok = match Strip::<f32, 3, 1, 18>::new(&Params::thesis_2006(), Fixture::Free, 1e-3) {
+    let ok = match Strip::<f32, 3, 1, 18>::new(&Params::main_m_2006(), Fixture::Free, 1e-3) {
         Ok(strip) => {
             let mut x = strip.rest();
             for _ in 0..1000 {
