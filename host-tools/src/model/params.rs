@@ -508,6 +508,17 @@ mod tests {
         assert!(rule.contains("core_thickness_m must be positive"), "{rule}");
     }
 
+    /// The message and its causes, as the binary prints them.
+    fn said(e: &dyn Error) -> String {
+        let mut s = e.to_string();
+        let mut cause = e.source();
+        while let Some(c) = cause {
+            s = format!("{s}: {c}");
+            cause = c.source();
+        }
+        s
+    }
+
     #[test]
     fn segment_deviations_round_trip_and_are_refused_by_segment() {
         let mut ext = model_core::Extensions::NONE;
@@ -528,8 +539,8 @@ mod tests {
             "p.toml",
             &text.replace("[0.0, 0.0, -0.1]", "[0.1, 0.0, -0.1]"),
         )
-        .unwrap_err()
-        .to_string();
+        .unwrap_err();
+        let err = said(&err);
         assert!(
             err.starts_with("p.toml: k_deviation of segment 1 is 0.1: segment 1 is the reference"),
             "{err}"
@@ -538,8 +549,8 @@ mod tests {
             "p.toml",
             &text.replace("[0.0, 0.0, -0.1]", &format!("{:?}", [0.0; 9])),
         )
-        .unwrap_err()
-        .to_string();
+        .unwrap_err();
+        let err = said(&err);
         assert!(
             err.contains("segment_k_deviation of segment 9") && err.contains("at most 8"),
             "{err}"
