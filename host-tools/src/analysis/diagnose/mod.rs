@@ -11,9 +11,11 @@
 //! (weighted residual sum of squares by at least 1 %) *and* the term that
 //! makes it that effect is significant (its 95 % interval excludes "off":
 //! hydrodynamic loading needs added mass, since its drag alone is
-//! damping; back-relaxation needs the zero below zero). The best accepted
-//! effect joins the model and the search repeats on top of it, so several
-//! causes can be named, strongest first. The verdict:
+//! damping; back-relaxation needs the zero below zero). Of the effects
+//! that pass, the one with the lowest held-out error joins the model (the
+//! training BIC gates but cannot rank strong candidates over correlated
+//! residuals) and the search repeats on top of it, so several causes can
+//! be named, strongest first. The verdict:
 //! - `none`: nothing accepted and the held-out residuals are at the noise
 //!   floor (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
 //! - `explained`: effects accepted and the held-out residuals are at the
