@@ -33,7 +33,7 @@
 //! assert!((s.tip_deflection_m(&x) - a).abs() < 1e-6);
 //! ```
 
-use crate::params::ParamError;
+use crate::params::{non_negative, ParamError};
 
 /// Optional model terms; all off in [`Extensions::NONE`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -227,22 +227,6 @@ impl Default for Extensions {
     }
 }
 
-fn non_negative(field: &'static str, value: f64) -> Result<(), ParamError> {
-    if !value.is_finite() {
-        Err(ParamError::NotFinite { field, value })
-    } else if value < 0.0 {
-        Err(ParamError::OutOfRange {
-            field,
-            value,
-            min: 0.0,
-            max: f64::INFINITY,
-        })
-    } else {
-        Ok(())
-    }
-}
-
-/// `min < value < max`.
 fn within(field: &'static str, value: f64, min: f64, max: f64) -> Result<(), ParamError> {
     if !value.is_finite() {
         Err(ParamError::NotFinite { field, value })

@@ -246,7 +246,8 @@ fn finite(field: &'static str, value: f64) -> Result<(), ParamError> {
     }
 }
 
-fn non_negative(field: &'static str, value: f64) -> Result<(), ParamError> {
+/// Refuses a NaN, infinite or negative value (shared with the extensions).
+pub(crate) fn non_negative(field: &'static str, value: f64) -> Result<(), ParamError> {
     finite(field, value)?;
     if value < 0.0 {
         Err(ParamError::OutOfRange {

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use finrs_rig::expect::{score, BENCH};
+use finrs_rig::expect::{score, Expected, BENCH};
 use finrs_rig::sweep::{csv, expected_of, markdown, plan, write_scenario, Outcome, Scenario};
 
 /// Writes and diagnoses off-class rig sessions, one seed each, and counts
@@ -133,20 +133,27 @@ fn verdict_of(v: &serde_json::Value) -> anyhow::Result<(String, Vec<String>, f64
     Ok((verdict, causes, gain))
 }
 
+/// The scenario's outcome: its kept result, or a diagnosis run now.
 fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
-    if let Some(said) = kept(cli, s)? {
-        let expected = expected_of(s)?;
-        let score = score(&expected, &said.verdict, &said.causes);
-        return Ok(Outcome {
-            scenario: s.clone(),
-            expected,
-            verdict: said.verdict,
-            causes: said.causes,
-            gain_percent: said.gain_percent,
-            score,
-            seconds: said.seconds,
-        });
-    }
+    let (expected, said) = match kept(cli, s)? {
+        Some(said) => (expected_of(s)?, said),
+        None => diagnose_one(cli, s)?,
+    };
+    let score = score(&expected, &said.verdict, &said.causes);
+    Ok(Outcome {
+        scenario: s.clone(),
+        expected,
+        verdict: said.verdict,
+        causes: said.causes,
+        gain_percent: said.gain_percent,
+        score,
+        seconds: said.seconds,
+    })
+}
+
+/// Writes the scenario's session, diagnoses it with the `finrs` binary
+/// and keeps the result.
+fn diagnose_one(cli: &Cli, s: &Scenario) -> anyhow::Result<(Expected, Said)> {
     let dir = cli.out.join(format!("session-{}", s.seed));
     let expected = write_scenario(s, &dir)?;
     let json = dir.join("verdict.json");
@@ -187,16 +194,7 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         seconds,
     };
     keep_result(cli, s, &said)?;
-    let score = score(&expected, &said.verdict, &said.causes);
-    Ok(Outcome {
-        scenario: s.clone(),
-        expected,
-        verdict: said.verdict,
-        causes: said.causes,
-        gain_percent: said.gain_percent,
-        score,
-        seconds: said.seconds,
-    })
+    Ok((expected, said))
 }
 
 fn main() -> anyhow::Result<()> {
