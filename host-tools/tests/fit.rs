@@ -3,9 +3,10 @@
 
 mod common;
 
-use finrs::analysis::fit::{Effect, Fitter, Knob, Space};
+use finrs::analysis::fit::{Effect, FitResult, Fitter, Knob, Space};
 use finrs::model::params::ModelFile;
 use finrs::model::predict::ModelSpec;
+use finrs::recording::Geometry;
 use finrs::session::Session;
 use model_core::Params;
 
@@ -23,19 +24,33 @@ fn sample() -> ModelSpec {
     })
 }
 
-#[test]
-fn baseline_fit_recovers_the_sample_within_its_intervals() {
-    let dir = std::env::temp_dir().join(format!("finrs-fit-{}", std::process::id()));
-    let truth = sample();
-    common::write_session(&dir, &truth, &common::short_protocol(), 11);
+/// Writes the short session of `truth` (noise seeded by `seed`), reads it
+/// back and fits it with `effects`, from the data alone; with the
+/// session's geometry.
+fn fit_session(
+    label: &str,
+    truth: &ModelSpec,
+    seed: u64,
+    effects: &[Effect],
+) -> (FitResult, Geometry) {
+    let dir = std::env::temp_dir().join(format!("finrs-fit-{label}-{}", std::process::id()));
+    common::write_session(&dir, truth, &common::short_protocol(), seed);
     let session = Session::read(&dir).unwrap();
     let fixed = ModelFile::main_m_2006()
         .spec_for(&session.geometry())
         .unwrap();
-    let fitter = Fitter::new(&session);
     let all: Vec<usize> = (0..session.recordings.len()).collect();
-    let fit = fitter.fit(&all, &[], None, fixed).unwrap();
+    let fit = Fitter::new(&session)
+        .fit(&all, effects, None, fixed)
+        .unwrap();
     std::fs::remove_dir_all(&dir).ok();
+    (fit, session.geometry())
+}
+
+#[test]
+fn baseline_fit_recovers_the_sample_within_its_intervals() {
+    let truth = sample();
+    let (fit, geometry) = fit_session("base", &truth, 11, &[]);
 
     // At the noise floor: weighted RSS per residual near 1 (the camera's
     // whole pixels add a little to its noise).
@@ -70,7 +85,7 @@ fn baseline_fit_recovers_the_sample_within_its_intervals() {
     // What is written is what simulate reads back.
     let file = fit.model_file();
     let back = ModelFile::parse("fit.toml", &file.to_toml()).unwrap();
-    assert_eq!(back.spec_for(&session.geometry()).unwrap(), fit.spec);
+    assert_eq!(back.spec_for(&geometry).unwrap(), fit.spec);
 }
 
 #[test]
@@ -100,22 +115,11 @@ fn noise_levels_are_read_off_the_rests() {
 /// evidence).
 #[test]
 fn segment_variation_fit_recovers_each_segments_deviations() {
-    let dir = std::env::temp_dir().join(format!("finrs-fit-var-{}", std::process::id()));
     let mut truth = sample();
     let var = &mut truth.ext.segment_variation;
     (var.r1_deviation[1], var.c_deviation[1], var.k_deviation[1]) = (0.12, -0.08, 0.1);
     (var.r1_deviation[2], var.c_deviation[2], var.k_deviation[2]) = (-0.1, 0.14, -0.12);
-    common::write_session(&dir, &truth, &common::short_protocol(), 12);
-    let session = Session::read(&dir).unwrap();
-    let fixed = ModelFile::main_m_2006()
-        .spec_for(&session.geometry())
-        .unwrap();
-    let fitter = Fitter::new(&session);
-    let all: Vec<usize> = (0..session.recordings.len()).collect();
-    let fit = fitter
-        .fit(&all, &[Effect::SegmentVariation], None, fixed)
-        .unwrap();
-    std::fs::remove_dir_all(&dir).ok();
+    let (fit, geometry) = fit_session("var", &truth, 12, &[Effect::SegmentVariation]);
 
     let per = fit.score.rss / fit.score.m as f64;
     assert!(per < 1.15, "RSS/m = {per}");
@@ -143,5 +147,5 @@ fn segment_variation_fit_recovers_each_segments_deviations() {
     );
     let file = fit.model_file();
     let back = ModelFile::parse("fit.toml", &file.to_toml()).unwrap();
-    assert_eq!(back.spec_for(&session.geometry()).unwrap(), fit.spec);
+    assert_eq!(back.spec_for(&geometry).unwrap(), fit.spec);
 }
