@@ -210,16 +210,16 @@ impl Search<'_> {
             // correlated residuals it cannot rank two strong candidates (a
             // six-knob segment variation out-scored the crosstalk it was
             // soaking up, with a seventh of its held-out gain).
-            let mut best: Option<(f64, Effect, FitResult, Score)> = None;
+            let mut best: Option<(Effect, FitResult, Score)> = None;
             for (e, fit, score) in self.fit_round(&untried, &found.fit)? {
                 let candidate = self.judge(e, round, &fit, &score, &found);
                 let passed = candidate.passed;
                 found.candidates.push(candidate);
-                if passed && best.as_ref().is_none_or(|(b, ..)| score.rss < *b) {
-                    best = Some((score.rss, e, fit, score));
+                if passed && best.as_ref().is_none_or(|(.., b)| score.rss < b.rss) {
+                    best = Some((e, fit, score));
                 }
             }
-            let Some((_, e, fit, score)) = best else {
+            let Some((e, fit, score)) = best else {
                 break;
             };
             found.accepted.push(e);
