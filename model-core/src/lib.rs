@@ -22,6 +22,7 @@
 #![deny(missing_docs, unsafe_code)]
 
 mod beam;
+mod circuit;
 mod extensions;
 pub mod matrix;
 mod params;
@@ -30,6 +31,7 @@ mod shape;
 mod strip;
 pub mod zoh;
 
+pub use circuit::Circuit;
 pub use extensions::{Extensions, SegmentVariation, MAX_SEGMENTS};
 pub use params::{Laminate, ParamError, Params};
 pub use real::Real;

@@ -32,6 +32,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::beam::{assemble, modes};
+use crate::circuit::Circuit;
 use crate::extensions::Extensions;
 use crate::matrix::{dof_zeros, rows, rows_mut, DofMat, Mat, Square};
 use crate::params::{ParamError, Params};
@@ -81,10 +82,9 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     /// Per segment, the columns of `Φ` (for `v_C` and `r`) and of `Γ` over
     /// the `η` and `ζ` rows (entries past `4NE` unused).
     drive: [[[T; S]; 3]; N],
-    /// The electrical block of every segment (all alike unless
-    /// `segment-variation` sets them apart):
-    /// `v_C ← a v_C + g₀ v`, `r ← b v_C + c r + g₁ v`, as `[a, b, c, g₀, g₁]`.
-    elec: [[T; 5]; N],
+    /// The electrics of every segment: the electrical states' own blocks
+    /// and the currents.
+    circuit: Circuit<T, N>,
     /// Row `d` (of `2NE`, see [`rows`]): freedom `d` (deflection in m,
     /// slope in rad) from `η`.
     dof_from_modal: DofMat<T, N, E, S>,
@@ -93,17 +93,10 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     /// Angular frequencies of the active modes, rad/s, ascending.
     omega_rad_s: [f64; S],
     modes: usize,
-    /// `1/R1` of every segment.
-    inv_r1: [T; N],
-    inv_r2: T,
     /// `C a` of every segment: moment per volt of `v_C`, N·m/V.
     instant: [T; N],
     /// `C (b − a p)` of every segment: moment per unit of `r`, N·m/(V·s).
     lag: [T; N],
-    /// `a` of the double layer's `v (1 + a v²)`.
-    charge_cubic: T,
-    /// `b` of the leak's `v/R2 (1 + b v²)`.
-    leak_cubic: T,
     /// `κ`, the moment a segment puts on each neighbour.
     crosstalk: T,
     /// Scale of every moment (1 unless dehydration lowers it).
@@ -215,7 +208,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         let segments = Segment::all::<N>(params, ext);
         // The pieces are inlined: the board re-discretises with the same
         // stack as when they were one function.
-        let elec = segments.map(|seg| Self::electrical_step(params, seg.inv_tau1(), dt_s));
+        let circuit = Circuit::built(params, ext, dt_s);
         let (rot, drive) = Self::modal_steps(&an, params, &segments, dt_s);
         let dof_from_modal = Self::modal_to_dof(&an);
         let force_row = if fixture == Fixture::Blocked {
@@ -231,44 +224,16 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             dt_s,
             rot,
             drive,
-            elec,
+            circuit,
             dof_from_modal,
             force_row,
             omega_rad_s: an.omega,
             modes: an.modes,
-            inv_r1: segments.map(|seg| T::from_f64(1.0 / seg.r1_ohm)),
-            inv_r2: T::from_f64(1.0 / params.r2_ohm),
             instant: segments.map(|seg| T::from_f64(seg.moment(params).0)),
             lag: segments.map(|seg| T::from_f64(seg.moment(params).1)),
-            charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
-            leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
             crosstalk: T::from_f64(ext.crosstalk),
             moment_gain: T::from_f64(1.0),
         })
-    }
-
-    /// One segment's electrical block alone, discretised at `dt_s`:
-    /// `v_C' = (v − v_C)/τ1`, `r' = v_C − p r`; its `Φ` (three entries, the
-    /// other is 0) and `Γ`.
-    #[inline(always)]
-    fn electrical_step(params: &Params, inv_tau1: f64, dt_s: f64) -> [T; 5] {
-        let mut a_e = [[-inv_tau1, 0.0], [1.0, -params.p_per_s]];
-        let (mut phi_e, mut gamma_e) = ([[0.0; 2]; 2], [[0.0; 1]; 2]);
-        discretise(
-            &mut a_e,
-            &[[inv_tau1], [0.0]],
-            dt_s,
-            &mut phi_e,
-            &mut gamma_e,
-        );
-        [
-            phi_e[0][0],
-            phi_e[1][0],
-            phi_e[1][1],
-            gamma_e[0][0],
-            gamma_e[1][0],
-        ]
-        .map(T::from_f64)
     }
 
     /// Each mode's rotation over one step, and its columns of `Φ` and `Γ`
@@ -509,7 +474,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         let dof = Self::DOF;
         // The double layer sees v (1 + a v²): exact under the hold, since
         // v is held. The beam sees every moment times the gain.
-        let v: [T; N] = core::array::from_fn(|i| v[i] + self.charge_cubic * v[i] * v[i] * v[i]);
+        let v = self.circuit.double_layer_v(v);
         let gain = self.moment_gain;
         let mut next = [T::ZERO; S];
         let (beam_next, elec_next) = next.split_at_mut(Self::ELEC);
@@ -535,14 +500,13 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 *n += c0 * vc + c1 * r + c2 * vi;
             }
         }
-        for (((n, e), &vi), &[a, b, c, g0, g1]) in elec_next
+        for (i, ((n, e), &vi)) in elec_next
             .chunks_exact_mut(2)
             .zip(elec.chunks_exact(2))
             .zip(v.iter())
-            .zip(&self.elec)
+            .enumerate()
         {
-            n[0] = a * e[0] + g0 * vi;
-            n[1] = b * e[0] + c * e[1] + g1 * vi;
+            n.copy_from_slice(&self.circuit.next(i, [e[0], e[1]], vi));
         }
         *x = next;
     }
@@ -594,12 +558,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// `i = v/R2 + (v − v_C)/R1` (eq. 2.2), which jumps at a step; with the
     /// electrochemical terms, `v/R2 (1 + b v²) + (v (1 + a v²) − v_C)/R1`.
     pub fn currents_a(&self, x: &[T; S], v: &[T; N]) -> [T; N] {
-        core::array::from_fn(|i| {
-            let (vi, vc) = (v[i], x[Self::ELEC + 2 * i]);
-            let v2 = vi * vi;
-            let leak = vi * self.inv_r2 * (T::from_f64(1.0) + self.leak_cubic * v2);
-            leak + (vi + self.charge_cubic * v2 * vi - vc) * self.inv_r1[i]
-        })
+        core::array::from_fn(|i| self.circuit.current(i, v[i], x[Self::ELEC + 2 * i]))
     }
 
     /// Force on the load cell, N (zero for the free fixture).
@@ -671,7 +630,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             phi[dof + k][k] = self.rot[2][k];
             phi[dof + k][dof + k] = self.rot[3][k];
         }
-        for (i, (cols, &[a, b, c, _, _])) in self.drive.iter().zip(&self.elec).enumerate() {
+        for (i, (cols, &[a, b, c, _, _])) in self.drive.iter().zip(&self.circuit.elec).enumerate() {
             let (vc, r) = (Self::ELEC + 2 * i, Self::ELEC + 2 * i + 1);
             for row in 0..Self::ELEC {
                 phi[row][vc] = cols[0][row];
@@ -688,7 +647,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// blocks (for checks and export on the host).
     pub fn gamma(&self) -> [[T; N]; S] {
         let mut gamma = [[T::ZERO; N]; S];
-        for (i, (cols, &[_, _, _, g0, g1])) in self.drive.iter().zip(&self.elec).enumerate() {
+        for (i, (cols, &[_, _, _, g0, g1])) in self.drive.iter().zip(&self.circuit.elec).enumerate()
+        {
             for row in 0..Self::ELEC {
                 gamma[row][i] = cols[2][row];
             }
@@ -709,7 +669,7 @@ fn dot<T: Real, const S: usize>(row: &[T; S], x: &[T; S]) -> T {
 }
 
 /// A sample time the discretisation accepts: finite and above 0.
-fn check_sample_time(dt_s: f64) -> Result<(), ParamError> {
+pub(crate) fn check_sample_time(dt_s: f64) -> Result<(), ParamError> {
     if !dt_s.is_finite() {
         return Err(ParamError::NotFinite {
             field: "dt_s",

@@ -2,7 +2,9 @@
 //! `finrs simulate` (every output on every row) and by the fit (only what
 //! the recording measured, only where it measured it).
 
-use model_core::{state_len, Extensions, Fixture as CoreFixture, ParamError, Params, Strip};
+use model_core::{
+    state_len, Circuit, Extensions, Fixture as CoreFixture, ParamError, Params, Strip,
+};
 
 use crate::recording::{Fixture, Recording};
 
@@ -107,12 +109,59 @@ pub fn predict(
     dispatch!(1, 2, 3, 4, 5, 6, 7, 8).map_err(PredictError::Model)
 }
 
+/// The currents alone, A (`[segment][row]`): the circuit of `spec` over
+/// the drive of `rec` at sample time `dt_s`, without the beam. The same
+/// numbers as [`predict`]'s currents, bit for bit (the circuit is upstream
+/// of the beam), at a fraction of the cost: what a fit of the circuit to
+/// the currents runs.
+pub fn predict_currents(
+    rec: &Recording,
+    spec: &ModelSpec,
+    dt_s: f64,
+) -> Result<Vec<Vec<f64>>, PredictError> {
+    fn go<const N: usize>(
+        rec: &Recording,
+        spec: &ModelSpec,
+        dt_s: f64,
+    ) -> Result<Vec<Vec<f64>>, ParamError> {
+        let circuit = Circuit::<f64, N>::new(&spec.params, &spec.ext, dt_s)?;
+        let rows = rec.t_s.len();
+        let mut out = vec![Vec::with_capacity(rows); N];
+        let mut x = circuit.rest();
+        for v_row in rec.v_v.rows() {
+            let mut v = [0.0; N];
+            v.copy_from_slice(&v_row[..N]);
+            for (c, i) in out.iter_mut().zip(circuit.currents_a(&x, &v)) {
+                c.push(i);
+            }
+            circuit.step(&mut x, &v);
+        }
+        Ok(out)
+    }
+    match rec.meta.segments {
+        1 => go::<1>(rec, spec, dt_s),
+        2 => go::<2>(rec, spec, dt_s),
+        3 => go::<3>(rec, spec, dt_s),
+        4 => go::<4>(rec, spec, dt_s),
+        5 => go::<5>(rec, spec, dt_s),
+        6 => go::<6>(rec, spec, dt_s),
+        7 => go::<7>(rec, spec, dt_s),
+        8 => go::<8>(rec, spec, dt_s),
+        n => return Err(PredictError::Segments(n)),
+    }
+    .map_err(PredictError::Model)
+}
+
 /// Why the engine refused.
 #[derive(Debug, thiserror::Error)]
 pub enum PredictError {
     /// Unsupported mesh.
     #[error("elements per segment must be one of {ELEMENTS:?}, got {0}")]
     Elements(usize),
+    /// More segments than the model has (the recording's reader refuses
+    /// them first).
+    #[error("segments must be 1 to 8, got {0}")]
+    Segments(usize),
     /// The model refused its parameters.
     #[error("{0}")]
     Model(ParamError),

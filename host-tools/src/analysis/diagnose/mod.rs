@@ -12,9 +12,10 @@
 //! makes it that effect is significant (its 95 % interval excludes "off":
 //! hydrodynamic loading needs added mass, since its drag alone is
 //! damping; back-relaxation needs the zero below zero). Of the effects
-//! that pass, the one with the lowest held-out error joins the model (the
-//! training BIC gates but cannot rank strong candidates over correlated
-//! residuals) and the search repeats on top of it, so several causes can
+//! that pass, the one with the lowest held-out error joins the model, or
+//! where the held-out part cannot tell passing effects apart, the one the
+//! session's evidence calls for ([`choose`]); the search repeats on top of
+//! it, so several causes can
 //! be named, strongest first. The verdict:
 //! - `none`: nothing accepted and the held-out residuals are at the noise
 //!   floor (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
@@ -32,6 +33,7 @@
 //! bench findings beside the verdict, never as a catalogue name.
 
 pub mod analyses;
+pub mod choose;
 pub mod report;
 pub mod rests;
 mod search;

@@ -3,6 +3,7 @@
 use rayon::prelude::*;
 
 use super::analyses;
+use super::choose::choose;
 use super::rests::rest_structure;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
@@ -205,21 +206,15 @@ impl Search<'_> {
                 round + 1,
                 untried.len()
             ));
-            // Of the effects that pass, the one whose held-out error is
-            // lowest joins: the training BIC gates, but over some 10⁵
-            // correlated residuals it cannot rank two strong candidates (a
-            // six-knob segment variation out-scored the crosstalk it was
-            // soaking up, with a seventh of its held-out gain).
-            let mut best: Option<(Effect, FitResult, Score)> = None;
+            let mut passed = Vec::new();
             for (e, fit, score) in self.fit_round(&untried, &found.fit)? {
                 let candidate = self.judge(e, round, &fit, &score, &found);
-                let passed = candidate.passed;
-                found.candidates.push(candidate);
-                if passed && best.as_ref().is_none_or(|(.., b)| score.rss < b.rss) {
-                    best = Some((e, fit, score));
+                if candidate.passed {
+                    passed.push((e, fit, score));
                 }
+                found.candidates.push(candidate);
             }
-            let Some((e, fit, score)) = best else {
+            let Some((e, fit, score)) = choose(passed, |e| self.expected(*e)) else {
                 break;
             };
             found.accepted.push(e);
@@ -227,6 +222,17 @@ impl Search<'_> {
             found.hold = score;
         }
         Ok(found)
+    }
+
+    /// Whether the session's own evidence calls for `e` (see
+    /// [`choose`]): the fluid's loading in a session in water.
+    fn expected(&self, e: Effect) -> bool {
+        e == Effect::HydrodynamicLoading
+            && self
+                .session
+                .recordings
+                .iter()
+                .any(|r| r.rec.meta.medium == Medium::Water)
     }
 
     /// Fits each untried effect on top of `current`, in parallel, and

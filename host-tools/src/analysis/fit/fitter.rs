@@ -1,18 +1,18 @@
 //! The fit itself: a session's targets, the least-squares problem the
 //! optimiser sees, and its restarts.
 
-use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, MinimizationReport};
-use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 
+use super::covariance::{self, Block};
 use super::data::SessionTargets;
 use super::effect::Effect;
 use super::error::FitError;
 use super::space::Space;
+use super::stage::{descend, Problem, Stage};
 use super::start;
 use super::stats::{self, ChannelFit, Estimate, Score};
 use crate::model::params::{Beam, Electrical, ExtensionsFile, ModelFile, Relaxation};
-use crate::model::predict::{predict, ModelSpec};
+use crate::model::predict::{predict, predict_currents, ModelSpec, Traces};
 use crate::session::Session;
 
 /// Elements per segment the fit uses: four, not the seed's one (Appendix
@@ -22,8 +22,6 @@ use crate::session::Session;
 /// first modes within 0.01 % of a finer mesh's, far below what the data
 /// resolve. The static shape does not depend on it.
 pub const FIT_ELEMENTS: usize = 4;
-/// Restarts of the optimiser after its first stop, at most.
-const MAX_RESTARTS: usize = 3;
 
 /// The fit's worker threads: the model's work arrays for the largest
 /// meshes take about 2 MiB of stack, rayon's default.
@@ -117,27 +115,43 @@ impl<'a> Fitter<'a> {
     /// Runs the model on recording `index` and returns its weighted
     /// residuals, target by target.
     fn residuals_of(&self, index: usize, spec: &ModelSpec) -> Result<Vec<Vec<f64>>, FitError> {
+        self.weighted(index, &self.traces(index, spec)?, |_| true)
+    }
+
+    /// The model's outputs on recording `index` (the camera only where it
+    /// looked).
+    fn traces(&self, index: usize, spec: &ModelSpec) -> Result<Traces, FitError> {
         let r = &self.session.recordings[index];
         let rt = &self.targets.recordings[index];
-        let t0 = r.t_start_s.unwrap_or(0.0);
-        let traces = predict(
+        predict(
             &r.rec,
             spec,
             FIT_ELEMENTS,
             r.dt_s,
-            t0,
+            r.t_start_s.unwrap_or(0.0),
             Some(&rt.camera_rows),
             &mut |_| {},
         )
         .map_err(|source| FitError::Model {
             recording: r.name.clone(),
             source,
-        })?;
-        Ok(rt
+        })
+    }
+
+    /// Weighted residuals `(ŷ − y)/σ` of the targets of recording `index`
+    /// that `keep` accepts, target by target.
+    fn weighted(
+        &self,
+        index: usize,
+        traces: &Traces,
+        keep: impl Fn(&super::data::Target) -> bool,
+    ) -> Result<Vec<Vec<f64>>, FitError> {
+        Ok(self.targets.recordings[index]
             .targets
             .iter()
+            .filter(|t| keep(t))
             .map(|t| {
-                t.model(&traces)
+                t.model(traces)
                     .zip(&t.values)
                     .map(|(m, y)| (m - y) / t.sigma)
                     .collect()
@@ -145,11 +159,34 @@ impl<'a> Fitter<'a> {
             .collect())
     }
 
-    /// Weighted residuals of `spec` over `recordings`, concatenated.
-    fn residuals(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Vec<f64>, FitError> {
+    /// The weighted residuals that `stage` sees over `recordings`,
+    /// concatenated; the circuit's stage runs the circuit alone.
+    pub(super) fn stage_residuals(
+        &self,
+        stage: Stage,
+        recordings: &[usize],
+        spec: &ModelSpec,
+    ) -> Result<Vec<f64>, FitError> {
         let parts: Result<Vec<Vec<Vec<f64>>>, FitError> = recordings
             .par_iter()
-            .map(|&i| self.residuals_of(i, spec))
+            .map(|&i| {
+                let traces = match stage {
+                    Stage::Circuit => {
+                        let r = &self.session.recordings[i];
+                        Traces {
+                            currents_a: predict_currents(&r.rec, spec, r.dt_s).map_err(
+                                |source| FitError::Model {
+                                    recording: r.name.clone(),
+                                    source,
+                                },
+                            )?,
+                            ..Traces::default()
+                        }
+                    }
+                    Stage::Beam => self.traces(i, spec)?,
+                };
+                self.weighted(i, &traces, |t| stage.sees(t.channel))
+            })
             .collect();
         Ok(parts?.into_iter().flatten().flatten().collect())
     }
@@ -190,7 +227,7 @@ impl<'a> Fitter<'a> {
         start: Option<&ModelSpec>,
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
-        let n_data = self.data_to_fit(recordings)?;
+        self.data_to_fit(recordings)?;
         let segments = self.session.recordings[0].rec.meta.segments;
         let space = Space::new(effects, segments, fixed);
         let start = match start {
@@ -203,30 +240,32 @@ impl<'a> Fitter<'a> {
                 &|i, spec| self.residuals_of(i, spec),
             )?,
         };
-        let theta0 = DVector::from_vec(space.theta(&start));
-        let mut problem = Problem {
-            fitter: self,
-            recordings,
-            space: &space,
-            theta: theta0.clone(),
-            residuals: None,
-            m: n_data,
-        };
-        problem.set_params(&theta0);
-        let (problem, report, evaluations) = descend(problem, &space);
-        // One simulation at the optimiser's final point serves the score,
-        // the information criteria and the Jacobian's base.
-        let theta = problem.theta.clone();
-        let spec = space.spec(theta.as_slice());
-        let score = self.score_here(recordings, &spec)?;
-        let (rss, m) = (score.rss, score.m);
-        let base: Vec<f64> = score
-            .channels
+        let mut theta = space.theta(&start);
+        let (mut evaluations, mut termination) = (0, Vec::new());
+        let stages: Vec<(Stage, Vec<usize>, usize)> = Stage::ALL
             .iter()
-            .flat_map(|c| c.residuals.iter().copied())
+            .map(|&stage| {
+                let m = self.stage_count(stage, recordings);
+                (stage, stage.knobs(&space), m)
+            })
             .collect();
-        let jac = problem.jacobian_at(&theta, &base)?;
-        let estimates = stats::estimates(&space, theta.as_slice(), &jac, rss, m);
+        for (stage, free, m) in &stages {
+            if free.is_empty() || *m == 0 {
+                continue;
+            }
+            let problem = Problem::new(self, recordings, &space, *stage, free, theta, *m);
+            let (problem, report, n) = descend(problem);
+            theta = problem.theta;
+            evaluations += n;
+            termination.push(format!("{}: {:?}", stage.name(), report.termination));
+        }
+        // One simulation at the final point serves the score, the
+        // information criteria and the beam stage's Jacobian base.
+        let spec = space.spec(&theta);
+        let score = self.score_here(recordings, &spec)?;
+        let (active, cov) = self.covariance(recordings, &space, &theta, &score, &stages)?;
+        let estimates = stats::estimates(&space, &theta, &cov, &active);
+        let (rss, m) = (score.rss, score.m);
         let k = space.counted_parameters();
         let (aic, bic) = stats::information(rss, m, k);
         Ok(FitResult {
@@ -238,8 +277,76 @@ impl<'a> Fitter<'a> {
             aic,
             bic,
             evaluations,
-            termination: format!("{:?}", report.termination),
+            termination: termination.join(", "),
         })
+    }
+
+    /// The covariance of `θ` at the end of a fit whose stages were
+    /// `stages` and whose score is `score` (see [`covariance::two_stage`]):
+    /// the circuit's Jacobian over the currents, the beam's over its own
+    /// sensors and the circuit's knobs.
+    fn covariance(
+        &self,
+        recordings: &[usize],
+        space: &Space,
+        theta: &[f64],
+        score: &Score,
+        stages: &[(Stage, Vec<usize>, usize)],
+    ) -> Result<(Vec<usize>, nalgebra::DMatrix<f64>), FitError> {
+        let mut circuit = None;
+        let mut beam = None;
+        for (stage, free, m) in stages {
+            if *m == 0 {
+                continue;
+            }
+            let base: Vec<f64> = score
+                .channels
+                .iter()
+                .filter(|c| stage.sees(c.channel))
+                .flat_map(|c| c.residuals.iter().copied())
+                .collect();
+            let rss = base.iter().map(|r| r * r).sum();
+            match stage {
+                Stage::Circuit => {
+                    let p = Problem::new(self, recordings, space, *stage, free, theta.to_vec(), *m);
+                    circuit = Some(Block {
+                        knobs: free.clone(),
+                        jacobian: p.jacobian_at(theta, &base)?,
+                        rss,
+                    });
+                }
+                Stage::Beam => {
+                    // One pass for the beam's columns and the circuit's
+                    // upstream ones.
+                    let upstream = Stage::Circuit.knobs(space);
+                    let all: Vec<usize> = free.iter().chain(&upstream).copied().collect();
+                    let p = Problem::new(self, recordings, space, *stage, &all, theta.to_vec(), *m);
+                    let jac = p.jacobian_at(theta, &base)?;
+                    let own = jac.columns(0, free.len()).into_owned();
+                    let up = jac.columns(free.len(), upstream.len()).into_owned();
+                    beam = Some((
+                        Block {
+                            knobs: free.clone(),
+                            jacobian: own,
+                            rss,
+                        },
+                        up,
+                    ));
+                }
+            }
+        }
+        let beam = beam.as_ref().map(|(b, up)| (b, up));
+        Ok(covariance::two_stage(theta.len(), circuit.as_ref(), beam))
+    }
+
+    /// The residual count `stage` sees over `recordings`.
+    fn stage_count(&self, stage: Stage, recordings: &[usize]) -> usize {
+        recordings
+            .iter()
+            .flat_map(|&i| &self.targets.recordings[i].targets)
+            .filter(|t| stage.sees(t.channel))
+            .map(|t| t.rows.len())
+            .sum()
     }
 
     /// The residual count of `recordings`, refused when it is 0 or when
@@ -266,112 +373,5 @@ impl<'a> Fitter<'a> {
             return Err(FitError::NoDrive);
         }
         Ok(n_data)
-    }
-}
-
-/// Levenberg–Marquardt from `problem`'s point, restarted: it stops on a
-/// small step as readily as on a minimum, so it restarts from where it
-/// stopped, with a fresh trust region, until a restart no longer lowers the
-/// cost by a millionth. Without this, a later model with one more term
-/// "gains" only by finishing this one's descent. Returns the problem at the
-/// end, the last report and the evaluations in all.
-fn descend<'a, 'b>(
-    problem: Problem<'a, 'b>,
-    space: &Space,
-) -> (Problem<'a, 'b>, MinimizationReport<f64>, usize) {
-    let (mut problem, mut report) = LevenbergMarquardt::new()
-        .with_patience(40)
-        .minimize(problem);
-    let mut evaluations = report.number_of_evaluations;
-    for _ in 0..MAX_RESTARTS {
-        let before = report.objective_function;
-        // Back onto the edge of any floor a term sank below: there the
-        // optimiser sees its gradient again.
-        let edge = DVector::from_vec(space.theta(&space.spec(problem.theta.as_slice())));
-        problem.set_params(&edge);
-        let (p, r) = LevenbergMarquardt::new()
-            .with_patience(40)
-            .minimize(problem);
-        evaluations += r.number_of_evaluations;
-        problem = p;
-        let gained = before - r.objective_function;
-        report = r;
-        if gained.is_nan() || gained <= 1e-6 * before.abs() {
-            break;
-        }
-    }
-    (problem, report, evaluations)
-}
-
-/// The least-squares problem the optimiser sees.
-struct Problem<'a, 'b> {
-    fitter: &'b Fitter<'a>,
-    recordings: &'b [usize],
-    space: &'b Space,
-    theta: DVector<f64>,
-    /// Residuals at `theta`; `None` where the model refused it.
-    residuals: Option<DVector<f64>>,
-    /// Residual count.
-    m: usize,
-}
-
-impl Problem<'_, '_> {
-    /// Forward-difference Jacobian at `theta`, whose residuals are `base`,
-    /// one column per knob, the columns in parallel (each is a whole
-    /// session's simulation).
-    fn jacobian_at(&self, theta: &DVector<f64>, base: &[f64]) -> Result<DMatrix<f64>, FitError> {
-        let columns: Result<Vec<Vec<f64>>, FitError> = (0..theta.len())
-            .into_par_iter()
-            .map(|j| {
-                // θ is a logarithm or similar: a fixed step is a relative one.
-                let h = 1e-6 * theta[j].abs().max(1.0);
-                let mut t = theta.clone();
-                t[j] += h;
-                let r = self
-                    .fitter
-                    .residuals(self.recordings, &self.space.spec(t.as_slice()))?;
-                Ok(r.iter().zip(base).map(|(a, b)| (a - b) / h).collect())
-            })
-            .collect();
-        let columns = columns?;
-        Ok(DMatrix::from_fn(base.len(), theta.len(), |i, j| {
-            columns[j][i]
-        }))
-    }
-}
-
-impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
-    type ResidualStorage = Owned<f64, Dyn>;
-    type JacobianStorage = Owned<f64, Dyn, Dyn>;
-    type ParameterStorage = Owned<f64, Dyn>;
-
-    fn set_params(&mut self, x: &DVector<f64>) {
-        self.theta.copy_from(x);
-        self.residuals = self
-            .fitter
-            .residuals(self.recordings, &self.space.spec(x.as_slice()))
-            .ok()
-            .filter(|r| r.iter().all(|v| v.is_finite()))
-            .map(DVector::from_vec);
-    }
-
-    fn params(&self) -> DVector<f64> {
-        self.theta.clone()
-    }
-
-    fn residuals(&self) -> Option<DVector<f64>> {
-        // Where the model refuses a trial point (or it overflows), a huge
-        // residual makes the optimiser step back instead of stopping.
-        Some(
-            self.residuals
-                .clone()
-                .unwrap_or_else(|| DVector::from_element(self.m, 1e6)),
-        )
-    }
-
-    fn jacobian(&self) -> Option<DMatrix<f64>> {
-        // The cached residuals are the base: no second simulation here.
-        let base = self.residuals.as_ref()?;
-        self.jacobian_at(&self.theta, base.as_slice()).ok()
     }
 }

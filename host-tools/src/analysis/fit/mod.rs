@@ -1,6 +1,8 @@
-//! `finrs fit`: estimates a model's free parameters jointly over the
-//! recordings of a session, by Levenberg–Marquardt on noise-weighted
-//! residuals, and reports what a researcher needs to trust the result:
+//! `finrs fit`: estimates a model's free parameters over the recordings of
+//! a session, by Levenberg–Marquardt on noise-weighted residuals, in two
+//! stages as the model is built (the circuit from the currents, then the
+//! relaxation and the beam from the camera and the load cell, see
+//! `stage.rs`), and reports what a researcher needs to trust the result:
 //! confidence intervals, fit per channel, AIC and BIC.
 //!
 //! Every channel is weighted by the noise of its sensor, measured on the
@@ -8,6 +10,7 @@
 //! the weighted residuals are in units of noise and their sum of squares is
 //! `m` when the model explains the data to the noise floor.
 
+mod covariance;
 mod data;
 mod effect;
 mod error;
@@ -15,6 +18,7 @@ mod fitter;
 pub mod modal;
 pub mod report;
 mod space;
+mod stage;
 mod start;
 mod stats;
 

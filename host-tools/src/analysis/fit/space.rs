@@ -124,6 +124,21 @@ impl Knob {
         }
     }
 
+    /// Whether it is the circuit's: the currents depend on these knobs
+    /// alone, and on nothing the beam does.
+    pub fn is_circuit(&self) -> bool {
+        matches!(
+            self,
+            Knob::R1
+                | Knob::R2
+                | Knob::C
+                | Knob::ChargeCubic
+                | Knob::LeakCubic
+                | Knob::SegmentR1(_)
+                | Knob::SegmentC(_)
+        )
+    }
+
     /// Whether it is one of segment variation's deviations.
     pub fn is_segment_deviation(&self) -> bool {
         matches!(

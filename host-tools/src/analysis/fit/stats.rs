@@ -161,21 +161,19 @@ pub fn information(rss: f64, m: usize, k: usize) -> (f64, f64) {
     (fit + 2.0 * k as f64, fit + k as f64 * m_f.ln())
 }
 
-/// 95 % intervals by the delta method: `cov θ = s² (JᵀJ)⁻¹` with
-/// `s² = RSS/(m − k)`, carried to each parameter through the gradient of
-/// its value with respect to all of `θ` (so `z`, which is fitted relative
-/// to `p`, carries `p`'s uncertainty too). A parameter that must be
-/// positive gets its interval on a log scale, so it stays positive.
+/// 95 % intervals by the delta method from `cov`, the covariance of `θ`
+/// (see [`covariance`](super::covariance)), carried to each parameter
+/// through the gradient of its value with respect to all of `θ` (so `z`,
+/// which is fitted relative to `p`, carries `p`'s uncertainty too). A
+/// parameter that must be positive gets its interval on a log scale, so it
+/// stays positive. A knob not in `active` gets an unbounded interval.
 pub fn estimates(
     space: &Space,
     theta: &[f64],
-    jac: &DMatrix<f64>,
-    rss: f64,
-    m: usize,
+    cov: &DMatrix<f64>,
+    active: &[usize],
 ) -> Vec<Estimate> {
     let k = theta.len();
-    let s2 = rss / (m.saturating_sub(k).max(1)) as f64;
-    let (active, cov) = covariance(jac, k, s2);
     let here = space.spec(theta);
     space
         .knobs
@@ -199,9 +197,7 @@ pub fn estimates(
                     (Space::value(knob, &space.spec(&t)) - value) / h
                 })
                 .collect();
-            let se = cov
-                .as_ref()
-                .map(|c| standard_error(&grad, c))
+            let se = Some(standard_error(&grad, cov))
                 .filter(|s| s.is_finite())
                 .unwrap_or(f64::INFINITY);
             let (low, high) = interval(knob.positive(), value, se);
@@ -213,32 +209,6 @@ pub fn estimates(
             }
         })
         .collect()
-}
-
-/// Of the first `k` columns of `jac`, the knobs the residuals move (a knob held at its floor of zero has a
-/// zero column: it is left out of the inverse, and gets an unbounded
-/// variance, so the others keep theirs), and the covariance of all knobs,
-/// `s2 (JᵀJ)⁻¹`, if the active part inverts.
-fn covariance(jac: &DMatrix<f64>, k: usize, s2: f64) -> (Vec<usize>, Option<DMatrix<f64>>) {
-    let norms: Vec<f64> = (0..k).map(|j| jac.column(j).norm()).collect();
-    let top = norms.iter().fold(0.0f64, |m, &x| m.max(x));
-    let active: Vec<usize> = (0..k).filter(|&j| norms[j] > 1e-12 * top).collect();
-    let sub = DMatrix::from_fn(jac.nrows(), active.len(), |i, a| jac[(i, active[a])]);
-    let cov = (sub.transpose() * &sub).try_inverse().map(|c| {
-        let mut full = DMatrix::from_element(k, k, 0.0);
-        for (a, &ja) in active.iter().enumerate() {
-            for (b, &jb) in active.iter().enumerate() {
-                full[(ja, jb)] = c[(a, b)] * s2;
-            }
-        }
-        for j in 0..k {
-            if !active.contains(&j) {
-                full[(j, j)] = f64::INFINITY;
-            }
-        }
-        full
-    });
-    (active, cov)
 }
 
 /// The standard error of a value with gradient `grad` over the knobs,

@@ -1,0 +1,217 @@
+//! The fit in two stages, as the model is built: the circuit from the
+//! currents, then the relaxation and the beam from the camera and the load
+//! cell with the circuit held.
+//!
+//! The circuit is upstream of the beam: the currents depend on `R1`, `R2`,
+//! `C` and the electrochemical terms alone. Fitted jointly, a misfit of the
+//! beam (damping the model lacks, a creeping strip) pulls the circuit's
+//! values wherever they lower the beam's residuals, and the currents'
+//! sharp intervals then claim a precision the values do not have. In
+//! stages, each sensor moves only what it determines; the circuit's stage
+//! runs the circuit alone (no modes, no beam), and the beam's Jacobian has
+//! only the beam's columns.
+
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt, MinimizationReport};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use rayon::prelude::*;
+
+use super::error::FitError;
+use super::fitter::Fitter;
+use super::space::{Knob, Space};
+use crate::recording::Channel;
+
+/// Restarts of the optimiser after its first stop, at most.
+const MAX_RESTARTS: usize = 3;
+
+/// A stage of the fit: which knobs it moves and which residuals it sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The electrics, from the currents.
+    Circuit,
+    /// The relaxation network and the beam, from the camera and the load
+    /// cell, with the circuit held.
+    Beam,
+}
+
+impl Stage {
+    /// Both, in the order they run.
+    pub const ALL: [Stage; 2] = [Stage::Circuit, Stage::Beam];
+
+    /// Whether the stage's residuals include channel `ch`.
+    pub fn sees(self, ch: Channel) -> bool {
+        matches!(ch, Channel::Current(_)) == (self == Stage::Circuit)
+    }
+
+    /// Whether the stage fits `knob`.
+    pub fn moves(self, knob: Knob) -> bool {
+        knob.is_circuit() == (self == Stage::Circuit)
+    }
+
+    /// The indices in `space`'s `θ` that the stage fits.
+    pub fn knobs(self, space: &Space) -> Vec<usize> {
+        (0..space.knobs.len())
+            .filter(|&j| self.moves(space.knobs[j]))
+            .collect()
+    }
+
+    /// Its name in the fit's report.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Circuit => "circuit",
+            Stage::Beam => "beam",
+        }
+    }
+}
+
+/// The least-squares problem of one stage, as the optimiser sees it: the
+/// stage's knobs free, every other part of `θ` held.
+pub struct Problem<'a, 'b> {
+    fitter: &'b Fitter<'a>,
+    recordings: &'b [usize],
+    space: &'b Space,
+    stage: Stage,
+    /// Indices in `θ` of the free knobs.
+    free: &'b [usize],
+    /// The whole `θ`, its free entries the optimiser's current point.
+    pub(super) theta: Vec<f64>,
+    /// Residuals at `theta`; `None` where the model refused it.
+    residuals: Option<DVector<f64>>,
+    /// Residual count.
+    m: usize,
+}
+
+impl<'a, 'b> Problem<'a, 'b> {
+    /// The stage's problem at `theta`, not yet evaluated.
+    pub fn new(
+        fitter: &'b Fitter<'a>,
+        recordings: &'b [usize],
+        space: &'b Space,
+        stage: Stage,
+        free: &'b [usize],
+        theta: Vec<f64>,
+        m: usize,
+    ) -> Self {
+        Problem {
+            fitter,
+            recordings,
+            space,
+            stage,
+            free,
+            theta,
+            residuals: None,
+            m,
+        }
+    }
+
+    /// `θ` with the free entries `x`.
+    fn with_free(&self, x: &[f64]) -> Vec<f64> {
+        let mut t = self.theta.clone();
+        for (&j, &v) in self.free.iter().zip(x) {
+            t[j] = v;
+        }
+        t
+    }
+
+    /// The stage's weighted residuals at the whole `theta`.
+    fn residuals_at(&self, theta: &[f64]) -> Result<Vec<f64>, FitError> {
+        self.fitter
+            .stage_residuals(self.stage, self.recordings, &self.space.spec(theta))
+    }
+
+    /// Forward-difference Jacobian of the stage's residuals at the whole
+    /// `theta`, whose residuals are `base`: one column per free knob, the
+    /// columns in parallel (each is a whole session's simulation).
+    pub fn jacobian_at(&self, theta: &[f64], base: &[f64]) -> Result<DMatrix<f64>, FitError> {
+        let columns: Result<Vec<Vec<f64>>, FitError> = self
+            .free
+            .par_iter()
+            .map(|&j| {
+                // θ is a logarithm or similar: a fixed step is a relative one.
+                let h = 1e-6 * theta[j].abs().max(1.0);
+                let mut t = theta.to_vec();
+                t[j] += h;
+                let r = self.residuals_at(&t)?;
+                Ok(r.iter().zip(base).map(|(a, b)| (a - b) / h).collect())
+            })
+            .collect();
+        let columns = columns?;
+        Ok(DMatrix::from_fn(base.len(), self.free.len(), |i, j| {
+            columns[j][i]
+        }))
+    }
+
+    /// The free entries of the point on the edge of any floor a term sank
+    /// below (where the optimiser sees its gradient again).
+    fn edge(&self) -> DVector<f64> {
+        let back = self.space.theta(&self.space.spec(&self.theta));
+        DVector::from_iterator(self.free.len(), self.free.iter().map(|&j| back[j]))
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        self.theta = self.with_free(x.as_slice());
+        self.residuals = self
+            .residuals_at(&self.theta)
+            .ok()
+            .filter(|r| r.iter().all(|v| v.is_finite()))
+            .map(DVector::from_vec);
+    }
+
+    fn params(&self) -> DVector<f64> {
+        DVector::from_iterator(self.free.len(), self.free.iter().map(|&j| self.theta[j]))
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        // Where the model refuses a trial point (or it overflows), a huge
+        // residual makes the optimiser step back instead of stopping.
+        Some(
+            self.residuals
+                .clone()
+                .unwrap_or_else(|| DVector::from_element(self.m, 1e6)),
+        )
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        // The cached residuals are the base: no second simulation here.
+        let base = self.residuals.as_ref()?;
+        self.jacobian_at(&self.theta, base.as_slice()).ok()
+    }
+}
+
+/// Levenberg–Marquardt from `problem`'s point, restarted: it stops on a
+/// small step as readily as on a minimum, so it restarts from where it
+/// stopped, with a fresh trust region, until a restart no longer lowers the
+/// cost by a millionth. Without this, a later model with one more term
+/// "gains" only by finishing this one's descent. Returns the problem at the
+/// end, the last report and the evaluations in all.
+pub fn descend<'a, 'b>(
+    mut problem: Problem<'a, 'b>,
+) -> (Problem<'a, 'b>, MinimizationReport<f64>, usize) {
+    let start = problem.params();
+    problem.set_params(&start);
+    let (mut problem, mut report) = LevenbergMarquardt::new()
+        .with_patience(40)
+        .minimize(problem);
+    let mut evaluations = report.number_of_evaluations;
+    for _ in 0..MAX_RESTARTS {
+        let before = report.objective_function;
+        let edge = problem.edge();
+        problem.set_params(&edge);
+        let (p, r) = LevenbergMarquardt::new()
+            .with_patience(40)
+            .minimize(problem);
+        evaluations += r.number_of_evaluations;
+        problem = p;
+        let gained = before - r.objective_function;
+        report = r;
+        if gained.is_nan() || gained <= 1e-6 * before.abs() {
+            break;
+        }
+    }
+    (problem, report, evaluations)
+}
