@@ -304,20 +304,7 @@ fn scan_decimal(row: &[u8], at: usize) -> (Option<f64>, usize) {
     let negative = row.get(at) == Some(&b'-');
     let start = at + usize::from(negative);
     let mut mantissa = 0u64;
-    // Digits until anything else; wrapping, as more than 15 digits are
-    // refused below anyway.
-    let mut digits = |from: usize| {
-        let mut count = 0;
-        for &b in row.get(from..).unwrap_or_default() {
-            let d = b.wrapping_sub(b'0');
-            if d >= 10 {
-                break;
-            }
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-            count += 1;
-        }
-        count
-    };
+    let mut digits = |from: usize| digit_run(row, from, &mut mantissa);
     let whole = digits(start);
     let mut i = start + whole;
     let mut decimals = 0;
@@ -338,6 +325,69 @@ fn scan_decimal(row: &[u8], at: usize) -> (Option<f64>, usize) {
     // Below 10^15: as i64, one instruction to convert.
     let x = mantissa as i64 as f64 / POW10[decimals];
     (Some(if negative { -x } else { x }), i)
+}
+
+/// The run of ASCII digits of `row` from `from`: its length, the digits
+/// appended to `mantissa` (wrapping: more than 15 digits are refused by the
+/// caller anyway). Eight bytes are looked at a time (SWAR): a field's
+/// digits are found and converted with a few word operations instead of a
+/// loop over bytes.
+fn digit_run(row: &[u8], from: usize, mantissa: &mut u64) -> usize {
+    let mut count = 0;
+    loop {
+        let rest = row.get(from + count..).unwrap_or_default();
+        // Past the row's end the word holds zero bytes: not digits.
+        let word = match rest.first_chunk::<8>() {
+            Some(bytes) => u64::from_le_bytes(*bytes),
+            None => {
+                let mut bytes = [0u8; 8];
+                bytes[..rest.len()].copy_from_slice(rest);
+                u64::from_le_bytes(bytes)
+            }
+        };
+        // Each byte's digit value; bytes that are not digits come out
+        // above 9, and their high bit is set below (no carry between bytes:
+        // 0x7F + 0x76 < 0x100).
+        let d = word ^ 0x3030_3030_3030_3030;
+        let not_digit =
+            (((d & 0x7F7F_7F7F_7F7F_7F7F) + 0x7676_7676_7676_7676) | d) & 0x8080_8080_8080_8080;
+        // Little-endian: the first byte is the lowest.
+        let n = (not_digit.trailing_zeros() / 8) as usize;
+        if n > 0 {
+            // The n digits moved to the word's top, zeros (leading zeros of
+            // the number) below them.
+            let value = eight_digits(d << (8 * (8 - n)));
+            *mantissa = mantissa.wrapping_mul(POW10_U64[n]).wrapping_add(value);
+        }
+        count += n;
+        if n < 8 {
+            return count;
+        }
+    }
+}
+
+/// `10^n` for `n` in `0..=8`.
+const POW10_U64: [u64; 9] = [
+    1,
+    10,
+    100,
+    1_000,
+    10_000,
+    100_000,
+    1_000_000,
+    10_000_000,
+    100_000_000,
+];
+
+/// The number whose eight decimal digits (values 0 to 9, most significant
+/// in the lowest byte) `d` holds: pairs, then fours, then all eight
+/// combined by one multiplication each.
+fn eight_digits(d: u64) -> u64 {
+    // Each byte pair (a, b) becomes 10 a + b in its high byte, shifted
+    // to the low one; then pairs of pairs, then the two fours.
+    let pairs = (d.wrapping_mul((10 << 8) + 1) >> 8) & 0x00FF_00FF_00FF_00FF;
+    let fours = (pairs.wrapping_mul((100 << 16) + 1) >> 16) & 0x0000_FFFF_0000_FFFF;
+    fours.wrapping_mul((10_000 << 32) + 1) >> 32
 }
 
 /// [`scan_decimal`] of a whole field.
@@ -444,6 +494,30 @@ mod tests {
                     proptest::prop_assert_eq!(got.to_bits(), want.to_bits(), "{}", field);
                 }
             }
+        }
+    }
+
+    proptest::proptest! {
+        /// The word-at-a-time digit run reads what a byte loop reads, at
+        /// any offset, up to the row's end and across several words.
+        #[test]
+        fn digit_runs_read_as_a_byte_loop_reads_them(
+            row in "[0-9.,a-]{0,40}",
+            from in 0usize..41,
+        ) {
+            let row = row.as_bytes();
+            let from = from.min(row.len());
+            let (mut want, mut want_count) = (0u64, 0usize);
+            for &b in &row[from..] {
+                if !b.is_ascii_digit() {
+                    break;
+                }
+                want = want.wrapping_mul(10).wrapping_add(u64::from(b - b'0'));
+                want_count += 1;
+            }
+            let mut got = 0u64;
+            let count = digit_run(row, from, &mut got);
+            proptest::prop_assert_eq!((count, got), (want_count, want));
         }
     }
 
