@@ -36,7 +36,11 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     // clap refuses the wave's options with --input, and requires one of
     // --input and --wave.
     let (name, input) = match (&args.input, &args.wave) {
-        (Some(path), _) => (path.display().to_string(), Recording::read(path)?),
+        // Measured channels are only drawn, never simulated.
+        (Some(path), _) if args.plot.is_some() => {
+            (path.display().to_string(), Recording::read(path)?)
+        }
+        (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
         (None, Some(spec)) => (spec.clone(), wave_recording(spec, &args.drive)?),
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
     };

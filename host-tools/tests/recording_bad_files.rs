@@ -187,6 +187,9 @@ fn every_bad_file_is_refused_for_its_rule() {
             err.message().contains(needle),
             "{file}: `{msg}` lacks `{needle}`"
         );
+        // Reading only the drive checks every field all the same.
+        let drive_err = Recording::read_drive(&path).expect_err(file);
+        assert_eq!(drive_err.to_string(), msg, "{file}");
     }
 }
 
@@ -198,6 +201,12 @@ fn good_files_read_and_round_trip() {
         rec.validate("round trip").unwrap();
         let back = Recording::parse("round trip", &rec.to_csv_string()).unwrap();
         assert_eq!(back, rec, "{}", path.display());
+        let drive = Recording::read_drive(&path).unwrap();
+        assert!(drive.channels.is_empty());
+        assert_eq!(
+            (&drive.meta, &drive.t_s, &drive.v_v),
+            (&rec.meta, &rec.t_s, &rec.v_v)
+        );
     }
     let free = Recording::read(&data("good").join("free_camera_crlf.csv")).unwrap();
     assert_eq!(

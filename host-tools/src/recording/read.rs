@@ -9,16 +9,36 @@ use super::{Channel, Recording, Voltages, SAFE_VOLTAGE_LIMIT_V};
 impl Recording {
     /// Reads and checks a recording file.
     pub fn read(path: &Path) -> Result<Recording, RecordingError> {
+        Self::read_keeping(path, Keep::All)
+    }
+
+    /// Reads and checks a recording file as [`Recording::read`] does,
+    /// every field of every row, but keeps only its metadata, time and
+    /// drive (`channels` is empty): what a simulation needs, without the
+    /// memory of the measured columns.
+    pub fn read_drive(path: &Path) -> Result<Recording, RecordingError> {
+        Self::read_keeping(path, Keep::Drive)
+    }
+
+    fn read_keeping(path: &Path, keep: Keep) -> Result<Recording, RecordingError> {
         let name = path.display().to_string();
         let bytes = std::fs::read(path)
             .map_err(|e| RecordingError::file(&name, format!("cannot read: {e}")))?;
-        Self::parse_bytes(&name, &bytes)
+        Self::parse_bytes_keeping(&name, &bytes, keep)
     }
 
     /// Parses raw bytes, refusing invalid UTF-8 with the line it is on.
     pub fn parse_bytes(name: &str, bytes: &[u8]) -> Result<Recording, RecordingError> {
+        Self::parse_bytes_keeping(name, bytes, Keep::All)
+    }
+
+    fn parse_bytes_keeping(
+        name: &str,
+        bytes: &[u8],
+        keep: Keep,
+    ) -> Result<Recording, RecordingError> {
         match std::str::from_utf8(bytes) {
-            Ok(text) => Self::parse(name, text),
+            Ok(text) => Self::parse_keeping(name, text, keep),
             Err(e) => {
                 let line = 1 + bytes[..e.valid_up_to()]
                     .iter()
@@ -31,6 +51,10 @@ impl Recording {
 
     /// Parses and checks the text of a recording; `name` is used in messages.
     pub fn parse(name: &str, text: &str) -> Result<Recording, RecordingError> {
+        Self::parse_keeping(name, text, Keep::All)
+    }
+
+    fn parse_keeping(name: &str, text: &str, keep: Keep) -> Result<Recording, RecordingError> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if text.is_empty() {
             return Err(RecordingError::file(name, "empty file"));
@@ -43,10 +67,13 @@ impl Recording {
             t_s: Vec::with_capacity(rows),
             v_v: Voltages::with_capacity(meta.segments, rows),
             meta,
-            channels: columns
-                .iter()
-                .map(|&c| (c, Vec::with_capacity(rows)))
-                .collect(),
+            channels: match keep {
+                Keep::All => columns
+                    .iter()
+                    .map(|&c| (c, Vec::with_capacity(rows)))
+                    .collect(),
+                Keep::Drive => Vec::new(),
+            },
         };
         let n = rec.meta.segments;
         let width = 1 + n + columns.len();
@@ -105,8 +132,11 @@ impl Recording {
                 voltage(name, line, k, x).map_err(refuse)?;
                 *slot = x;
             }
-            for (j, (_, values)) in rec.channels.iter_mut().enumerate() {
-                values.push(next(1 + n + j)?);
+            for j in 0..columns.len() {
+                let value = next(1 + n + j)?;
+                if let Some((_, values)) = rec.channels.get_mut(j) {
+                    values.push(value);
+                }
             }
             if fields.next().is_some() {
                 return Err(refuse(RecordingError::at(name, line, "extra field")));
@@ -123,6 +153,15 @@ impl Recording {
         }
         Ok(rec)
     }
+}
+
+/// What a read keeps of a recording (every field is checked either way).
+#[derive(Clone, Copy)]
+enum Keep {
+    /// Everything.
+    All,
+    /// Metadata, time and drive.
+    Drive,
 }
 
 /// The lines of `text`, numbered from 1, without their `\r\n` or `\n`.
