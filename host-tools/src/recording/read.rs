@@ -22,8 +22,19 @@ impl Recording {
 
     fn read_keeping(path: &Path, keep: Keep) -> Result<Recording, RecordingError> {
         let name = path.display().to_string();
-        let bytes = std::fs::read(path)
-            .map_err(|e| RecordingError::file(&name, format!("cannot read: {e}")))?;
+        let cannot = |e: std::io::Error| RecordingError::file(&name, format!("cannot read: {e}"));
+        // A large file is read in chunks of whole lines, never whole in
+        // memory. Whatever that refuses is read again whole and refused
+        // from there: one message for a file however it is read (the
+        // whole file's UTF-8 is checked before any row, for one).
+        let mut file = std::fs::File::open(path).map_err(cannot)?;
+        let len = file.metadata().map_err(cannot)?.len();
+        if len > 4 * CHUNK_BYTES as u64 {
+            if let Some(rec) = read_in_chunks(&name, &mut file, len, keep) {
+                return Ok(rec);
+            }
+        }
+        let bytes = std::fs::read(path).map_err(cannot)?;
         Self::parse_bytes_keeping(&name, &bytes, keep)
     }
 
@@ -60,12 +71,111 @@ impl Recording {
             return Err(RecordingError::file(name, "empty file"));
         }
         let mut lines = lines(text);
-        let (meta, header_line, columns) = read_head(name, &mut lines)?;
-        // A first guess at the row count saves most regrowing.
-        let rows = text.len() / (8 * (1 + meta.segments + columns.len()));
-        let mut rec = Recording {
+        let head = read_head(name, &mut lines)?;
+        let mut rows = Rows::new(name, head, text.len(), keep);
+        for (line, row) in lines {
+            rows.row(line, row, after(text, row))?;
+        }
+        rows.finish()
+    }
+}
+
+/// The bytes of `text` from where `row`, a part of it, starts.
+fn after<'a>(text: &'a str, row: &str) -> &'a [u8] {
+    &text.as_bytes()[row.as_ptr() as usize - text.as_ptr() as usize..]
+}
+
+/// Bytes read at a time from a large file.
+const CHUNK_BYTES: usize = 64 << 10;
+
+/// Reads `file` (`len` bytes) in chunks of whole lines; `None` if anything
+/// is refused or cannot be read.
+fn read_in_chunks(name: &str, file: &mut std::fs::File, len: u64, keep: Keep) -> Option<Recording> {
+    use std::io::Read;
+    let mut buf = Vec::with_capacity(2 * CHUNK_BYTES);
+    let mut more = |buf: &mut Vec<u8>| -> Option<bool> {
+        let n = (&mut *file)
+            .take(CHUNK_BYTES as u64)
+            .read_to_end(buf)
+            .ok()?;
+        Some(n > 0)
+    };
+    // The metadata and the header, up to the end of the first line that
+    // is not metadata.
+    let bom = "\u{feff}".as_bytes();
+    let head_end = loop {
+        let start = if buf.starts_with(bom) { bom.len() } else { 0 };
+        let mut at = start;
+        let mut found = None;
+        for nl in memchr::memchr_iter(b'\n', &buf[start..]) {
+            let end = start + nl;
+            if !buf[at..end].starts_with(b"#") {
+                found = Some(end + 1);
+                break;
+            }
+            at = end + 1;
+        }
+        match found {
+            Some(end) => break end,
+            None if more(&mut buf)? => continue,
+            None => return None,
+        }
+    };
+    let head_text = std::str::from_utf8(&buf[..head_end]).ok()?;
+    let head_text = head_text.strip_prefix('\u{feff}').unwrap_or(head_text);
+    let head = read_head(name, &mut lines(head_text)).ok()?;
+    let mut line = head.1 + 1;
+    let mut rows = Rows::new(name, head, len as usize, keep);
+    buf.drain(..head_end);
+    loop {
+        let more_to_read = more(&mut buf)?;
+        // Whole lines only; at the end, the last line without its `\n`.
+        let complete = match memchr::memrchr(b'\n', &buf) {
+            Some(nl) if more_to_read => nl + 1,
+            _ if more_to_read => continue,
+            _ => buf.len(),
+        };
+        let text = std::str::from_utf8(&buf[..complete]).ok()?;
+        let body = text.strip_suffix('\n').unwrap_or(text);
+        if !body.is_empty() || complete > body.len() {
+            for l in body.split('\n') {
+                let row = l.strip_suffix('\r').unwrap_or(l);
+                rows.row(line, row, after(text, row)).ok()?;
+                line += 1;
+            }
+        }
+        buf.drain(..complete);
+        if !more_to_read {
+            return rows.finish().ok();
+        }
+    }
+}
+
+/// The data rows of a recording as they are read, checked one by one.
+struct Rows<'a> {
+    name: &'a str,
+    header_line: usize,
+    columns: Vec<Channel>,
+    rules: RowRules,
+    v: Vec<f64>,
+    rec: Recording,
+}
+
+impl<'a> Rows<'a> {
+    /// No rows yet, after the head `(meta, header_line, columns)`; `bytes`
+    /// of text to come (a first guess at the row count saves most
+    /// regrowing).
+    fn new(
+        name: &'a str,
+        (meta, header_line, columns): (Metadata, usize, Vec<Channel>),
+        bytes: usize,
+        keep: Keep,
+    ) -> Rows<'a> {
+        let rows = bytes / (8 * (1 + meta.segments + columns.len()));
+        let n = meta.segments;
+        let rec = Recording {
             t_s: Vec::with_capacity(rows),
-            v_v: Voltages::with_capacity(meta.segments, rows),
+            v_v: Voltages::with_capacity(n, rows),
             meta,
             channels: match keep {
                 Keep::All => columns
@@ -75,83 +185,96 @@ impl Recording {
                 Keep::Drive => Vec::new(),
             },
         };
-        let n = rec.meta.segments;
+        Rows {
+            name,
+            header_line,
+            columns,
+            rules: RowRules::default(),
+            v: vec![0.0; n],
+            rec,
+        }
+    }
+
+    /// Checks and keeps the data row `text` on line `line`.
+    fn row(&mut self, line: usize, text: &str, bytes: &[u8]) -> Result<(), RecordingError> {
+        let name = self.name;
+        let columns = &self.columns;
+        let n = self.rec.meta.segments;
         let width = 1 + n + columns.len();
-        let mut rules = RowRules::default();
-        let mut v = vec![0.0; n];
-        for (line, text) in lines {
-            if text.is_empty() {
-                return Err(RecordingError::at(name, line, "blank line inside the data"));
-            }
-            if text.starts_with('#') {
-                return Err(RecordingError::at(
+        if text.is_empty() {
+            return Err(RecordingError::at(name, line, "blank line inside the data"));
+        }
+        if text.starts_with('#') {
+            return Err(RecordingError::at(
+                name,
+                line,
+                "metadata line after the header: metadata must come first",
+            ));
+        }
+        // Fields are split and parsed in one pass over the row; a wrong
+        // field count is what any refusal of the row reports first.
+        let mut fields = Fields { text, bytes, at: 0 };
+        let refuse = |e: RecordingError| {
+            let count = 1 + text.bytes().filter(|&b| b == b',').count();
+            if count == width {
+                e
+            } else {
+                RecordingError::at(
                     name,
                     line,
-                    "metadata line after the header: metadata must come first",
-                ));
+                    format!("row has {count} fields, the header has {width}"),
+                )
             }
-            // Fields are split and parsed in one pass over the row; a wrong
-            // field count is what any refusal of the row reports first.
-            let mut fields = Fields { text, at: 0 };
-            let refuse = |e: RecordingError| {
-                let count = 1 + text.bytes().filter(|&b| b == b',').count();
-                if count == width {
-                    e
-                } else {
-                    RecordingError::at(
-                        name,
-                        line,
-                        format!("row has {count} fields, the header has {width}"),
-                    )
-                }
-            };
-            // Column names are only built for a message.
-            let column = |j: usize| column_name(n, &columns, j);
-            let mut next = |j: usize| match fields.next() {
-                Some((field, value)) => {
-                    value.map_err(|e| refuse(e.at(name, line, &column(j), field)))
-                }
-                None => Err(refuse(RecordingError::at(name, line, "missing field"))),
-            };
-            let t = next(0)?.ok_or_else(|| {
+        };
+        // Column names are only built for a message.
+        let column = |j: usize| column_name(n, columns, j);
+        let mut next = |j: usize| match fields.next() {
+            Some((field, value)) => value.map_err(|e| refuse(e.at(name, line, &column(j), field))),
+            None => Err(refuse(RecordingError::at(name, line, "missing field"))),
+        };
+        let t = next(0)?.ok_or_else(|| {
+            refuse(RecordingError::at(
+                name,
+                line,
+                "t_s is empty: time is never missing",
+            ))
+        })?;
+        self.rules.time(name, line, t).map_err(refuse)?;
+        for (k, slot) in self.v.iter_mut().enumerate() {
+            let x = next(1 + k)?.ok_or_else(|| {
                 refuse(RecordingError::at(
                     name,
                     line,
-                    "t_s is empty: time is never missing",
+                    format!("{} is empty: voltages are never missing", column(1 + k)),
                 ))
             })?;
-            rules.time(name, line, t).map_err(refuse)?;
-            for (k, slot) in v.iter_mut().enumerate() {
-                let x = next(1 + k)?.ok_or_else(|| {
-                    refuse(RecordingError::at(
-                        name,
-                        line,
-                        format!("{} is empty: voltages are never missing", column(1 + k)),
-                    ))
-                })?;
-                voltage(name, line, k, x).map_err(refuse)?;
-                *slot = x;
-            }
-            for j in 0..columns.len() {
-                let value = next(1 + n + j)?;
-                if let Some((_, values)) = rec.channels.get_mut(j) {
-                    values.push(value);
-                }
-            }
-            if fields.next().is_some() {
-                return Err(refuse(RecordingError::at(name, line, "extra field")));
-            }
-            rec.t_s.push(t);
-            rec.v_v.push(&v);
+            voltage(name, line, k, x).map_err(refuse)?;
+            *slot = x;
         }
-        if rec.t_s.is_empty() {
+        for j in 0..columns.len() {
+            let value = next(1 + n + j)?;
+            if let Some((_, values)) = self.rec.channels.get_mut(j) {
+                values.push(value);
+            }
+        }
+        if fields.next().is_some() {
+            return Err(refuse(RecordingError::at(name, line, "extra field")));
+        }
+        self.rec.t_s.push(t);
+        self.rec.v_v.push(&self.v);
+        Ok(())
+    }
+
+    /// The recording read, if it has a data row.
+    fn finish(self) -> Result<Recording, RecordingError> {
+        if self.rec.t_s.is_empty() {
             return Err(RecordingError::at(
-                name,
-                header_line,
+                self.name,
+                self.header_line,
                 "no data rows after the header",
             ));
         }
-        Ok(rec)
+        Ok(self.rec)
     }
 }
 
@@ -291,6 +414,10 @@ impl BadNumber {
 /// A data row's fields, split and parsed in one pass.
 struct Fields<'a> {
     text: &'a str,
+    /// The row's bytes and any that follow it in the buffer it lies in:
+    /// digits are read eight bytes at a time, and the bytes after the row
+    /// spare copying its last ones into a word of their own.
+    bytes: &'a [u8],
     /// Where the next field starts; past the end once the last is taken.
     at: usize,
 }
@@ -299,12 +426,11 @@ impl<'a> Fields<'a> {
     /// The next field and its value (`None` when empty), or `None` past
     /// the last field. Parsing allocates nothing.
     fn next(&mut self) -> Option<(&'a str, Result<Option<f64>, BadNumber>)> {
-        let row = self.text.as_bytes();
         let at = self.at;
-        if at > row.len() {
+        if at > self.text.len() {
             return None;
         }
-        let (fast, end) = scan_decimal(row, at);
+        let (fast, end) = scan_decimal(self.bytes, self.text.len(), at);
         self.at = end + 1;
         let field = &self.text[at..end];
         let value = match fast {
@@ -333,17 +459,19 @@ const POW10: [f64; 16] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
 ];
 
-/// The field of `row` starting at `at`: its value if it is a plain decimal
-/// of at most 15 digits (`-12.345`, `0.0192`, `3`), else `None` (left to
-/// `str::parse`), and where it ends (the next comma, or the row's end).
+/// The field of the row `bytes[..len]` starting at `at`: its value if it
+/// is a plain decimal of at most 15 digits (`-12.345`, `0.0192`, `3`), else
+/// `None` (left to `str::parse`), and where it ends (the next comma, or
+/// the row's end). Bytes past `len` are never part of a field.
 /// Such a field is what a DAQ writes, and its value is one correctly
 /// rounded division of two numbers exact in `f64` (Clinger's fast path),
 /// so it equals what `str::parse` gives, at a fraction of the cost.
-fn scan_decimal(row: &[u8], at: usize) -> (Option<f64>, usize) {
+fn scan_decimal(bytes: &[u8], len: usize, at: usize) -> (Option<f64>, usize) {
+    let row = &bytes[..len];
     let negative = row.get(at) == Some(&b'-');
     let start = at + usize::from(negative);
     let mut mantissa = 0u64;
-    let mut digits = |from: usize| digit_run(row, from, &mut mantissa);
+    let mut digits = |from: usize| digit_run(bytes, len, from, &mut mantissa);
     let whole = digits(start);
     let mut i = start + whole;
     let mut decimals = 0;
@@ -366,15 +494,15 @@ fn scan_decimal(row: &[u8], at: usize) -> (Option<f64>, usize) {
     (Some(if negative { -x } else { x }), i)
 }
 
-/// The run of ASCII digits of `row` from `from`: its length, the digits
-/// appended to `mantissa` (wrapping: more than 15 digits are refused by the
-/// caller anyway). Eight bytes are looked at a time (SWAR): a field's
-/// digits are found and converted with a few word operations instead of a
-/// loop over bytes.
-fn digit_run(row: &[u8], from: usize, mantissa: &mut u64) -> usize {
+/// The run of ASCII digits of the row `bytes[..len]` from `from`: its
+/// length, the digits appended to `mantissa` (wrapping: more than 15
+/// digits are refused by the caller anyway). Eight bytes are looked at a
+/// time (SWAR): a field's digits are found and converted with a few word
+/// operations instead of a loop over bytes.
+fn digit_run(bytes: &[u8], len: usize, from: usize, mantissa: &mut u64) -> usize {
     let mut count = 0;
     loop {
-        let rest = row.get(from + count..).unwrap_or_default();
+        let rest = bytes.get(from + count..).unwrap_or_default();
         // Past the row's end the word holds zero bytes: not digits.
         let word = match rest.first_chunk::<8>() {
             Some(bytes) => u64::from_le_bytes(*bytes),
@@ -390,8 +518,8 @@ fn digit_run(row: &[u8], from: usize, mantissa: &mut u64) -> usize {
         let d = word ^ 0x3030_3030_3030_3030;
         let not_digit =
             (((d & 0x7F7F_7F7F_7F7F_7F7F) + 0x7676_7676_7676_7676) | d) & 0x8080_8080_8080_8080;
-        // Little-endian: the first byte is the lowest.
-        let n = (not_digit.trailing_zeros() / 8) as usize;
+        // Little-endian: the first byte is the lowest. Not past the row.
+        let n = ((not_digit.trailing_zeros() / 8) as usize).min(len.saturating_sub(from + count));
         if n > 0 {
             // The n digits moved to the word's top, zeros (leading zeros of
             // the number) below them.
@@ -432,7 +560,7 @@ fn eight_digits(d: u64) -> u64 {
 /// [`scan_decimal`] of a whole field.
 #[cfg(test)]
 fn short_decimal(field: &[u8]) -> Option<f64> {
-    match scan_decimal(field, 0) {
+    match scan_decimal(field, field.len(), 0) {
         (Some(x), end) if end == field.len() => Some(x),
         _ => None,
     }
@@ -526,7 +654,7 @@ mod tests {
         ) {
             for field in [digits, format!("{x}"), format!("{x:.decimals$}"), format!("{:.decimals$}", x % 1e4)] {
                 let row = format!("{field},1");
-                let (fast, end) = scan_decimal(row.as_bytes(), 0);
+                let (fast, end) = scan_decimal(row.as_bytes(), row.len(), 0);
                 proptest::prop_assert_eq!(end, field.len(), "{}", field);
                 if let Some(got) = fast {
                     let want: f64 = field.parse().unwrap();
@@ -538,16 +666,19 @@ mod tests {
 
     proptest::proptest! {
         /// The word-at-a-time digit run reads what a byte loop reads, at
-        /// any offset, up to the row's end and across several words.
+        /// any offset, up to the row's end (never the bytes after it) and
+        /// across several words.
         #[test]
         fn digit_runs_read_as_a_byte_loop_reads_them(
-            row in "[0-9.,a-]{0,40}",
+            bytes in "[0-9.,a-]{0,40}",
+            len in 0usize..41,
             from in 0usize..41,
         ) {
-            let row = row.as_bytes();
-            let from = from.min(row.len());
+            let bytes = bytes.as_bytes();
+            let len = len.min(bytes.len());
+            let from = from.min(len);
             let (mut want, mut want_count) = (0u64, 0usize);
-            for &b in &row[from..] {
+            for &b in &bytes[from..len] {
                 if !b.is_ascii_digit() {
                     break;
                 }
@@ -555,9 +686,45 @@ mod tests {
                 want_count += 1;
             }
             let mut got = 0u64;
-            let count = digit_run(row, from, &mut got);
+            let count = digit_run(bytes, len, from, &mut got);
             proptest::prop_assert_eq!((count, got), (want_count, want));
         }
+    }
+
+    #[test]
+    fn a_large_file_is_read_in_chunks_as_its_text_parses() {
+        // What `read_in_chunks` returns itself, not the whole-file read it
+        // falls back on: 30 000 rows in chunks of 64 KiB, CRLF, a BOM and
+        // no final line end.
+        let mut text = String::from(
+            "\u{feff}# format = \"ipmc-bench/1\"\r\n# segments = 2\r\n# length_m = 0.05\r\n\
+             # width_m = 0.01\r\n# thickness_m = 0.0002858\r\n# fixture = \"free\"\r\n\
+             # medium = \"air\"\r\nt_s,v1_V,v2_V,i1_A,tip_y_m\r\n",
+        );
+        for k in 0..30_000 {
+            let camera = if k % 3 == 0 { "0.00012" } else { "" };
+            text.push_str(&format!(
+                "{}.{:03},{}.5,-0.{k},0.0{k},{camera}\r\n",
+                k / 1000,
+                k % 1000,
+                k % 3
+            ));
+        }
+        let text = text.trim_end();
+        let path =
+            std::env::temp_dir().join(format!("finrs-read-chunks-{}.csv", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let mut file = std::fs::File::open(&path).unwrap();
+        let len = text.len() as u64;
+        assert!(len > 4 * CHUNK_BYTES as u64);
+        let chunked = read_in_chunks("big", &mut file, len, Keep::All);
+        std::fs::remove_file(&path).unwrap();
+        let want = Recording::parse("big", text).unwrap();
+        assert_eq!(want.t_s.len(), 30_000);
+        assert!(
+            chunked == Some(want),
+            "read in chunks differs from the parsed text"
+        );
     }
 
     #[test]
