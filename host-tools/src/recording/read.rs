@@ -136,10 +136,8 @@ fn read_in_chunks(name: &str, file: &mut std::fs::File, len: u64, keep: Keep) ->
             _ => buf.len(),
         };
         let text = std::str::from_utf8(&buf[..complete]).ok()?;
-        let body = text.strip_suffix('\n').unwrap_or(text);
-        if !body.is_empty() || complete > body.len() {
-            for l in body.split('\n') {
-                let row = l.strip_suffix('\r').unwrap_or(l);
+        if complete > 0 {
+            for (_, row) in lines(text) {
                 rows.row(line, row, after(text, row)).ok()?;
                 line += 1;
             }
