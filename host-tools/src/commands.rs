@@ -12,7 +12,7 @@ use finrs::analysis::fit::{Effect, Fitter};
 use finrs::link::capture::{self, CaptureError, Firmware, Monitor};
 use finrs::link::probe::ProbeError;
 use finrs::model::params::{ModelFile, Preset};
-use finrs::model::simulate::simulate as simulate_recording;
+use finrs::model::simulate::predict_recording;
 use finrs::model::synth::{self, DriveError};
 use finrs::plot;
 use finrs::recording::Geometry;
@@ -36,7 +36,11 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     // clap refuses the wave's options with --input, and requires one of
     // --input and --wave.
     let (name, input) = match (&args.input, &args.wave) {
-        (Some(path), _) => (path.display().to_string(), Recording::read(path)?),
+        // Measured channels are only drawn, never simulated.
+        (Some(path), _) if args.plot.is_some() => {
+            (path.display().to_string(), Recording::read(path)?)
+        }
+        (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
         (None, Some(spec)) => (spec.clone(), wave_recording(spec, &args.drive)?),
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
     };
@@ -54,7 +58,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
             .progress_chars("=> "),
     );
     bar.set_message("simulating");
-    let sim = simulate_recording(&name, &input, &spec, args.elements, &mut |n| {
+    let sim = predict_recording(&name, &input, &spec, args.elements, &mut |n| {
         bar.set_position(n)
     })
     // SimulateError's message already ends with its source's (in
@@ -64,16 +68,20 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
 
     create_parent(&args.out)?;
     sim.write(&args.out)?;
-    eprintln!("wrote {} ({} rows)", args.out.display(), sim.t_s.len());
+    eprintln!("wrote {} ({} rows)", args.out.display(), sim.rows());
     if let Some(png) = &args.plot {
         let measured = args.input.as_ref().map(|_| &input);
+        // Plotting needs the prediction as a recording of its own.
+        let sim = sim.to_recording();
         plot::plot(png, &format!("finrs simulate: {name}"), measured, &sim)
             .with_context(|| png.display().to_string())?;
         eprintln!("wrote {}", png.display());
+        std::mem::forget(sim);
     }
     // The process ends here: the system takes the recordings' memory back
     // at exit, quicker than freeing it piece by piece.
-    std::mem::forget((input, sim));
+    std::mem::forget(sim);
+    std::mem::forget(input);
     Ok(())
 }
 

@@ -9,9 +9,11 @@
 //! grid's grey.
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
+use plotters::style::register_font;
 
 use crate::recording::{Channel, Fixture, Recording};
 
@@ -24,6 +26,27 @@ pub enum PlotError {
     /// plotters failed to draw or to write the PNG.
     #[error("drawing the plot")]
     Draw(#[source] Box<dyn std::error::Error + Send + Sync>),
+    /// The embedded font did not load (a broken build, not bad input).
+    #[error("the plots' embedded font (DejaVu Sans) does not load")]
+    Font,
+}
+
+/// The one typeface of every plot, embedded so that no run loads the
+/// system's font libraries (fontconfig, freetype): DejaVu Sans, licence in
+/// `assets/fonts/DejaVuSans.LICENSE`.
+const SANS_TTF: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+
+/// Registers [`SANS_TTF`] as plotters' `sans-serif` (the family its axes,
+/// legends and our titles ask for) once, before the first text is drawn.
+fn register_fonts() -> Result<(), PlotError> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED
+        .get_or_init(|| register_font("sans-serif", FontStyle::Normal, SANS_TTF).is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(PlotError::Font)
+    }
 }
 
 impl<E: std::error::Error + Send + Sync + 'static> From<DrawingAreaErrorKind<E>> for PlotError {
@@ -119,6 +142,7 @@ pub fn plot_models(
     let Some(&(_, first)) = models.first() else {
         return Err(PlotError::Nothing);
     };
+    register_fonts()?;
     let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
     root.fill(&WHITE)?;
     let root = root.titled(title, ("sans-serif", 22))?;
@@ -392,6 +416,25 @@ mod tests {
         for g in GRID_COLOURS {
             assert!(distance2(BAND_COLOUR, g) > 150 * 150);
         }
+    }
+
+    #[test]
+    fn the_embedded_font_draws_text() {
+        // A title drawn in memory with the embedded font leaves dark
+        // pixels in its strip; with no font it would fail to draw at all.
+        let (w, h) = (200u32, 40u32);
+        let mut pixels = vec![255u8; (w * h * 3) as usize];
+        {
+            register_fonts().unwrap();
+            let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
+            root.titled("finrs 0.1 mm", ("sans-serif", 22)).unwrap();
+            root.present().unwrap();
+        }
+        let dark = pixels
+            .chunks(3)
+            .filter(|p| p.iter().all(|&c| c < 128))
+            .count();
+        assert!(dark > 50, "{dark} dark pixels");
     }
 
     fn free(rows: usize, tip: impl Fn(usize) -> Option<f64>) -> Recording {

@@ -187,6 +187,9 @@ fn every_bad_file_is_refused_for_its_rule() {
             err.message().contains(needle),
             "{file}: `{msg}` lacks `{needle}`"
         );
+        // Reading only the drive checks every field all the same.
+        let drive_err = Recording::read_drive(&path).expect_err(file);
+        assert_eq!(drive_err.to_string(), msg, "{file}");
     }
 }
 
@@ -198,6 +201,12 @@ fn good_files_read_and_round_trip() {
         rec.validate("round trip").unwrap();
         let back = Recording::parse("round trip", &rec.to_csv_string()).unwrap();
         assert_eq!(back, rec, "{}", path.display());
+        let drive = Recording::read_drive(&path).unwrap();
+        assert!(drive.channels.is_empty());
+        assert_eq!(
+            (&drive.meta, &drive.t_s, &drive.v_v),
+            (&rec.meta, &rec.t_s, &rec.v_v)
+        );
     }
     let free = Recording::read(&data("good").join("free_camera_crlf.csv")).unwrap();
     assert_eq!(
@@ -242,4 +251,73 @@ fn example_session_reads() {
         assert!(rec.t_s.len() > 9_000, "{}", path.display());
         assert!(rec.channel(Channel::Current(2)).is_some());
     }
+}
+
+#[test]
+fn a_large_file_read_in_chunks_reads_as_its_text_and_is_refused_alike() {
+    // Large files are read in chunks of lines: the same recording as its
+    // whole text parses to, and the same refusal, whichever rule breaks
+    // where (a bad row near the end; invalid UTF-8 after a bad row, which
+    // the whole file's UTF-8 check reports first).
+    let good = Recording::read(&data("good").join("free_camera.csv")).unwrap();
+    let mut rec = good.clone();
+    let rows = 40_000;
+    rec.t_s = (0..rows).map(|k| k as f64 * 1e-3).collect();
+    rec.v_v = finrs::recording::Voltages::from_rows(
+        rec.meta.segments,
+        (0..rows).map(|k| vec![(k % 2000) as f64 * 1e-3; rec.meta.segments]),
+    );
+    for (_, values) in &mut rec.channels {
+        *values = (0..rows)
+            .map(|k| (k % 3 == 0).then_some(k as f64 * 1e-7))
+            .collect();
+    }
+    let text = rec.to_csv_string();
+    assert!(text.len() > 1_000_000, "{} bytes", text.len());
+    let dir = std::env::temp_dir().join(format!("finrs-chunks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("large.csv");
+    let name = path.display().to_string();
+    let check = |bytes: &[u8]| {
+        std::fs::write(&path, bytes).unwrap();
+        let whole = Recording::parse_bytes(&name, bytes);
+        let read = Recording::read(&path);
+        match (read, whole) {
+            (Ok(r), Ok(w)) => {
+                // Not assert_eq!: a difference would print 40 000 rows.
+                assert!(r == w, "read in chunks differs from the parsed text");
+                let drive = Recording::read_drive(&path).unwrap();
+                assert!(drive.t_s == w.t_s && drive.v_v == w.v_v);
+                None
+            }
+            (Err(r), Err(w)) => {
+                assert_eq!(r.to_string(), w.to_string());
+                assert_eq!(
+                    Recording::read_drive(&path).unwrap_err().to_string(),
+                    w.to_string()
+                );
+                Some(w.to_string())
+            }
+            (r, w) => panic!("read ok {}, parsed ok {}", r.is_ok(), w.is_ok()),
+        }
+    };
+    assert_eq!(check(text.as_bytes()), None);
+    let back = Recording::read(&path).unwrap();
+    assert!(back.t_s == rec.t_s && back.v_v == rec.v_v);
+    // CRLF line ends, and no final line end.
+    let crlf = text.replace('\n', "\r\n");
+    assert_eq!(check(crlf.trim_end().as_bytes()), None);
+    // A blank line at the very end is refused, as is a bad row near it.
+    let blank = format!("{text}\n");
+    assert!(check(blank.as_bytes()).unwrap().contains("blank line"));
+    let late = text.len() - 200;
+    let row_start = text[..late].rfind('\n').unwrap() + 1;
+    let mut bad_row = text.clone();
+    bad_row.insert(row_start, 'x');
+    assert!(check(bad_row.as_bytes()).unwrap().contains("not a number"));
+    let mut bytes = bad_row.into_bytes();
+    let end = bytes.len() - 5;
+    bytes[end] = 0xff;
+    assert!(check(&bytes).unwrap().contains("not valid UTF-8"));
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -5,7 +5,7 @@ mod common;
 
 use finrs::model::params::ModelFile;
 use finrs::model::predict::ModelSpec;
-use finrs::model::simulate::simulate;
+use finrs::model::simulate::{predict_recording, simulate};
 use finrs::model::synth::{drive_recording, Drive};
 use finrs::recording::Geometry;
 use finrs::recording::{max_written_error, Channel, Fixture, Recording};
@@ -34,6 +34,36 @@ fn column(r: &Recording, ch: Channel) -> Vec<f64> {
         .iter()
         .map(|v| v.expect("simulation fills every row"))
         .collect()
+}
+
+#[test]
+fn a_prediction_writes_what_its_recording_writes() {
+    // The borrowed prediction, written to a file in chunks, is byte for
+    // byte the recording `simulate` makes of it; a NaN it holds is refused
+    // by line and column, as in a recording.
+    let wave = Wave::parse("sine:2,1,120").unwrap();
+    let input = drive_recording(&wave, &drive(Fixture::Free, 0.5, 2.0)).unwrap();
+    let spec = ModelSpec::baseline(seed_params());
+    let mut pred = predict_recording("sine", &input, &spec, 2, &mut |_| {}).unwrap();
+    let whole = simulate("sine", &input, &spec, 2, &mut |_| {}).unwrap();
+    assert_eq!(pred.to_recording(), whole);
+    let path = std::env::temp_dir().join(format!("finrs-prediction-{}.csv", std::process::id()));
+    pred.write(&path).unwrap();
+    let written = std::fs::read_to_string(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    assert!(
+        written.len() > 100_000,
+        "{} bytes: more than one chunk",
+        written.len()
+    );
+    assert_eq!(written, whole.to_csv_string());
+
+    pred.channels[1].1[7] = f64::NAN;
+    let ch = pred.channels[1].0;
+    let err = pred.view().validate("pred.csv").unwrap_err().to_string();
+    let header_line = written.lines().position(|l| l.starts_with("t_s")).unwrap() + 1;
+    let want = format!("pred.csv:{}", header_line + 8);
+    assert!(err.contains(&want) && err.contains(&ch.name()), "{err}");
 }
 
 #[test]

@@ -196,7 +196,8 @@ impl Run<'_> {
         let free = self.fixture == CoreFixture::Free;
         let camera_len = if free { rows } else { 0 };
         let mut t = Traces {
-            currents_a: vec![Vec::with_capacity(rows); N],
+            // Not `vec![..; N]`: a clone of an empty Vec drops its capacity.
+            currents_a: (0..N).map(|_| Vec::with_capacity(rows)).collect(),
             tip_y_m: vec![f64::NAN; camera_len],
             tip_x_m: vec![f64::NAN; camera_len],
             dots_y_m: vec![vec![f64::NAN; camera_len]; dots.len()],

@@ -5,8 +5,12 @@
 //! and for a free tip the camera channels (tip and any tracked dots), for a
 //! blocked tip the load cell's force.
 
+use std::path::Path;
+
 use super::predict::{predict, ModelSpec, PredictError};
-use crate::recording::{Channel, Fixture, Recording, SampleTimeError};
+use crate::recording::{
+    Channel, Column, Fixture, Metadata, Recording, RecordingError, RecordingView, SampleTimeError,
+};
 
 pub use super::predict::ELEMENTS;
 
@@ -31,10 +35,64 @@ pub enum SimulateError {
     },
 }
 
+/// A simulation's output: a recording of the same fixture whose time and
+/// drive are the input's, borrowed, and whose channels are the model's
+/// traces, held as computed (a value on every row). Written as it is, or
+/// made a [`Recording`] when one is needed whole (to plot it).
+#[derive(Clone, Debug)]
+pub struct Prediction<'a> {
+    /// The recording simulated.
+    pub input: &'a Recording,
+    /// The input's metadata with a note saying what simulated it.
+    pub meta: Metadata,
+    /// Predicted channels in the order they are written.
+    pub channels: Vec<(Channel, Vec<f64>)>,
+}
+
+impl Prediction<'_> {
+    /// The prediction's parts, borrowed, to check and write.
+    pub fn view(&self) -> RecordingView<'_> {
+        RecordingView {
+            meta: &self.meta,
+            t_s: &self.input.t_s,
+            v_v: &self.input.v_v,
+            channels: self
+                .channels
+                .iter()
+                .map(|(c, v)| (*c, Column::Every(v)))
+                .collect(),
+        }
+    }
+
+    /// Checks and writes the prediction to `path` (see [`Recording::write`]).
+    pub fn write(&self, path: &Path) -> Result<(), RecordingError> {
+        self.view().write(path)
+    }
+
+    /// Rows predicted.
+    pub fn rows(&self) -> usize {
+        self.input.t_s.len()
+    }
+
+    /// The prediction as a recording of its own (copies time, drive and
+    /// channels).
+    pub fn to_recording(&self) -> Recording {
+        Recording {
+            meta: self.meta.clone(),
+            t_s: self.input.t_s.clone(),
+            v_v: self.input.v_v.clone(),
+            channels: self
+                .channels
+                .iter()
+                .map(|(c, v)| (*c, v.iter().copied().map(Some).collect()))
+                .collect(),
+        }
+    }
+}
+
 /// Simulates the drive of `input` with `model`, `elements` per segment,
-/// calling `progress(rows_done)` now and then. The recording's session
-/// start time (its `notes`, `t_session_start_s = …`) sets the dehydration
-/// clock; without one it starts at 0.
+/// calling `progress(rows_done)` now and then: [`predict_recording`] made
+/// a recording of its own.
 pub fn simulate(
     name: &str,
     input: &Recording,
@@ -42,6 +100,20 @@ pub fn simulate(
     elements: usize,
     progress: &mut dyn FnMut(u64),
 ) -> Result<Recording, SimulateError> {
+    predict_recording(name, input, model, elements, progress).map(|p| p.to_recording())
+}
+
+/// Simulates the drive of `input` with `model`, `elements` per segment,
+/// calling `progress(rows_done)` now and then. The recording's session
+/// start time (its `notes`, `t_session_start_s = …`) sets the dehydration
+/// clock; without one it starts at 0.
+pub fn predict_recording<'a>(
+    name: &str,
+    input: &'a Recording,
+    model: &ModelSpec,
+    elements: usize,
+    progress: &mut dyn FnMut(u64),
+) -> Result<Prediction<'a>, SimulateError> {
     let dt_s = input
         .sample_time()
         .map_err(|source| SimulateError::Timing {
@@ -57,31 +129,30 @@ pub fn simulate(
             }
         })?;
 
-    let mut out = Recording {
-        meta: input.meta.clone(),
-        t_s: input.t_s.clone(),
-        v_v: input.v_v.clone(),
-        channels: Vec::new(),
-    };
-    out.meta.notes = Some(format!(
+    let mut meta = input.meta.clone();
+    meta.notes = Some(format!(
         "simulated by finrs {} ({} element(s) per segment) from {name}",
         env!("CARGO_PKG_VERSION"),
         elements
     ));
-    let some = |v: Vec<f64>| v.into_iter().map(Some).collect::<Vec<_>>();
+    let mut channels = Vec::new();
     for (k, c) in traces.currents_a.into_iter().enumerate() {
-        out.channels.push((Channel::Current(k), some(c)));
+        channels.push((Channel::Current(k), c));
     }
     match input.meta.fixture {
         Fixture::Free => {
-            out.channels.push((Channel::TipY, some(traces.tip_y_m)));
-            out.channels.push((Channel::TipX, some(traces.tip_x_m)));
+            channels.push((Channel::TipY, traces.tip_y_m));
+            channels.push((Channel::TipX, traces.tip_x_m));
             for (j, (y, x)) in traces.dots_y_m.into_iter().zip(traces.dots_x_m).enumerate() {
-                out.channels.push((Channel::DotY(j), some(y)));
-                out.channels.push((Channel::DotX(j), some(x)));
+                channels.push((Channel::DotY(j), y));
+                channels.push((Channel::DotX(j), x));
             }
         }
-        Fixture::Blocked => out.channels.push((Channel::Force, some(traces.force_n))),
+        Fixture::Blocked => channels.push((Channel::Force, traces.force_n)),
     }
-    Ok(out)
+    Ok(Prediction {
+        input,
+        meta,
+        channels,
+    })
 }

@@ -94,14 +94,14 @@ const MAX_BYTES: usize = 2 << 30;
 const GIB: f64 = (1u64 << 30) as f64;
 
 /// Memory `finrs simulate --wave` takes for a drive of `rows` rows of
-/// `segments` segments, bytes, from above: the drive, its simulated copy
-/// with the predicted channels, and the file's text are all in memory at
-/// once. Peak RSS of `finrs simulate --wave step:1 --rest-s 0` grew by
-/// 212–236 bytes a row for 1 segment, 305–316 for 3 and 536–545 for 8
-/// (free and blocked, 250 000 vs 500 000 rows, `/usr/bin/time -f %M`);
-/// 200 + 48 per segment covers each.
+/// `segments` segments, bytes, from above: the drive and the predicted
+/// channels are in memory at once (the prediction borrows the drive, and
+/// the file's text is written in bounded chunks). Peak RSS of `finrs
+/// simulate --wave step:1 --rest-s 0` grew by 55–56 bytes a row for 1
+/// segment, 80–81 for 3 and 167–168 for 8 (free and blocked, 250 000 vs
+/// 500 000 rows, `/usr/bin/time -f %M`); 48 + 16 per segment covers each.
 fn bytes_to_simulate(rows: usize, segments: usize) -> usize {
-    rows.saturating_mul(200 + 48 * segments)
+    rows.saturating_mul(48 + 16 * segments)
 }
 
 /// When and how a wave is applied.
@@ -291,12 +291,12 @@ mod tests {
 
     #[test]
     fn a_drive_under_the_row_cap_but_too_big_to_simulate_is_refused() {
-        // 7 million rows of 3 segments: under 50 million, over 2 GiB.
+        // 25 million rows of 3 segments: under 50 million, over 2 GiB.
         let d = Drive {
             segments: 3,
             fixture: Fixture::Free,
             rest_s: 0.0,
-            duration_s: 7_000.0,
+            duration_s: 25_000.0,
             off_s: 0.0,
             rate_hz: 1000.0,
         };
@@ -304,13 +304,13 @@ mod tests {
         assert_eq!(
             err,
             DriveError::TooMuchMemory {
-                rows: 7_000_001,
+                rows: 25_000_001,
                 segments: 3
             }
         );
         assert_eq!(
             err.to_string(),
-            "7000001 rows of 3 segment(s) would take about 2.2 GiB to simulate (344 bytes a row); \
+            "25000001 rows of 3 segment(s) would take about 2.2 GiB to simulate (96 bytes a row); \
              this tool refuses above 2 GiB: shorten the drive or lower its rate"
         );
     }

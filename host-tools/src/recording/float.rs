@@ -84,7 +84,7 @@ impl Formatter {
             out.push(b'-');
         }
         let q = quanta.unsigned_abs();
-        let (whole, mut frac) = (q / FRACTION, q % FRACTION);
+        let (whole, frac) = (q / FRACTION, q % FRACTION);
         if whole < 10 {
             out.push(b'0' + whole as u8);
         } else {
@@ -93,20 +93,44 @@ impl Formatter {
         if frac == 0 {
             return;
         }
-        // The point and all ten decimals, two digits at a time from the
-        // right, then the trailing zeros cut: no division per digit.
-        let mut text = [b'0'; 1 + MEASURED_DECIMALS as usize];
-        text[0] = b'.';
-        for at in (1..text.len()).rev().step_by(2) {
-            let pair = 2 * (frac % 100) as usize;
-            frac /= 100;
-            text[at - 1..=at].copy_from_slice(&DIGIT_PAIRS[pair..pair + 2]);
-        }
-        let zeros = text.iter().rev().take_while(|&&b| b == b'0').count();
+        // The point, the first two decimals from a table and the last eight
+        // as one word (SWAR), then the trailing zeros cut, counted from the
+        // word: no loop over digits.
+        let (high, low) = ((frac / 100_000_000) as usize, frac % 100_000_000);
+        let digits = eight_digit_values(low);
+        let mut text = [b'.'; 3 + 8];
+        text[1..3].copy_from_slice(&DIGIT_PAIRS[2 * high..2 * high + 2]);
+        text[3..].copy_from_slice(&(digits | 0x3030_3030_3030_3030).to_le_bytes());
+        // The last digit lies in the word's top byte; frac > 0, so if all
+        // eight are zero the pair's second digit is not, unless it is 0
+        // too and the first one ends the text.
+        let zeros = if digits != 0 {
+            (digits.leading_zeros() / 8) as usize
+        } else if high % 10 != 0 {
+            8
+        } else {
+            9
+        };
         // A fixed-size copy, then the zeros cut: no call to `memcpy`.
         out.extend_from_slice(&text);
         out.truncate(out.len() - zeros);
     }
+}
+
+/// The eight decimal digits of `n < 10^8` as byte values 0 to 9, the most
+/// significant in the lowest byte (the order they are written in): split
+/// into halves, quarters and digits in parallel lanes of one word, each
+/// division by 10⁴, 10², 10 a multiplication and a shift.
+fn eight_digit_values(n: u64) -> u64 {
+    debug_assert!(n < 100_000_000);
+    // Lanes of 32 bits: the first four digits low, the last four high.
+    let fours = (n / 10_000) | ((n % 10_000) << 32);
+    // ⌊x / 100⌋ = (x · 10486) >> 20 for x < 10⁴ (lanes stay below 2³²).
+    let hundreds = ((fours * 10_486) >> 20) & 0x0000_007F_0000_007F;
+    let pairs = hundreds | ((fours - hundreds * 100) << 16);
+    // ⌊x / 10⌋ = (x · 103) >> 10 for x < 100 (lanes stay below 2¹⁶).
+    let tens = ((pairs * 103) >> 10) & 0x000F_000F_000F_000F;
+    tens | ((pairs - tens * 10) << 8)
 }
 
 /// `00`, `01`, … `99` back to back.
@@ -208,6 +232,25 @@ mod tests {
             (round(0.0), round(-0.0), round(2.5), round(-2.5)),
             (0, 0, 3, -3)
         );
+    }
+
+    proptest::proptest! {
+        /// Any number of quanta is written as its plain decimal: the
+        /// whole part, the ten decimals, trailing zeros and a bare point cut.
+        #[test]
+        fn quanta_are_written_as_their_decimal(
+            q in -1_000_000_000_000i64..1_000_000_000_000,
+            zeros in 0u32..11,
+        ) {
+            for q in [q, q / 10i64.pow(zeros) * 10i64.pow(zeros)] {
+                let mut out = Vec::new();
+                Formatter::default().quanta(&mut out, q);
+                let (sign, q_abs) = (if q < 0 { "-" } else { "" }, q.unsigned_abs());
+                let text = format!("{sign}{}.{:010}", q_abs / FRACTION, q_abs % FRACTION);
+                let want = text.trim_end_matches('0').trim_end_matches('.');
+                proptest::prop_assert_eq!(String::from_utf8(out).unwrap(), want);
+            }
+        }
     }
 
     #[test]

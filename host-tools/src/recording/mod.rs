@@ -32,3 +32,4 @@ pub use geometry::Geometry;
 pub use meta::{Fixture, Medium, Metadata, FORMAT};
 pub use timing::SampleTimeError;
 pub use voltages::Voltages;
+pub use write::{Column, RecordingView};

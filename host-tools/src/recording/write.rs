@@ -1,12 +1,75 @@
 //! Writing a recording, after checking it against the same rules.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::Path;
 
 use super::error::RecordingError;
 use super::float::Formatter;
+use super::meta::Metadata;
 use super::read::{column_name, lines, read_head, voltage, BadNumber, RowRules};
-use super::Recording;
+use super::{Channel, Recording, Voltages};
+
+/// Bytes of text gathered before each write to the file: the output never
+/// lies in memory whole (a 20 000-row prediction is 1.6 MB of text).
+const CHUNK_BYTES: usize = 64 << 10;
+
+/// A measured column as a [`RecordingView`] borrows it.
+#[derive(Clone, Copy, Debug)]
+pub enum Column<'a> {
+    /// `None` where not sampled, as [`Recording::channels`] holds it.
+    Sampled(&'a [Option<f64>]),
+    /// A value on every row (a model's prediction).
+    Every(&'a [f64]),
+}
+
+impl Column<'_> {
+    /// Values held.
+    fn len(&self) -> usize {
+        match self {
+            Column::Sampled(v) => v.len(),
+            Column::Every(v) => v.len(),
+        }
+    }
+
+    /// The value on `row`, `None` if not sampled or past the end.
+    #[inline]
+    fn get(&self, row: usize) -> Option<f64> {
+        match self {
+            Column::Sampled(v) => v.get(row).copied().flatten(),
+            Column::Every(v) => v.get(row).copied(),
+        }
+    }
+
+    /// The first of the first `rows` rows holding NaN or infinity, and it.
+    fn first_not_finite(&self, rows: usize) -> Option<(usize, f64)> {
+        match self {
+            Column::Sampled(v) => v[..rows]
+                .iter()
+                .position(|x| x.is_some_and(|x| !x.is_finite()))
+                .map(|row| (row, v[row].unwrap_or_default())),
+            Column::Every(v) => v[..rows]
+                .iter()
+                .position(|x| !x.is_finite())
+                .map(|row| (row, v[row])),
+        }
+    }
+}
+
+/// A recording to check and write whose parts are borrowed, so that a
+/// prediction is written from the input's time and drive and the model's
+/// traces without copying them into a [`Recording`] first.
+#[derive(Clone, Debug)]
+pub struct RecordingView<'a> {
+    /// The `# key = value` lines.
+    pub meta: &'a Metadata,
+    /// Time of every row, s.
+    pub t_s: &'a [f64],
+    /// Voltage per row and segment, V.
+    pub v_v: &'a Voltages,
+    /// Measured channels in header order.
+    pub channels: Vec<(Channel, Column<'a>)>,
+}
 
 impl Recording {
     /// The recording as `ipmc-bench/1` text, unchecked (see
@@ -17,7 +80,47 @@ impl Recording {
     /// they are, and NaN or infinity as `NaN`, `inf`, `-inf`: the reader
     /// refuses all of them.
     pub fn to_csv_string(&self) -> String {
-        String::from_utf8(self.to_csv_bytes()).expect("the writer writes ASCII and UTF-8 metadata")
+        self.view().to_csv_string()
+    }
+
+    /// The recording's parts, borrowed.
+    pub fn view(&self) -> RecordingView<'_> {
+        RecordingView {
+            meta: &self.meta,
+            t_s: &self.t_s,
+            v_v: &self.v_v,
+            channels: self
+                .channels
+                .iter()
+                .map(|(c, v)| (*c, Column::Sampled(v)))
+                .collect(),
+        }
+    }
+
+    /// Checks the recording against every rule, as if read from a file
+    /// called `name`: line numbers refer to the text it would be written as.
+    /// The metadata and header are checked by reading their text back; the
+    /// rows by the reader's own rules, on the numbers themselves.
+    pub fn validate(&self, name: &str) -> Result<(), RecordingError> {
+        self.view().validate(name)
+    }
+
+    /// Checks and writes the recording to `path`.
+    pub fn write(&self, path: &Path) -> Result<(), RecordingError> {
+        self.view().write(path)
+    }
+}
+
+impl RecordingView<'_> {
+    /// As [`Recording::to_csv_string`].
+    pub fn to_csv_string(&self) -> String {
+        let mut out = Vec::new();
+        // Writing into memory cannot fail.
+        let _ = self.write_text(|chunk| {
+            out.extend_from_slice(chunk);
+            Ok(())
+        });
+        String::from_utf8(out).expect("the writer writes ASCII and UTF-8 metadata")
     }
 
     /// The metadata lines and the header line.
@@ -34,12 +137,14 @@ impl Recording {
         out
     }
 
-    /// [`Recording::to_csv_string`] as bytes, formatted in one pass into
-    /// one buffer.
-    fn to_csv_bytes(&self) -> Vec<u8> {
+    /// The text, formatted in one pass and handed to `sink` in chunks of
+    /// about [`CHUNK_BYTES`], whole rows each.
+    fn write_text(
+        &self,
+        mut sink: impl FnMut(&[u8]) -> std::io::Result<()>,
+    ) -> std::io::Result<()> {
         let head = self.head_text();
-        let width = 1 + self.meta.segments + self.channels.len();
-        let mut out = Vec::with_capacity(head.len() + self.t_s.len() * width * 20);
+        let mut out = Vec::with_capacity(head.len().max(CHUNK_BYTES + 4096));
         out.extend_from_slice(head.as_bytes());
         let mut f = Formatter::default();
         for (row, &t) in self.t_s.iter().enumerate() {
@@ -50,19 +155,20 @@ impl Recording {
             }
             for (_, values) in &self.channels {
                 out.push(b',');
-                if let Some(&Some(x)) = values.get(row) {
+                if let Some(x) = values.get(row) {
                     finite(&mut out, x, |out, x| f.measured(out, x));
                 }
             }
             out.push(b'\n');
+            if out.len() >= CHUNK_BYTES {
+                sink(&out)?;
+                out.clear();
+            }
         }
-        out
+        sink(&out)
     }
 
-    /// Checks the recording against every rule, as if read from a file
-    /// called `name`: line numbers refer to the text it would be written as.
-    /// The metadata and header are checked by reading their text back; the
-    /// rows by the reader's own rules, on the numbers themselves.
+    /// As [`Recording::validate`].
     pub fn validate(&self, name: &str) -> Result<(), RecordingError> {
         let rows = self.t_s.len();
         if self.v_v.segments() != self.meta.segments {
@@ -93,7 +199,7 @@ impl Recording {
         let (meta, header_line, columns) = read_head(name, &mut lines(&head))?;
         // Metadata is written to read back exactly; a difference would
         // mean the writer lost something.
-        if meta != self.meta {
+        if meta != *self.meta {
             return Err(RecordingError::file(
                 name,
                 "metadata does not read back as written",
@@ -121,11 +227,7 @@ impl Recording {
         let mut bad_channel: Option<(usize, usize, f64)> = None;
         for (j, (_, values)) in self.channels.iter().enumerate() {
             let rows = bad_channel.map_or(rows, |(row, _, _)| row);
-            if let Some(row) = values[..rows]
-                .iter()
-                .position(|x| x.is_some_and(|x| !x.is_finite()))
-            {
-                let x = values[row].unwrap_or_default();
+            if let Some((row, x)) = values.first_not_finite(rows) {
                 bad_channel = Some((row, 1 + n + j, x));
             }
         }
@@ -153,12 +255,14 @@ impl Recording {
         }
     }
 
-    /// Checks and writes the recording to `path`.
+    /// Checks, then writes to `path` in chunks as the text is formatted.
     pub fn write(&self, path: &Path) -> Result<(), RecordingError> {
         let name = path.display().to_string();
         self.validate(&name)?;
-        std::fs::write(path, self.to_csv_bytes())
-            .map_err(|e| RecordingError::file(&name, format!("cannot write: {e}")))
+        let cannot = |e: std::io::Error| RecordingError::file(&name, format!("cannot write: {e}"));
+        let mut file = std::fs::File::create(path).map_err(cannot)?;
+        self.write_text(|chunk| file.write_all(chunk))
+            .map_err(cannot)
     }
 }
 
