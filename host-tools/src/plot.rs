@@ -37,8 +37,9 @@ pub enum PlotError {
 const SANS_TTF: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 
 /// Registers [`SANS_TTF`] as plotters' `sans-serif` (the family its axes,
-/// legends and our titles ask for) once, before the first text is drawn.
-fn register_fonts() -> Result<(), PlotError> {
+/// legends and our titles ask for) once, before the first text is drawn;
+/// every crate of ours that draws with plotters calls it.
+pub fn register_fonts() -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED
         .get_or_init(|| register_font("sans-serif", FontStyle::Normal, SANS_TTF).is_ok());

@@ -9,6 +9,7 @@ use crate::sweep::{columns, matrix, Outcome};
 
 /// Draws the matrix of `outcomes` into the PNG at `path`.
 pub fn draw(outcomes: &[Outcome], path: &Path) -> anyhow::Result<()> {
+    finrs::plot::register_fonts()?;
     let rows = matrix(outcomes);
     let columns = columns();
     let (label_w, cell_w, cell_h, head_h) = (330i32, 72i32, 26i32, 240i32);

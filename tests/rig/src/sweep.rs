@@ -403,4 +403,18 @@ mod tests {
         assert!(md.contains("right 33 %"), "{md}");
         assert_eq!(csv(&o).lines().count(), 4);
     }
+
+    #[test]
+    fn the_heat_map_is_drawn_with_the_embedded_font() {
+        let o = [
+            outcome(vec![], "explained", &["damping"]),
+            outcome(vec!["segment-variation"], "none", &[]),
+        ];
+        let path = std::env::temp_dir().join(format!("finrs-heatmap-{}.png", std::process::id()));
+        crate::heatmap::draw(&o, &path).unwrap();
+        // Labels and shaded cells: far more than an empty PNG's few bytes.
+        let bytes = std::fs::metadata(&path).unwrap().len();
+        std::fs::remove_file(&path).ok();
+        assert!(bytes > 5_000, "{bytes} bytes");
+    }
 }
