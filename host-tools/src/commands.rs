@@ -60,10 +60,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     bar.set_message("simulating");
     let sim = predict_recording(&name, &input, &spec, args.elements, &mut |n| {
         bar.set_position(n)
-    })
-    // SimulateError's message already ends with its source's (in
-    // model/simulate.rs); its text alone says each once.
-    .map_err(|e| anyhow!(e.to_string()))?;
+    })?;
     bar.finish_and_clear();
 
     create_parent(&args.out)?;

@@ -14,11 +14,12 @@ use crate::recording::{
 
 pub use super::predict::ELEMENTS;
 
-/// Why a simulation was refused.
+/// Why a simulation was refused. Each variant says which recording; the
+/// rule broken is its `source()`, which the binary prints after it.
 #[derive(Debug, thiserror::Error)]
 pub enum SimulateError {
     /// The recording has no single sample time.
-    #[error("{name}: {source}")]
+    #[error("{name}")]
     Timing {
         /// The recording.
         name: String,
@@ -26,7 +27,7 @@ pub enum SimulateError {
         source: SampleTimeError,
     },
     /// The engine refused the model or the mesh.
-    #[error("{name}: {source}")]
+    #[error("{name}")]
     Model {
         /// The recording.
         name: String,

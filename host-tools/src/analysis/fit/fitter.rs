@@ -161,7 +161,7 @@ impl<'a> Fitter<'a> {
 
     /// The weighted residuals that `stage` sees over `recordings`,
     /// concatenated; the circuit's stage runs the circuit alone.
-    pub(super) fn stage_residuals(
+    fn stage_residuals(
         &self,
         stage: Stage,
         recordings: &[usize],
@@ -253,7 +253,8 @@ impl<'a> Fitter<'a> {
             if free.is_empty() || *m == 0 {
                 continue;
             }
-            let problem = Problem::new(self, recordings, &space, *stage, free, theta, *m);
+            let run = |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec);
+            let problem = Problem::new(&run, &space, free, theta, *m);
             let (problem, report, n) = descend(problem);
             theta = problem.theta;
             evaluations += n;
@@ -306,9 +307,10 @@ impl<'a> Fitter<'a> {
                 .flat_map(|c| c.residuals.iter().copied())
                 .collect();
             let rss = base.iter().map(|r| r * r).sum();
+            let run = |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec);
             match stage {
                 Stage::Circuit => {
-                    let p = Problem::new(self, recordings, space, *stage, free, theta.to_vec(), *m);
+                    let p = Problem::new(&run, space, free, theta.to_vec(), *m);
                     circuit = Some(Block {
                         knobs: free.clone(),
                         jacobian: p.jacobian_at(theta, &base)?,
@@ -320,7 +322,7 @@ impl<'a> Fitter<'a> {
                     // upstream ones.
                     let upstream = Stage::Circuit.knobs(space);
                     let all: Vec<usize> = free.iter().chain(&upstream).copied().collect();
-                    let p = Problem::new(self, recordings, space, *stage, &all, theta.to_vec(), *m);
+                    let p = Problem::new(&run, space, &all, theta.to_vec(), *m);
                     let jac = p.jacobian_at(theta, &base)?;
                     let own = jac.columns(0, free.len()).into_owned();
                     let up = jac.columns(free.len(), upstream.len()).into_owned();

@@ -16,8 +16,8 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 
 use super::error::FitError;
-use super::fitter::Fitter;
 use super::space::{Knob, Space};
+use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
 
 /// Restarts of the optimiser after its first stop, at most.
@@ -63,13 +63,15 @@ impl Stage {
     }
 }
 
+/// Runs a model and returns the weighted residuals a stage sees.
+pub type Residuals<'a> = dyn Fn(&ModelSpec) -> Result<Vec<f64>, FitError> + Sync + 'a;
+
 /// The least-squares problem of one stage, as the optimiser sees it: the
 /// stage's knobs free, every other part of `θ` held.
-pub struct Problem<'a, 'b> {
-    fitter: &'b Fitter<'a>,
-    recordings: &'b [usize],
+pub struct Problem<'b> {
+    /// The stage's residuals of a model.
+    run: &'b Residuals<'b>,
     space: &'b Space,
-    stage: Stage,
     /// Indices in `θ` of the free knobs.
     free: &'b [usize],
     /// The whole `θ`, its free entries the optimiser's current point.
@@ -80,22 +82,19 @@ pub struct Problem<'a, 'b> {
     m: usize,
 }
 
-impl<'a, 'b> Problem<'a, 'b> {
-    /// The stage's problem at `theta`, not yet evaluated.
+impl<'b> Problem<'b> {
+    /// The problem of the stage whose residuals `run` gives, `m` of them,
+    /// over the knobs `free` of `space`, at `theta`, not yet evaluated.
     pub fn new(
-        fitter: &'b Fitter<'a>,
-        recordings: &'b [usize],
+        run: &'b Residuals<'b>,
         space: &'b Space,
-        stage: Stage,
         free: &'b [usize],
         theta: Vec<f64>,
         m: usize,
     ) -> Self {
         Problem {
-            fitter,
-            recordings,
+            run,
             space,
-            stage,
             free,
             theta,
             residuals: None,
@@ -114,8 +113,7 @@ impl<'a, 'b> Problem<'a, 'b> {
 
     /// The stage's weighted residuals at the whole `theta`.
     fn residuals_at(&self, theta: &[f64]) -> Result<Vec<f64>, FitError> {
-        self.fitter
-            .stage_residuals(self.stage, self.recordings, &self.space.spec(theta))
+        (self.run)(&self.space.spec(theta))
     }
 
     /// Forward-difference Jacobian of the stage's residuals at the whole
@@ -148,7 +146,7 @@ impl<'a, 'b> Problem<'a, 'b> {
     }
 }
 
-impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     type ResidualStorage = Owned<f64, Dyn>;
     type JacobianStorage = Owned<f64, Dyn, Dyn>;
     type ParameterStorage = Owned<f64, Dyn>;
@@ -189,9 +187,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_, '_> {
 /// cost by a millionth. Without this, a later model with one more term
 /// "gains" only by finishing this one's descent. Returns the problem at the
 /// end, the last report and the evaluations in all.
-pub fn descend<'a, 'b>(
-    mut problem: Problem<'a, 'b>,
-) -> (Problem<'a, 'b>, MinimizationReport<f64>, usize) {
+pub fn descend(mut problem: Problem<'_>) -> (Problem<'_>, MinimizationReport<f64>, usize) {
     let start = problem.params();
     problem.set_params(&start);
     let (mut problem, mut report) = LevenbergMarquardt::new()
