@@ -351,18 +351,12 @@ impl<'a> Fitter<'a> {
             .sum()
     }
 
-    /// The residual count of `recordings`, refused when it is 0 or when
-    /// no recording drives a segment (the data then say nothing).
-    fn data_to_fit(&self, recordings: &[usize]) -> Result<usize, FitError> {
-        let n_data: usize = recordings
+    /// Refuses `recordings` when they hold no residual or when no
+    /// recording drives a segment (the data then say nothing).
+    fn data_to_fit(&self, recordings: &[usize]) -> Result<(), FitError> {
+        let n_data: usize = Stage::ALL
             .iter()
-            .map(|&i| {
-                self.targets.recordings[i]
-                    .targets
-                    .iter()
-                    .map(|t| t.rows.len())
-                    .sum::<usize>()
-            })
+            .map(|&stage| self.stage_count(stage, recordings))
             .sum();
         if n_data == 0 {
             return Err(FitError::NoData);
@@ -374,6 +368,6 @@ impl<'a> Fitter<'a> {
         if !driven {
             return Err(FitError::NoDrive);
         }
-        Ok(n_data)
+        Ok(())
     }
 }

@@ -197,9 +197,8 @@ pub fn estimates(
                     (Space::value(knob, &space.spec(&t)) - value) / h
                 })
                 .collect();
-            let se = Some(standard_error(&grad, cov))
-                .filter(|s| s.is_finite())
-                .unwrap_or(f64::INFINITY);
+            let se = standard_error(&grad, cov);
+            let se = if se.is_finite() { se } else { f64::INFINITY };
             let (low, high) = interval(knob.positive(), value, se);
             Estimate {
                 knob,
