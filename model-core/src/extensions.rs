@@ -213,8 +213,9 @@ impl Extensions {
     }
 
     /// Modal damping `2ζω` of a mode at `omega_rad_s`, with `rho_a` the
-    /// strip's own mass per length, 1/s.
-    pub(crate) fn two_zeta_omega(&self, omega_rad_s: f64, rho_a: f64) -> f64 {
+    /// strip's own mass per length, 1/s (the fit reads `ζ` off it to start
+    /// a damping term where the measured ringing decays).
+    pub fn two_zeta_omega(&self, omega_rad_s: f64, rho_a: f64) -> f64 {
         self.damping_mass_per_s
             + self.damping_stiffness_s * omega_rad_s * omega_rad_s
             + self.drag_n_s_per_m2 / (rho_a + self.added_mass_kg_per_m)

@@ -10,7 +10,11 @@
 //! decides where it can: in water, the fluid's drag is mass-proportional
 //! damping, so `damping` and `hydrodynamic-loading` differ only by the
 //! added mass, and the fluid the session names (`medium`, which the
-//! contract makes evidence) is the expected cause of both.
+//! contract makes evidence) is the expected cause of both. Otherwise the
+//! simplest of them joins (fewest effects; the forward search also tries
+//! a pair at once): a second term that the held-out part cannot tell
+//! from none is not evidence for it, as the one-standard-error rule of
+//! cross-validation says.
 
 use crate::analysis::fit::{FitResult, Score};
 
@@ -23,33 +27,45 @@ pub type Passed<E> = (E, FitResult, Score);
 
 /// The candidate that joins: of the lowest held-out error and those whose
 /// held-out error is within [`TOLD_APART_SE`] standard errors of it (the
-/// log ratio paired over the held-out recordings' channels), the first
-/// that `expected` accepts; if none, the lowest held-out error.
-pub fn choose<E>(passed: Vec<Passed<E>>, expected: impl Fn(&E) -> bool) -> Option<Passed<E>> {
-    let best = passed
+/// log ratio paired over the held-out recordings' channels), one that
+/// `expected` accepts if any, then the one of fewest effects (`size`),
+/// then the lowest held-out error.
+pub fn choose<E>(
+    passed: Vec<Passed<E>>,
+    expected: impl Fn(&E) -> bool,
+    size: impl Fn(&E) -> usize,
+) -> Option<Passed<E>> {
+    let held: Vec<Vec<f64>> = passed.iter().map(|p| per_channel(&p.2)).collect();
+    let keys: Vec<(bool, usize)> = passed
         .iter()
-        .enumerate()
-        .min_by(|(_, a), (_, b)| a.2.rss.total_cmp(&b.2.rss))?
-        .0;
-    let best_rss = per_channel(&passed[best].2);
-    let tied = |s: &Score| {
+        .map(|p| (!expected(&p.0), size(&p.0)))
+        .collect();
+    let pick = pick(&held, &keys)?;
+    passed.into_iter().nth(pick)
+}
+
+/// [`choose`] on the candidates' held-out RSS per channel `held` and their
+/// preference keys (`(not expected, effects)`, lower first).
+fn pick(held: &[Vec<f64>], keys: &[(bool, usize)]) -> Option<usize> {
+    let total = |c: &[f64]| c.iter().sum::<f64>();
+    let best = (0..held.len()).min_by(|&a, &b| total(&held[a]).total_cmp(&total(&held[b])))?;
+    let tied = |c: &[f64]| {
         // On a log scale: each channel's ratio counts alike, so one
         // channel's large RSS does not stand for all of them.
-        let d: Vec<f64> = per_channel(s)
+        let d: Vec<f64> = c
             .iter()
-            .zip(&best_rss)
+            .zip(&held[best])
             .map(|(a, b)| (a / b).ln())
             .collect();
         indistinguishable(&d)
     };
-    let pick = passed
-        .iter()
-        .enumerate()
-        .filter(|(i, p)| *i == best || tied(&p.2))
-        .filter(|(_, p)| expected(&p.0))
-        .min_by(|(_, a), (_, b)| a.2.rss.total_cmp(&b.2.rss))
-        .map_or(best, |(i, _)| i);
-    passed.into_iter().nth(pick)
+    (0..held.len())
+        .filter(|&i| i == best || tied(&held[i]))
+        .min_by(|&a, &b| {
+            keys[a]
+                .cmp(&keys[b])
+                .then(total(&held[a]).total_cmp(&total(&held[b])))
+        })
 }
 
 /// The held-out RSS of each channel of each recording, in the score's
@@ -81,7 +97,27 @@ fn indistinguishable(d: &[f64]) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::indistinguishable;
+    use super::{indistinguishable, pick};
+
+    #[test]
+    fn of_candidates_the_held_out_part_cannot_tell_apart_the_simplest_joins() {
+        let single = vec![10.0, 20.0, 30.0];
+        // A pair a hair better on every channel, but not consistently.
+        let pair = vec![9.0, 21.0, 29.0];
+        let keys = [(true, 1), (true, 2)];
+        assert_eq!(pick(&[single.clone(), pair], &keys), Some(0));
+        // A pair clearly better everywhere joins.
+        let better = vec![1.0, 2.5, 3.0];
+        assert_eq!(pick(&[single.clone(), better.clone()], &keys), Some(1));
+        // The session's evidence comes before the count.
+        let keys = [(true, 1), (false, 2)];
+        let close = vec![11.0, 19.0, 31.0];
+        assert_eq!(pick(&[single.clone(), close], &keys), Some(1));
+        // Otherwise the lowest held-out error of the tied.
+        let keys = [(true, 1), (true, 1)];
+        assert_eq!(pick(&[single, vec![9.5, 20.0, 30.0]], &keys), Some(1));
+        assert_eq!(pick(&[], &[]), None);
+    }
 
     #[test]
     fn a_consistent_difference_is_told_apart_a_noisy_one_is_not() {

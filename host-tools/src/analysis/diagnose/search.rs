@@ -3,11 +3,12 @@
 use rayon::prelude::*;
 
 use super::analyses;
-use super::choose::choose;
+use super::choose::{choose, Passed};
 use super::rests::rest_structure;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
-use crate::analysis::fit::{modal, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
+use crate::analysis::fit::modal::{self, Ringing};
+use crate::analysis::fit::{ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::model::predict::ModelSpec;
 use crate::recording::Medium;
 use crate::session::Session;
@@ -20,8 +21,13 @@ pub const NOISE_FLOOR_RATIO: f64 = 1.5;
 pub const DELTA_BIC: f64 = -10.0;
 /// Relative drop of held-out weighted RSS an effect must reach.
 pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
-/// Effects accepted at most (rounds of the forward search).
-pub const MAX_CAUSES: usize = 3;
+/// Effects accepted at most: a damped, soft strip needs two before any
+/// other (every real strip, docs/FORMAT.md), and a third and fourth are
+/// what a session hides.
+pub const MAX_CAUSES: usize = 4;
+/// The effects the blocked mode's frequency and decay speak to, tried
+/// together as well as apart.
+pub const MODE_PAIR: [Effect; 2] = [Effect::Damping, Effect::BeamStiffness];
 /// Lags of the residual–input correlation, as MATLAB's `resid` default.
 pub const INPUT_LAGS: usize = 25;
 /// Splits a session: every third recording from the second is held out,
@@ -177,8 +183,8 @@ struct Found {
 }
 
 impl Search<'_> {
-    /// Adds, round by round, the best effect that passes the tests, until
-    /// none passes or [`MAX_CAUSES`] are in.
+    /// Adds, round by round, the best effect (or [`MODE_PAIR`]) that passes
+    /// the tests, until none passes or [`MAX_CAUSES`] are in.
     fn run(
         &self,
         baseline: &FitResult,
@@ -192,34 +198,45 @@ impl Search<'_> {
             accepted: Vec::new(),
             candidates: Vec::new(),
         };
-        for round in 0..MAX_CAUSES {
+        let mut round = 0;
+        while found.accepted.len() < MAX_CAUSES {
             let untried: Vec<Effect> = Effect::ALL
                 .into_iter()
                 .filter(|e| !found.fit.effects.contains(e))
                 .filter(|e| !untestable.iter().any(|u| u.effect == e.name()))
                 .collect();
-            if untried.is_empty() {
+            let mut moves: Vec<Vec<Effect>> = untried.iter().map(|&e| vec![e]).collect();
+            // The blocked mode's frequency and decay are read together: a
+            // damped, soft strip leaves a model with either term alone off
+            // in the other, and neither alone may then gain (the classic
+            // trap of adding one term at a time), so the two are also
+            // tried together.
+            if MODE_PAIR.iter().all(|e| untried.contains(e))
+                && found.accepted.len() + MODE_PAIR.len() <= MAX_CAUSES
+            {
+                moves.push(MODE_PAIR.to_vec());
+            }
+            if moves.is_empty() {
                 break;
             }
-            progress(&format!(
-                "round {}: {} candidates",
-                round + 1,
-                untried.len()
-            ));
+            progress(&format!("round {}: {} candidates", round + 1, moves.len()));
             let mut passed = Vec::new();
-            for (e, fit, score) in self.fit_round(&untried, &found.fit)? {
-                let candidate = self.judge(e, round, &fit, &score, &found);
+            for (m, fit, score) in self.fit_round(&moves, &found.fit)? {
+                let candidate = self.judge(&m, round, &fit, &score, &found);
                 if candidate.passed {
-                    passed.push((e, fit, score));
+                    passed.push((m, fit, score));
                 }
                 found.candidates.push(candidate);
             }
-            let Some((e, fit, score)) = choose(passed, |e| self.expected(*e)) else {
+            let Some((m, fit, score)) =
+                choose(passed, |m| m.iter().any(|&e| self.expected(e)), Vec::len)
+            else {
                 break;
             };
-            found.accepted.push(e);
+            found.accepted.extend(m);
             found.fit = fit;
             found.hold = score;
+            round += 1;
         }
         Ok(found)
     }
@@ -235,42 +252,47 @@ impl Search<'_> {
                 .any(|r| r.rec.meta.medium == Medium::Water)
     }
 
-    /// Fits each untried effect on top of `current`, in parallel, and
-    /// scores it on the held-out part.
+    /// Fits each move (an untried effect, or [`MODE_PAIR`]) on top of
+    /// `current`, in parallel, and scores it on the held-out part.
     fn fit_round(
         &self,
-        untried: &[Effect],
+        moves: &[Vec<Effect>],
         current: &FitResult,
-    ) -> Result<Vec<(Effect, FitResult, Score)>, FitError> {
-        // The model's and the load cell's blocked frequencies, once a round:
-        // every frequency-moving candidate of the round starts from them.
-        let frequencies = untried
+    ) -> Result<Vec<Passed<Vec<Effect>>>, FitError> {
+        // The model's and the load cell's blocked modes, once a round:
+        // every candidate of the round that moves or damps the mode starts
+        // from them.
+        let modes = moves
             .iter()
-            .any(|e| moves_frequency(*e))
-            .then(|| blocked_frequencies(self.session, self.train, &current.spec))
+            .flatten()
+            .any(|e| reads_the_mode(*e))
+            .then(|| blocked_modes(self.session, self.train, &current.spec))
             .flatten();
-        let results: Vec<Result<(Effect, FitResult, Score), FitError>> = untried
+        let results: Vec<Result<Passed<Vec<Effect>>, FitError>> = moves
             .par_iter()
-            .map(|&e| {
+            .map(|m| {
                 let mut effects = current.effects.clone();
-                effects.push(e);
-                let start = frequency_start(e, &current.spec, frequencies);
+                effects.extend(m);
+                let start = m
+                    .iter()
+                    .fold(current.spec, |start, &e| mode_start(e, &start, modes));
                 let fit = self
                     .fitter
                     .fit(self.train, &effects, Some(&start), self.fixed)?;
                 let score = self.fitter.score(self.hold, &fit.spec)?;
-                Ok((e, fit, score))
+                Ok((m.clone(), fit, score))
             })
             .collect();
         // In order, so that the first candidate's failure is the one named.
         results.into_iter().collect()
     }
 
-    /// The candidate `e` of round `round` against the model so far: it
-    /// passes when BIC, the held-out error and its own term all say so.
+    /// The candidate move `m` of round `round` against the model so far: it
+    /// passes when BIC, the held-out error and each effect's own term all
+    /// say so.
     fn judge(
         &self,
-        e: Effect,
+        m: &[Effect],
         round: usize,
         fit: &FitResult,
         score: &Score,
@@ -279,14 +301,15 @@ impl Search<'_> {
         let delta_bic = fit.bic - so_far.fit.bic;
         let rss_gain = 1.0 - score.rss / so_far.hold.rss;
         Candidate {
-            name: e.name().to_string(),
+            name: m.iter().map(|e| e.name()).collect::<Vec<_>>().join("+"),
             round,
             delta_bic,
             holdout_gain_percent: gain_percent(so_far.hold.nrmse, score.nrmse),
             holdout_rss_gain_percent: 100.0 * rss_gain,
             passed: delta_bic < DELTA_BIC
                 && rss_gain > HOLDOUT_RSS_GAIN
-                && signature_is_significant(e, fit, &self.fixed),
+                && m.iter()
+                    .all(|&e| signature_is_significant(e, fit, &self.fixed)),
             params: fit
                 .estimates
                 .iter()
@@ -339,43 +362,60 @@ pub fn tested_channels<'a>(
         .filter(|(b, _)| b.has_signal || b.channel.is_camera())
 }
 
-/// Whether a candidate moves the beam's natural frequencies.
-fn moves_frequency(e: Effect) -> bool {
-    matches!(e, Effect::BeamStiffness | Effect::HydrodynamicLoading)
+/// Whether a candidate moves or damps the beam's first mode.
+fn reads_the_mode(e: Effect) -> bool {
+    matches!(
+        e,
+        Effect::BeamStiffness | Effect::HydrodynamicLoading | Effect::Damping
+    )
 }
 
-/// `(model, measured)` first blocked frequency, Hz, the measurement
-/// searched between 0.2 and 3 times the model's.
-fn blocked_frequencies(
+/// `(model, measured)` first blocked mode, the measurement searched
+/// between 0.2 and 3 times the model's frequency.
+fn blocked_modes(
     session: &Session,
     train: &[usize],
     current: &ModelSpec,
-) -> Option<(f64, f64)> {
-    let model_hz = modal::model_blocked_hz(current)?;
-    let data_hz = modal::measured_blocked_hz(session, train, 0.2 * model_hz, 3.0 * model_hz)?;
-    Some((model_hz, data_hz))
+) -> Option<(Ringing, Ringing)> {
+    let model = modal::model_blocked_ringing(current)?;
+    let data =
+        modal::measured_blocked_ringing(session, train, current, 0.2 * model.hz, 3.0 * model.hz)?;
+    Some((model, data))
 }
 
-/// Where a candidate that moves the beam's frequency starts: where the
-/// model's first blocked mode rings at the measured frequency (`EI` for
-/// beam-stiffness, added mass for hydrodynamic loading). Others start at
-/// the current model, their own terms off.
-fn frequency_start(e: Effect, current: &ModelSpec, frequencies: Option<(f64, f64)>) -> ModelSpec {
+/// Where a candidate that moves or damps the beam's first mode starts:
+/// where the model's mode rings at the measured frequency (`EI` for
+/// beam-stiffness, added mass for hydrodynamic loading) and decays at the
+/// measured rate (Rayleigh damping, half of the missing ratio from each
+/// term at the mode; the water's linear drag). Others start at the current
+/// model, their own terms off.
+fn mode_start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) -> ModelSpec {
     let mut start = *current;
-    if !moves_frequency(e) {
+    if !reads_the_mode(e) {
         return start;
     }
-    let Some((model_hz, data_hz)) = frequencies else {
+    let Some((model, data)) = modes else {
         return start;
     };
     // f ∝ √(EI / mass per length).
-    let ratio2 = (data_hz / model_hz).powi(2);
+    let ratio2 = (data.hz / model.hz).powi(2);
+    let missing = (data.damping_ratio - model.damping_ratio).max(0.0);
     match e {
         Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
+        Effect::Damping => {
+            // ζ(ω) = α/(2ω) + βω/2 at the mode, which damping does not move.
+            let w = 2.0 * std::f64::consts::PI * model.hz;
+            start.ext.damping_mass_per_s += missing * w;
+            start.ext.damping_stiffness_s += missing / w;
+        }
         _ => {
             let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
             start.ext.added_mass_kg_per_m =
                 (mass / ratio2 - start.params.mass_per_length_kg_per_m).max(0.0);
+            // Linear drag d damps as 2ζω = d / (mass with the water's).
+            let w = 2.0 * std::f64::consts::PI * data.hz;
+            let wet = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
+            start.ext.drag_n_s_per_m2 += 2.0 * missing * w * wet;
         }
     }
     start
