@@ -220,9 +220,17 @@ impl Search<'_> {
                 break;
             }
             progress(&format!("round {}: {} candidates", round + 1, moves.len()));
-            let mut passed = Vec::new();
+            let mut passed: Vec<Passed<Vec<Effect>>> = Vec::new();
+            // The pair comes after the single effects.
             for (m, fit, score) in self.fit_round(&moves, &found.fit)? {
-                let candidate = self.judge(&m, round, &fit, &score, &found);
+                let mut candidate = self.judge(&m, round, &fit, &score, &found);
+                // The pair must pay, on held-out data, for its second
+                // effect over a member that passed alone, as that effect
+                // would joining a round later.
+                candidate.passed &= passed
+                    .iter()
+                    .filter(|p| p.0.len() == 1 && m.len() > 1 && m.contains(&p.0[0]))
+                    .all(|p| score.rss < (1.0 - HOLDOUT_RSS_GAIN) * p.2.rss);
                 if candidate.passed {
                     passed.push((m, fit, score));
                 }
