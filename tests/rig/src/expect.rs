@@ -142,6 +142,23 @@ pub fn expected(hidden: &Hidden, bench: &Bench, protocol: Protocol) -> Expected 
     e
 }
 
+/// The names a verdict gives, as scored: its catalogue `causes`, then its
+/// bench findings (`bench` holds what each found, one per channel) as
+/// `bench:` names, each once.
+pub fn names_given<S: AsRef<str>>(
+    causes: &[String],
+    bench: impl IntoIterator<Item = S>,
+) -> Vec<String> {
+    let mut names = causes.to_vec();
+    for what in bench {
+        let name = format!("{BENCH}{}", what.as_ref());
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    names
+}
+
 /// Scores a verdict (`none`, `explained` or `unexplained`) naming `causes`
 /// against what was expected.
 pub fn score(expected: &Expected, verdict: &str, causes: &[String]) -> Score {

@@ -9,7 +9,7 @@
 use finrs::analysis::diagnose::{diagnose, Verdict};
 use finrs::model::params::ModelFile;
 use finrs::session::Session;
-use finrs_rig::expect::BENCH;
+use finrs_rig::expect::names_given;
 use finrs_rig::sweep::{write_scenario, Scenario};
 use finrs_rig::{score, Expected};
 
@@ -35,13 +35,7 @@ fn run(
         .unwrap();
     let v = diagnose(&session, fixed, &|_| {}).unwrap().verdict;
     std::fs::remove_dir_all(&dir).ok();
-    let mut names = v.causes.clone();
-    for b in &v.rest.bench {
-        let name = format!("{BENCH}{}", b.what);
-        if !names.contains(&name) {
-            names.push(name);
-        }
-    }
+    let names = names_given(&v.causes, v.rest.bench.iter().map(|b| &b.what));
     eprintln!(
         "{} (seed {seed}): verdict {}, names {names:?}, expected {expected:?}",
         s.row(),

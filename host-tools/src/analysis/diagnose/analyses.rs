@@ -9,6 +9,7 @@
 use serde::Serialize;
 
 use crate::analysis::fit::Score;
+use crate::analysis::median::median;
 use crate::recording::{Channel, Fixture};
 use crate::session::Session;
 
@@ -158,13 +159,15 @@ fn amplitude(session: &Session, recordings: &[RecordingMisfit]) -> Option<Depend
 
 /// Median gain over the mechanical channels that carry signal.
 fn median_gain(channels: &[&crate::analysis::fit::ChannelFit]) -> Option<f64> {
-    let mut gains: Vec<f64> = channels
-        .iter()
-        .filter(|c| c.has_signal && !matches!(c.channel, Channel::Current(_)) && c.gain.is_finite())
-        .map(|c| c.gain)
-        .collect();
-    gains.sort_by(f64::total_cmp);
-    (!gains.is_empty()).then(|| gains[gains.len() / 2])
+    median(
+        channels
+            .iter()
+            .filter(|c| {
+                c.has_signal && !matches!(c.channel, Channel::Current(_)) && c.gain.is_finite()
+            })
+            .map(|c| c.gain)
+            .collect(),
+    )
 }
 
 /// Spearman's rank correlation of `(x, y)` pairs (ties get mean ranks).

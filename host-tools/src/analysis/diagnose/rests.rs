@@ -28,6 +28,7 @@ use rustfft::num_complex::Complex;
 use serde::Serialize;
 
 use super::whiteness;
+use crate::analysis::median::median;
 use crate::session::Session;
 
 /// Mains frequencies tried, Hz.
@@ -264,11 +265,6 @@ fn line_fit(y: &[f64]) -> (f64, f64) {
     (mean_y - b * mean_i, b)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// The strongest mains family's hum, if a line of it stands out.
 fn hum(s: &Spectrum, channel: &str) -> Option<BenchFinding> {
     let mut best: Option<(f64, f64, f64)> = None; // (f0, strongest ratio, hum power)
@@ -279,7 +275,9 @@ fn hum(s: &Spectrum, channel: &str) -> Option<BenchFinding> {
             if around.len() < 4 {
                 continue;
             }
-            let floor = median(around.iter().map(|&k| s.psd[k]).collect());
+            let Some(floor) = median(around.iter().map(|&k| s.psd[k]).collect()) else {
+                continue;
+            };
             let k = s.bin(f);
             // The Hann window spreads a line over about three bins.
             let near = k.saturating_sub(2)..=(k + 2).min(s.psd.len() - 1);

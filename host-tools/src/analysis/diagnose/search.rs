@@ -229,7 +229,7 @@ impl Search<'_> {
                 // would joining a round later.
                 candidate.passed &= passed
                     .iter()
-                    .filter(|p| p.0.len() == 1 && m.len() > 1 && m.contains(&p.0[0]))
+                    .filter(|p| p.0.len() == 1 && m.contains(&p.0[0]))
                     .all(|p| score.rss < (1.0 - HOLDOUT_RSS_GAIN) * p.2.rss);
                 if candidate.passed {
                     passed.push((m, fit, score));

@@ -1,6 +1,7 @@
 //! What a fit compares: per recording, each measured channel at the rows
 //! where it was sampled, its rest offset removed, and its noise level.
 
+use crate::analysis::median::median;
 use crate::model::predict::Traces;
 use crate::recording::Channel;
 use crate::session::{Session, SessionRecording};
@@ -100,12 +101,10 @@ impl SessionTargets {
             });
         }
         let mut sigma = Vec::new();
-        for (sensor, mut s) in spreads {
-            if s.is_empty() {
-                continue;
+        for (sensor, s) in spreads {
+            if let Some(m) = median(s) {
+                sigma.push((sensor, m));
             }
-            s.sort_by(f64::total_cmp);
-            sigma.push((sensor, s[s.len() / 2]));
         }
         for rt in &mut recordings {
             for t in &mut rt.targets {

@@ -16,6 +16,7 @@ use std::f64::consts::PI;
 
 use model_core::{state_len, Fixture as CoreFixture, Strip};
 
+use crate::analysis::median::median;
 use crate::model::predict::ModelSpec;
 use crate::recording::{Channel, Fixture};
 use crate::session::Session;
@@ -105,10 +106,6 @@ pub fn measured_blocked_ringing(
             found.push(m);
         }
     }
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied()
-    };
     Some(Ringing {
         hz: median(found.iter().map(|m| m.hz).collect())?,
         damping_ratio: median(found.iter().map(|m| m.damping_ratio).collect())?,
@@ -290,11 +287,9 @@ fn peak_hz(y: &[f64], dt_s: f64, lo_hz: f64, hi_hz: f64) -> Option<f64> {
             (f, power(y, dt_s, f))
         })
         .collect();
-    let mut powers: Vec<f64> = grid.iter().map(|g| g.1).collect();
-    powers.sort_by(f64::total_cmp);
-    let median = powers[powers.len() / 2];
+    let floor = median(grid.iter().map(|g| g.1).collect())?;
     let (f0, p0) = grid.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))?;
-    let clear = p0 > 20.0 * median;
+    let clear = p0 > 20.0 * floor;
     if !clear {
         return None;
     }

@@ -10,6 +10,7 @@
 use super::data::SessionTargets;
 use super::error::FitError;
 use super::space::Space;
+use crate::analysis::median::median;
 use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
 use crate::session::Session;
@@ -104,9 +105,5 @@ fn electrical(session: &Session, recordings: &[usize]) -> Option<(f64, f64, f64)
             cs.push(tau1 * g1);
         }
     }
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied()
-    };
     Some((median(r1s)?, median(r2s)?, median(cs)?))
 }

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use finrs_rig::expect::{score, Expected, BENCH};
+use finrs_rig::expect::{names_given, score, Expected};
 use finrs_rig::sweep::{csv, expected_of, markdown, plan, write_scenario, Outcome, Scenario};
 
 /// Writes and diagnoses off-class rig sessions, one seed each, and counts
@@ -114,21 +114,14 @@ fn read_verdict(path: &Path) -> anyhow::Result<(String, Vec<String>, f64)> {
 /// result, which holds the names already merged).
 fn verdict_of(v: &serde_json::Value) -> anyhow::Result<(String, Vec<String>, f64)> {
     let verdict = v["verdict"].as_str().context("no `verdict`")?.to_string();
-    let mut causes: Vec<String> = v["causes"]
+    let causes: Vec<String> = v["causes"]
         .as_array()
         .context("no `causes`")?
         .iter()
         .filter_map(|c| c.as_str().map(str::to_string))
         .collect();
-    // Bench findings (one per channel) count once each, as `bench:` names.
-    if let Some(found) = v["rest"]["bench"].as_array() {
-        for what in found.iter().filter_map(|b| b["what"].as_str()) {
-            let name = format!("{BENCH}{what}");
-            if !causes.contains(&name) {
-                causes.push(name);
-            }
-        }
-    }
+    let found = v["rest"]["bench"].as_array().into_iter().flatten();
+    let causes = names_given(&causes, found.filter_map(|b| b["what"].as_str()));
     let gain = v["gain_percent"].as_f64().unwrap_or(f64::NAN);
     Ok((verdict, causes, gain))
 }
