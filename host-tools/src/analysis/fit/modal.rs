@@ -90,9 +90,14 @@ pub fn measured_blocked_ringing(
         let Some(force) = r.rec.channel(Channel::Force) else {
             continue;
         };
-        let start = r.rest_rows + (settle_s / r.dt_s).round() as usize;
+        // The casts saturate, and a charging time from a far-off model
+        // can be any length: the sums are checked, not trusted.
+        let settle = (settle_s / r.dt_s).round() as usize;
         let len = (WINDOW_S / r.dt_s).round() as usize;
-        if start + len > force.len() {
+        let Some(start) = r.rest_rows.checked_add(settle) else {
+            continue;
+        };
+        if start.checked_add(len).is_none_or(|end| end > force.len()) {
             continue;
         }
         // The drive must hold over the window, or its own steps dominate.
