@@ -8,7 +8,7 @@
 //!
 //! | effect | term | how it enters |
 //! |---|---|---|
-//! | `damping` | Rayleigh `C = α M + β K` | each mode's 2×2 block gets `−2ζₖωₖ`, `2ζₖωₖ = α + β ωₖ²` |
+//! | `damping` | Rayleigh `C = α M + β K` and a constant ratio `ζ₀` | each mode's 2×2 block gets `−2ζₖωₖ`, `2ζₖωₖ = α + 2ζ₀ωₖ + β ωₖ²` |
 //! | `hydrodynamic-loading` | added mass `m_a` per length, linear drag `c_d` per length | `ρA + m_a` in the mass matrix; drag `c_d/(ρA + m_a)` like `α` |
 //! | `beam-stiffness` | `EI` differs from the laminate's | a parameter ([`crate::Params::ei_nm2`]), no term |
 //! | `back-relaxation` | the relaxation network's `b = K z` may be `≤ 0` (`z ≤ 0`) | the moment relaxes past zero under a held voltage |
@@ -42,6 +42,11 @@ pub struct Extensions {
     pub damping_mass_per_s: f64,
     /// Rayleigh stiffness-proportional damping `β`, s (`≥ 0`).
     pub damping_stiffness_s: f64,
+    /// Constant modal damping ratio `ζ₀` (`0 ≤ ζ₀ < 1`): every mode loses
+    /// the same fraction of critical damping, as a polymer's frequency-
+    /// independent loss factor `η = 2ζ₀` gives (structural or hysteretic
+    /// damping), where Rayleigh's ratio falls and rises with frequency.
+    pub damping_ratio: f64,
     /// Added mass of the surrounding fluid per length `m_a`, kg/m (`≥ 0`).
     pub added_mass_kg_per_m: f64,
     /// Linear drag of the surrounding fluid per length `c_d`, N·s/m² (`≥ 0`).
@@ -180,6 +185,7 @@ impl Extensions {
     pub const NONE: Extensions = Extensions {
         damping_mass_per_s: 0.0,
         damping_stiffness_s: 0.0,
+        damping_ratio: 0.0,
         added_mass_kg_per_m: 0.0,
         drag_n_s_per_m2: 0.0,
         charge_cubic_per_v2: 0.0,
@@ -194,6 +200,15 @@ impl Extensions {
     pub fn validate(&self) -> Result<(), ParamError> {
         non_negative("damping_mass_per_s", self.damping_mass_per_s)?;
         non_negative("damping_stiffness_s", self.damping_stiffness_s)?;
+        non_negative("damping_ratio", self.damping_ratio)?;
+        if self.damping_ratio >= 1.0 {
+            return Err(ParamError::OutOfRange {
+                field: "damping_ratio",
+                value: self.damping_ratio,
+                min: 0.0,
+                max: 1.0,
+            });
+        }
         non_negative("added_mass_kg_per_m", self.added_mass_kg_per_m)?;
         non_negative("drag_n_s_per_m2", self.drag_n_s_per_m2)?;
         within(
@@ -217,6 +232,7 @@ impl Extensions {
     /// a damping term where the measured ringing decays).
     pub fn two_zeta_omega(&self, omega_rad_s: f64, rho_a: f64) -> f64 {
         self.damping_mass_per_s
+            + 2.0 * self.damping_ratio * omega_rad_s
             + self.damping_stiffness_s * omega_rad_s * omega_rad_s
             + self.drag_n_s_per_m2 / (rho_a + self.added_mass_kg_per_m)
     }

@@ -314,7 +314,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
 
     /// Blocking force on the cell: the tip row of `M q̈ + K q = F u`,
     /// solved for the reaction, `F_t u − M_t q̈ − K_t q`, with
-    /// `q̈ = Ψ (−Ω² η + g u)`; a row over the state.
+    /// `q̈ = Ψ (−Ω² η − 2ζω η̇ + g u)`; a row over the state. The damping
+    /// acts on the modes of the held beam, not on the pinned freedom, so
+    /// it enters the force through the accelerations alone (as in the
+    /// rig's reference, `tests/rig/tests/against_model.rs`).
     #[inline(always)]
     fn blocking_force_row(
         an: &Analysis<N, E, S>,
@@ -331,6 +334,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 kt_psi += k_t[d] * psi[(d, k)];
             }
             force_row[k] = T::from_f64(-kt_psi + an.omega2[k] * mt_psi[k]);
+            // η̇ = ω ζ-coordinate, so −M_t Ψ (−2ζω η̇) is this times it.
+            force_row[Self::DOF + k] = T::from_f64(mt_psi[k] * an.two_zeta_omega[k] * an.omega[k]);
         }
         for i in 0..N {
             let (instant, lag) = segments[i].moment(params);

@@ -42,6 +42,8 @@ pub struct ExtensionsFile {
     pub damping_mass_per_s: f64,
     /// Rayleigh stiffness-proportional damping `β`, s.
     pub damping_stiffness_s: f64,
+    /// Constant modal damping ratio `ζ₀` (`0 ≤ ζ₀ < 1`).
+    pub damping_ratio: f64,
     /// Added fluid mass per length, kg/m.
     pub added_mass_kg_per_m: f64,
     /// Linear fluid drag per length, N·s/m².
@@ -109,6 +111,7 @@ impl ExtensionsFile {
         Ok(model_core::Extensions {
             damping_mass_per_s: self.damping_mass_per_s,
             damping_stiffness_s: self.damping_stiffness_s,
+            damping_ratio: self.damping_ratio,
             added_mass_kg_per_m: self.added_mass_kg_per_m,
             drag_n_s_per_m2: self.drag_n_s_per_m2,
             charge_cubic_per_v2: self.charge_cubic_per_v2,
@@ -129,6 +132,7 @@ impl ExtensionsFile {
         ExtensionsFile {
             damping_mass_per_s: ext.damping_mass_per_s,
             damping_stiffness_s: ext.damping_stiffness_s,
+            damping_ratio: ext.damping_ratio,
             added_mass_kg_per_m: ext.added_mass_kg_per_m,
             drag_n_s_per_m2: ext.drag_n_s_per_m2,
             charge_cubic_per_v2: ext.charge_cubic_per_v2,

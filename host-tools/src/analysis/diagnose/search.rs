@@ -394,8 +394,8 @@ fn blocked_modes(
 /// Where a candidate that moves or damps the beam's first mode starts:
 /// where the model's mode rings at the measured frequency (`EI` for
 /// beam-stiffness, added mass for hydrodynamic loading) and decays at the
-/// measured rate (Rayleigh damping, half of the missing ratio from each
-/// term at the mode; the water's linear drag). Others start at the current
+/// measured rate (the constant damping ratio takes all of the missing
+/// ratio; the water's linear drag). Others start at the current
 /// model, their own terms off.
 fn mode_start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) -> ModelSpec {
     let mut start = *current;
@@ -410,12 +410,8 @@ fn mode_start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>)
     let missing = (data.damping_ratio - model.damping_ratio).max(0.0);
     match e {
         Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
-        Effect::Damping => {
-            // ζ(ω) = α/(2ω) + βω/2 at the mode, which damping does not move.
-            let w = 2.0 * std::f64::consts::PI * model.hz;
-            start.ext.damping_mass_per_s += missing * w;
-            start.ext.damping_stiffness_s += missing / w;
-        }
+        // The constant ratio is the measured ratio itself, at every mode.
+        Effect::Damping => start.ext.damping_ratio += missing,
         _ => {
             let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
             start.ext.added_mass_kg_per_m =
@@ -441,7 +437,7 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bo
     match e {
         Effect::LargeDeflection => true,
         Effect::BeamStiffness => excludes(Knob::Ei, fixed.params.ei_nm2),
-        Effect::Damping => excludes(Knob::Alpha, 0.0) || excludes(Knob::Beta, 0.0),
+        Effect::Damping => excludes(Knob::Zeta, 0.0) || excludes(Knob::Beta, 0.0),
         // Added mass is what water adds; its drag alone is damping.
         Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
         Effect::ElectrochemicalNonlinearity => {

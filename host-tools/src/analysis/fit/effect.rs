@@ -10,7 +10,8 @@ pub enum Effect {
     LargeDeflection,
     /// `EI` differs from the laminate estimate.
     BeamStiffness,
-    /// Viscoelastic and structural damping (Rayleigh).
+    /// Viscoelastic and structural damping: a constant modal ratio `ζ₀`
+    /// and the stiffness-proportional `β`.
     Damping,
     /// Added mass and drag of the surrounding water.
     HydrodynamicLoading,

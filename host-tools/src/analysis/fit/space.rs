@@ -27,8 +27,8 @@ pub enum Knob {
     P,
     /// `EI`, N·m² (beam-stiffness).
     Ei,
-    /// Rayleigh `α`, 1/s (damping).
-    Alpha,
+    /// Constant modal damping ratio `ζ₀` (damping).
+    Zeta,
     /// Rayleigh `β`, s (damping).
     Beta,
     /// Added mass per length, kg/m (hydrodynamic loading).
@@ -109,7 +109,7 @@ impl Knob {
             Knob::B => "b_nm_per_c_s",
             Knob::P => "p_per_s",
             Knob::Ei => "ei_nm2",
-            Knob::Alpha => "damping_mass_per_s",
+            Knob::Zeta => "damping_ratio",
             Knob::Beta => "damping_stiffness_s",
             Knob::AddedMass => "added_mass_kg_per_m",
             Knob::Drag => "drag_n_s_per_m2",
@@ -159,8 +159,11 @@ const CUBIC_MIN: f64 = -1.0 / 48.0;
 // (a logarithm could not start at zero, and any other start moves the
 // undamped beam's ringing out of phase). Each scale is the term's typical
 // size, so that θ is of order one.
-/// Rayleigh `α`, 1/s.
-const ALPHA_SCALE: f64 = 1.0;
+/// Constant damping ratio (the rig's and real strips' 0.02 to 0.1).
+const ZETA_SCALE: f64 = 1e-2;
+/// Highest constant damping ratio: the model's terms are for an
+/// underdamped strip.
+const ZETA_MAX: f64 = 0.9;
 /// Rayleigh `β`, s (`β ω₁²` is about 0.03/s at this scale).
 const BETA_SCALE: f64 = 1e-6;
 /// Added mass, kg/m (the strip itself is about 8e-3).
@@ -223,7 +226,7 @@ impl Space {
             knobs.extend_from_slice(match e {
                 Effect::LargeDeflection | Effect::BackRelaxation => &[],
                 Effect::BeamStiffness => &[Knob::Ei],
-                Effect::Damping => &[Knob::Alpha, Knob::Beta],
+                Effect::Damping => &[Knob::Zeta, Knob::Beta],
                 Effect::HydrodynamicLoading => &[Knob::AddedMass, Knob::Drag],
                 Effect::ElectrochemicalNonlinearity => &[Knob::ChargeCubic, Knob::LeakCubic],
                 Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
@@ -283,7 +286,7 @@ impl Space {
                 Knob::B => b_theta = Some(t),
                 Knob::P => p.p_per_s = t.exp(),
                 Knob::Ei => p.ei_nm2 = t.exp(),
-                Knob::Alpha => spec.ext.damping_mass_per_s = ramp(t, ALPHA_SCALE),
+                Knob::Zeta => spec.ext.damping_ratio = ramp(t, ZETA_SCALE).min(ZETA_MAX),
                 Knob::Beta => spec.ext.damping_stiffness_s = ramp(t, BETA_SCALE),
                 Knob::AddedMass => spec.ext.added_mass_kg_per_m = ramp(t, ADDED_MASS_SCALE),
                 Knob::Drag => spec.ext.drag_n_s_per_m2 = ramp(t, DRAG_SCALE),
@@ -353,7 +356,7 @@ impl Space {
                 }
                 Knob::P => ln(p.p_per_s, 1e-9),
                 Knob::Ei => ln(p.ei_nm2, 1e-15),
-                Knob::Alpha => spec.ext.damping_mass_per_s / ALPHA_SCALE,
+                Knob::Zeta => spec.ext.damping_ratio / ZETA_SCALE,
                 Knob::Beta => spec.ext.damping_stiffness_s / BETA_SCALE,
                 Knob::AddedMass => spec.ext.added_mass_kg_per_m / ADDED_MASS_SCALE,
                 Knob::Drag => spec.ext.drag_n_s_per_m2 / DRAG_SCALE,
@@ -380,7 +383,7 @@ impl Space {
             Knob::B => p.b_nm_per_c_s,
             Knob::P => p.p_per_s,
             Knob::Ei => p.ei_nm2,
-            Knob::Alpha => spec.ext.damping_mass_per_s,
+            Knob::Zeta => spec.ext.damping_ratio,
             Knob::Beta => spec.ext.damping_stiffness_s,
             Knob::AddedMass => spec.ext.added_mass_kg_per_m,
             Knob::Drag => spec.ext.drag_n_s_per_m2,
