@@ -183,6 +183,10 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
             })
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
+    // An output that cannot be written fails before the fit, not after.
+    if let Some(out) = &args.out {
+        check_writable(out)?;
+    }
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let fitter = Fitter::new(&session);
@@ -244,6 +248,9 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
 
 /// `finrs seed-check`.
 pub fn seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
+    if let Some(path) = &json {
+        check_writable(path)?;
+    }
     let c = finrs::analysis::seed_check::seed_check()?;
     print!("{c}");
     if let Some(path) = json {

@@ -1,5 +1,6 @@
-//! `finrs diagnose` as users run it: an output it cannot write fails at
-//! once, naming the path, instead of after the minutes-long run.
+//! `finrs diagnose`, `fit` and `seed-check` as users run them: an output
+//! they cannot write fails at once, naming the path, instead of after the
+//! run (minutes long for a diagnosis).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -92,4 +93,57 @@ fn the_check_leaves_no_output_behind_when_the_run_then_fails() {
     assert_eq!(std::fs::read_to_string(&old).unwrap(), "old\n");
     assert!(!new.exists(), "the check left {} behind", new.display());
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Runs `finrs args…`, which must fail before its run: nothing on stdout,
+/// where each prints its result; returns its stderr.
+fn refused_before_the_run(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_finrs"))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "succeeded: {stderr}");
+    assert!(
+        out.stdout.is_empty(),
+        "ran before failing: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    stderr
+}
+
+#[test]
+fn an_unwritable_fit_output_fails_before_the_fit_naming_the_path() {
+    let file = blocker("fit");
+    let toml = file.join("params.toml");
+    let session = example_session();
+    let stderr = refused_before_the_run(&[
+        "fit",
+        session.to_str().unwrap(),
+        "--out",
+        toml.to_str().unwrap(),
+    ]);
+    assert!(
+        stderr.starts_with(&format!(
+            "error: cannot create the folder {}: ",
+            file.display()
+        )),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(file.parent().unwrap()).unwrap();
+}
+
+#[test]
+fn an_unwritable_seed_check_output_fails_before_the_check_naming_the_path() {
+    let file = blocker("seed");
+    let json = file.join("seed.json");
+    let stderr = refused_before_the_run(&["seed-check", "--json", json.to_str().unwrap()]);
+    assert!(
+        stderr.starts_with(&format!(
+            "error: cannot create the folder {}: ",
+            file.display()
+        )),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(file.parent().unwrap()).unwrap();
 }
