@@ -232,6 +232,31 @@ fn one_recording_is_refused_with_the_reason() {
     );
 }
 
+/// What the board alone records (blocked runs, no camera) cannot show large
+/// deflection: it is said, with the reason, and not tried.
+#[test]
+fn a_blocked_only_session_cannot_show_large_deflection() {
+    let dir = std::env::temp_dir().join(format!("finrs-board-only-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = common::baseline_air_dir();
+    let mut blocked = 0;
+    for entry in std::fs::read_dir(&data).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_str().unwrap().to_string();
+        if name.contains("_blocked_") {
+            std::fs::copy(&path, dir.join(&name)).unwrap();
+            blocked += 1;
+        }
+    }
+    assert!(blocked >= 1, "no blocked recording in the test data");
+    let session = Session::read(&dir).unwrap();
+    let u = finrs::analysis::diagnose::untestable(&session);
+    std::fs::remove_dir_all(&dir).ok();
+    let names: Vec<&str> = u.iter().map(|u| u.effect.as_str()).collect();
+    assert_eq!(names, ["large-deflection", "hydrodynamic-loading"], "{u:?}");
+    assert!(u[0].why.contains("blocked"), "{}", u[0].why);
+}
+
 /// The contract's evidence: a session in air cannot show hydrodynamic
 /// loading, and one without every recording's session time cannot show
 /// drying; both are said, with the reason, and neither is tried.

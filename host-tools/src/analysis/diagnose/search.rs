@@ -10,7 +10,7 @@ use super::whiteness;
 use crate::analysis::fit::modal::{self, Ringing};
 use crate::analysis::fit::{ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::model::predict::ModelSpec;
-use crate::recording::Medium;
+use crate::recording::{Fixture, Medium};
 use crate::session::Session;
 
 /// Held-out weighted RSS per residual above which structure remains: the
@@ -49,12 +49,19 @@ pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
 }
 
 /// The catalogue effects `session` cannot show, and why (docs/FORMAT.md):
-/// `hydrodynamic-loading` needs water around the strip, `segment-variation`
-/// two segments or more, `dehydration` the session time of every recording. They are not tried, and the verdict
-/// says so.
+/// `large-deflection` needs a free recording (the board alone records
+/// blocked runs only), `hydrodynamic-loading` water around the strip,
+/// `segment-variation` two segments or more, `dehydration` the session
+/// time of every recording. They are not tried, and the verdict says so.
 pub fn untestable(session: &Session) -> Vec<Untestable> {
     let mut out = Vec::new();
     let recs = &session.recordings;
+    if !recs.iter().any(|r| r.rec.meta.fixture == Fixture::Free) {
+        out.push(Untestable {
+            effect: Effect::LargeDeflection.name().to_string(),
+            why: "every recording is blocked (`fixture`): the arc moves a free tip toward the clamp, which only a camera on a free run sees; it does not change the held tip's force".to_string(),
+        });
+    }
     if !recs.iter().any(|r| r.rec.meta.medium == Medium::Water) {
         out.push(Untestable {
             effect: Effect::HydrodynamicLoading.name().to_string(),
