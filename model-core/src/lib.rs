@@ -27,6 +27,7 @@ mod extensions;
 pub mod matrix;
 mod params;
 mod real;
+mod rounding;
 mod shape;
 mod strip;
 pub mod zoh;

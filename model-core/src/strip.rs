@@ -37,6 +37,7 @@ use crate::extensions::Extensions;
 use crate::matrix::{dof_zeros, rows, rows_mut, DofMat, Mat, Square};
 use crate::params::{ParamError, Params};
 use crate::real::Real;
+use crate::rounding::round_block;
 use crate::zoh::discretise;
 
 /// How the tip is held.
@@ -279,11 +280,14 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 }
                 if i == 0 {
                     // The rotation does not depend on the electrics: the
-                    // reference segment's exponential gives it.
-                    rot[0][k] = T::from_f64(phi[0][0]);
-                    rot[1][k] = T::from_f64(phi[0][1]);
-                    rot[2][k] = T::from_f64(phi[1][0]);
-                    rot[3][k] = T::from_f64(phi[1][1]);
+                    // reference segment's exponential gives it, rounded so
+                    // that an undamped mode cannot grow in f32.
+                    let r: [[T; 2]; 2] =
+                        round_block([[phi[0][0], phi[0][1]], [phi[1][0], phi[1][1]]]);
+                    rot[0][k] = r[0][0];
+                    rot[1][k] = r[0][1];
+                    rot[2][k] = r[1][0];
+                    rot[3][k] = r[1][1];
                 }
                 let scale = seg.c_f * seg.gain / (segments[0].c_f * segments[0].gain);
                 let coupling = an.g[k][i] * scale;
