@@ -4,7 +4,6 @@ use rayon::prelude::*;
 
 use super::analyses;
 use super::choose::{choose, Passed};
-use super::floors::sensor_floors;
 use super::rests::rest_structure;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
@@ -120,9 +119,7 @@ pub fn diagnose(
     let untestable = untestable(session);
     let found = search.run(&baseline, &base_hold, &untestable, progress)?;
     let per = |s: &Score| s.rss / s.m.max(1) as f64;
-    // Each sensor on its own: pooled, the currents would hide the rest.
-    let sensors = sensor_floors(&found.hold);
-    let at_floor = sensors.iter().all(|f| f.at_floor);
+    let at_floor = per(&found.hold) < NOISE_FLOOR_RATIO;
     let causes: Vec<String> = found
         .accepted
         .iter()
@@ -157,7 +154,6 @@ pub fn diagnose(
         training: train.iter().map(name).collect(),
         holdout: hold.iter().map(name).collect(),
         residual_tests: residual_tests(&base_hold, &found.hold),
-        sensors,
         untestable,
         rest,
         analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
