@@ -40,6 +40,10 @@ struct Cli {
     /// OUT/results from an earlier (interrupted) run.
     #[arg(long)]
     fresh: bool,
+    /// Only these seeds of the sweep (each keeps its row in the whole
+    /// sweep's plan), e.g. to look again at the sessions it got wrong.
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<u64>,
 }
 
 /// What `finrs diagnose` said of one session, as kept in OUT/results so
@@ -199,7 +203,21 @@ fn main() -> anyhow::Result<()> {
         cli.finrs.display()
     );
     std::fs::create_dir_all(cli.out.join("results"))?;
-    let scenarios = plan(cli.first_seed, cli.sessions);
+    let mut scenarios = plan(cli.first_seed, cli.sessions);
+    if let Some(s) = cli
+        .only
+        .iter()
+        .find(|&&s| !scenarios.iter().any(|x| x.seed == s))
+    {
+        anyhow::bail!(
+            "--only {s}: not a seed of this sweep ({} to {})",
+            cli.first_seed,
+            cli.first_seed + cli.sessions as u64 - 1
+        );
+    }
+    if !cli.only.is_empty() {
+        scenarios.retain(|x| cli.only.contains(&x.seed));
+    }
     let next = Mutex::new(scenarios.iter());
     let outcomes = Mutex::new(Vec::new());
     std::thread::scope(|scope| {
