@@ -20,6 +20,16 @@ pub struct SessionRecording {
     pub rest_rows: usize,
 }
 
+impl SessionRecording {
+    /// The segments the recording drives (0-based): those whose voltage
+    /// is non-zero at some sample.
+    pub fn driven(&self) -> Vec<usize> {
+        (0..self.rec.meta.segments)
+            .filter(|&k| self.rec.v_v.rows().any(|v| v[k] != 0.0))
+            .collect()
+    }
+}
+
 /// All recordings of a session, in file-name order (the session's order).
 #[derive(Clone, Debug)]
 pub struct Session {

@@ -149,3 +149,37 @@ fn segment_variation_fit_recovers_each_segments_deviations() {
     let back = ModelFile::parse("fit.toml", &file.to_toml()).unwrap();
     assert_eq!(back.spec_for(&geometry).unwrap(), fit.spec);
 }
+
+/// A dot at the tip (`dots_s_m` ends at `length_m`) is the tip's own
+/// measurement: the fit counts the tip once, not as two sensors.
+#[test]
+fn the_tip_and_a_dot_at_the_tip_are_fitted_once() {
+    let dir = std::env::temp_dir().join(format!("finrs-fit-tip-once-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let name = "04_free_chirp.csv";
+    std::fs::copy(common::baseline_air_dir().join(name), dir.join(name)).unwrap();
+    let session = Session::read(&dir).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let meta = &session.recordings[0].rec.meta;
+    let dots = meta.dots_s_m.clone().unwrap();
+    assert_eq!(
+        *dots.last().unwrap(),
+        meta.length_m,
+        "the data's last dot is at the tip"
+    );
+    let fitter = Fitter::new(&session);
+    let names: Vec<String> = fitter.targets().recordings[0]
+        .targets
+        .iter()
+        .map(|t| t.channel.name())
+        .collect();
+    for kept in ["tip_y_m", "tip_x_m", "dot4_y_m", "dot4_x_m"] {
+        assert!(names.iter().any(|n| n == kept), "{kept} missing: {names:?}");
+    }
+    for dropped in ["dot5_y_m", "dot5_x_m"] {
+        assert!(
+            !names.iter().any(|n| n == dropped),
+            "{dropped} fitted: {names:?}"
+        );
+    }
+}

@@ -83,11 +83,7 @@ pub fn analyse(session: &Session, score: &Score) -> Analyses {
                 immovable.push(format!("{}: {}", r.name, c.channel.name()));
             }
         }
-        let segments = r.rec.meta.segments;
-        let driven: Vec<usize> = (0..segments)
-            .filter(|&s| r.rec.v_v.rows().any(|v| v[s] != 0.0))
-            .map(|s| s + 1)
-            .collect();
+        let driven: Vec<usize> = r.driven().iter().map(|s| s + 1).collect();
         let max_abs_v = r
             .rec
             .v_v

@@ -17,11 +17,12 @@
 //! session's evidence calls for ([`choose`]); the search repeats on top of
 //! it, so several causes can
 //! be named, strongest first. The verdict:
-//! - `none`: nothing accepted and the held-out residuals are at the noise
-//!   floor (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
-//! - `explained`: effects accepted and the held-out residuals are at the
-//!   noise floor;
-//! - `unexplained`: above the noise floor after the best model, with the
+//! - `none`: nothing accepted and the held-out residuals of every sensor
+//!   (currents, load cell, camera: [`floors`]) are at its noise floor
+//!   (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
+//! - `explained`: effects accepted and every sensor at its noise floor;
+//! - `unexplained`: a sensor above its noise floor after the best model
+//!   (the verdict names it and its worst channel), with the
 //!   effects that did pass (possibly none); or the DAQ's channels already
 //!   carry structure while the strip rests before its drive (most
 //!   rests fail a Ljung–Box test) that no bench finding accounts for:
@@ -34,12 +35,14 @@
 
 pub mod analyses;
 pub mod choose;
+pub mod floors;
 pub mod report;
 pub mod rests;
 mod search;
 mod verdict;
 pub mod whiteness;
 
+pub use floors::{sensor_floors, SensorFloor};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
 pub use search::{
     diagnose, split, tested_channels, untestable, DELTA_BIC, HOLDOUT_RSS_GAIN, INPUT_LAGS,

@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{Diagnosis, ResidualTest, Verdict};
+use super::{Diagnosis, ResidualTest, Verdict, NOISE_FLOOR_RATIO};
 use crate::analysis::fit::ChannelFit;
 use crate::model::simulate::{simulate, SimulateError};
 use crate::plot::{self, PlotError};
@@ -124,6 +124,29 @@ fn summary(s: &mut String, session: &Session, v: &Verdict) {
          noise floor measured on the recordings' opening rests.\n",
         v.gain_percent
     );
+    let _ = writeln!(
+        s,
+        "Each sensor against its own floor (the final model, held out; `explained` \
+         and `none` need every one below {NOISE_FLOOR_RATIO}):\n"
+    );
+    let _ = writeln!(
+        s,
+        "| sensor | RSS/m | residuals | at its floor | worst channel | its RSS/m |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for f in &v.sensors {
+        let _ = writeln!(
+            s,
+            "| {} | {:.3} | {} | {} | {} | {:.3} |",
+            f.sensor,
+            f.rss_per_residual,
+            f.residuals,
+            if f.at_floor { "yes" } else { "**no**" },
+            f.worst_channel,
+            f.worst_rss_per_residual
+        );
+    }
+    let _ = writeln!(s);
     let _ = writeln!(
         s,
         "Opening rests (currents, load cell): {} of {} fail a Ljung–Box test at 99 % \

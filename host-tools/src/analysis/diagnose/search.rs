@@ -4,6 +4,7 @@ use rayon::prelude::*;
 
 use super::analyses;
 use super::choose::{choose, Passed};
+use super::floors::sensor_floors;
 use super::rests::rest_structure;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
@@ -119,7 +120,9 @@ pub fn diagnose(
     let untestable = untestable(session);
     let found = search.run(&baseline, &base_hold, &untestable, progress)?;
     let per = |s: &Score| s.rss / s.m.max(1) as f64;
-    let at_floor = per(&found.hold) < NOISE_FLOOR_RATIO;
+    // Each sensor on its own: pooled, the currents would hide the rest.
+    let sensors = sensor_floors(&found.hold);
+    let at_floor = sensors.iter().all(|f| f.at_floor);
     let causes: Vec<String> = found
         .accepted
         .iter()
@@ -154,6 +157,7 @@ pub fn diagnose(
         training: train.iter().map(name).collect(),
         holdout: hold.iter().map(name).collect(),
         residual_tests: residual_tests(&base_hold, &found.hold),
+        sensors,
         untestable,
         rest,
         analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),

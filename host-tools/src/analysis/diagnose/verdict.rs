@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::analyses;
+use super::floors::SensorFloor;
 use super::rests::RestStructure;
 use crate::analysis::fit::{FitResult, Score};
 
@@ -87,6 +88,9 @@ pub struct Verdict {
     pub holdout: Vec<String>,
     /// Whiteness of the held-out residuals.
     pub residual_tests: Vec<ResidualTest>,
+    /// The final model's held-out residuals, sensor by sensor: each must
+    /// be at its own noise floor for `explained` or `none`.
+    pub sensors: Vec<SensorFloor>,
     /// Catalogue effects this session cannot show, not tried.
     pub untestable: Vec<Untestable>,
     /// The DAQ's channels during the opening rests: whiteness, and the
@@ -133,6 +137,13 @@ impl std::fmt::Display for Verdict {
                 c.delta_bic,
                 c.holdout_gain_percent,
                 if c.passed { "passed" } else { "-" }
+            )?;
+        }
+        for s in self.sensors.iter().filter(|s| !s.at_floor) {
+            writeln!(
+                f,
+                "  above its noise floor: {} at {:.2} (worst {} at {:.2})",
+                s.sensor, s.rss_per_residual, s.worst_channel, s.worst_rss_per_residual
             )?;
         }
         for u in &self.untestable {

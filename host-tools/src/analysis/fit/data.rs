@@ -20,6 +20,16 @@ pub enum Sensor {
 }
 
 impl Sensor {
+    /// As reports name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Sensor::Current => "currents",
+            Sensor::CameraY => "camera across",
+            Sensor::CameraX => "camera along",
+            Sensor::Force => "load cell",
+        }
+    }
+
     /// The sensor of a channel.
     pub fn of(ch: Channel) -> Sensor {
         match ch {
@@ -30,7 +40,8 @@ impl Sensor {
         }
     }
 
-    const ALL: [Sensor; 4] = [
+    /// Every sensor, in report order.
+    pub const ALL: [Sensor; 4] = [
         Sensor::Current,
         Sensor::CameraY,
         Sensor::CameraX,
@@ -130,7 +141,31 @@ fn targets_of(
     let rows_total = r.rec.t_s.len();
     let mut camera_rows = vec![false; rows_total];
     let mut targets = Vec::new();
+    let sampled = |ch: Channel| {
+        r.rec
+            .channels
+            .iter()
+            .any(|(c, v)| *c == ch && v.iter().any(Option::is_some))
+    };
+    // A dot at the tip is the tip's own measurement on a real camera (the
+    // same blob tracked twice): fitted beside the tip column it would count
+    // the tip's misfit and noise twice, as if two sensors had seen it.
+    let at_tip = |j: usize| {
+        let meta = &r.rec.meta;
+        meta.dots_s_m
+            .as_ref()
+            .and_then(|d| d.get(j))
+            .is_some_and(|&s| (s - meta.length_m).abs() <= 1e-9 * meta.length_m)
+    };
     for (ch, values) in &r.rec.channels {
+        let duplicate = match *ch {
+            Channel::DotY(j) => at_tip(j) && sampled(Channel::TipY),
+            Channel::DotX(j) => at_tip(j) && sampled(Channel::TipX),
+            _ => false,
+        };
+        if duplicate {
+            continue;
+        }
         let rows: Vec<usize> = (0..rows_total).filter(|&i| values[i].is_some()).collect();
         if rows.is_empty() {
             continue;
