@@ -183,3 +183,31 @@ fn the_tip_and_a_dot_at_the_tip_are_fitted_once() {
         );
     }
 }
+
+/// A fit that starts with no DC moment (`b = 0`, where an earlier fit on a
+/// misfitting structure can leave it) climbs back to the strip's. On a
+/// logarithmic scale `b/p → 0` had a vanishing gradient, and a soft
+/// strip's stiffness fit that started there kept `b = 0` and the tip at
+/// 4.5× its noise.
+#[test]
+fn a_fit_started_at_zero_dc_moment_leaves_it() {
+    let truth = sample();
+    let dir = std::env::temp_dir().join(format!("finrs-fit-b0-{}", std::process::id()));
+    common::write_session(&dir, &truth, &common::short_protocol(), 12);
+    let session = Session::read(&dir).unwrap();
+    let fixed = ModelFile::main_m_2006()
+        .spec_for(&session.geometry())
+        .unwrap();
+    let mut start = truth;
+    start.params.b_nm_per_c_s = 0.0;
+    let all: Vec<usize> = (0..session.recordings.len()).collect();
+    let fit = Fitter::new(&session)
+        .fit(&all, &[], Some(&start), fixed)
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let b = fit.spec.params.b_nm_per_c_s;
+    let want = truth.params.b_nm_per_c_s;
+    assert!((b - want).abs() < 0.05 * want, "b = {b}, truth {want}");
+    let per = fit.score.rss / fit.score.m as f64;
+    assert!(per < 1.15, "RSS/m = {per}");
+}

@@ -9,8 +9,12 @@
 
 use serde::Serialize;
 
-use super::search::NOISE_FLOOR_RATIO;
 use crate::analysis::fit::{ChannelFit, Score, Sensor};
+
+/// Held-out weighted RSS per residual above which structure remains: the
+/// noise levels come from about a second of rest per recording, so they
+/// are known to some ten percent; the camera's whole pixels add a little.
+pub const NOISE_FLOOR_RATIO: f64 = 1.5;
 
 /// One sensor's held-out residuals under a model.
 #[derive(Clone, Debug, Serialize, PartialEq)]

@@ -42,10 +42,10 @@ mod search;
 mod verdict;
 pub mod whiteness;
 
-pub use floors::{sensor_floors, SensorFloor};
+pub use floors::{sensor_floors, SensorFloor, NOISE_FLOOR_RATIO};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
 pub use search::{
     diagnose, split, tested_channels, untestable, DELTA_BIC, HOLDOUT_RSS_GAIN, INPUT_LAGS,
-    MAX_CAUSES, NOISE_FLOOR_RATIO,
+    MAX_CAUSES,
 };
 pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};

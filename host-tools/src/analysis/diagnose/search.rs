@@ -14,10 +14,6 @@ use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
 use crate::session::Session;
 
-/// Held-out weighted RSS per residual above which structure remains: the
-/// noise levels come from about a second of rest per recording, so they
-/// are known to some ten percent; the camera's whole pixels add a little.
-pub const NOISE_FLOOR_RATIO: f64 = 1.5;
 /// BIC improvement an effect must reach on the training recordings.
 pub const DELTA_BIC: f64 = -10.0;
 /// Relative drop of held-out weighted RSS an effect must reach.

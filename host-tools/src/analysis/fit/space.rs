@@ -20,8 +20,9 @@ pub enum Knob {
     /// fixed model's DC moment per charge, `≥ 0`; as `ln a` with
     /// back-relaxation).
     A,
-    /// `b = K z`, N·m/(C·s) (fitted as `ln(b/p)`, the DC moment per charge;
-    /// as `z/p = b/(a p)`, of either sign, with back-relaxation).
+    /// `b = K z`, N·m/(C·s) (fitted as `b/p = θ²` times the fixed
+    /// model's DC moment per charge, `≥ 0`; as `z/p = b/(a p)`, of either
+    /// sign, with back-relaxation).
     B,
     /// `p`, 1/s.
     P,
@@ -181,6 +182,13 @@ const DEHYDRATION_SCALE: f64 = 1e-3;
 /// spread (5 to 15 %).
 const SEGMENT_SCALE: f64 = 0.1;
 
+/// Lowest `b/p` of the baseline's network, in units of the fixed model's
+/// DC moment per charge: `b = 0` is back-relaxation's, not the baseline's.
+const B_FLOOR: f64 = 1e-15;
+/// Lowest `θ` a start gives `b/p` (`θ²` = 1e-6 of the unit): at `θ = 0`
+/// its gradient vanishes.
+const B_START_MIN: f64 = 1e-3;
+
 /// A non-negative term: `s θ` above zero, zero below (the optimiser sees
 /// a flat floor, and steps back from it).
 fn ramp(t: f64, scale: f64) -> f64 {
@@ -317,13 +325,20 @@ impl Space {
                 p.a_nm_per_c = ta.exp();
                 p.b_nm_per_c_s = tb * p.a_nm_per_c * p.p_per_s;
             } else {
-                // The DC moment per charge b/p > 0 on a log scale and the
-                // instant part a on its own, in units of the fixed model's
-                // DC moment per charge: a = 0 is the pure lag, z = p is an
-                // ordinary point, and z → 0 (b → 0 with a held) is one knob
-                // going to −∞, not two. |θ| keeps a ≥ 0 without a floor the
-                // optimiser could not climb back from.
-                p.b_nm_per_c_s = tb.exp() * p.p_per_s;
+                // The DC moment per charge b/p and the instant part a, in
+                // units of the fixed model's DC moment per charge: a = 0
+                // is the pure lag, z = p an ordinary point, z = 0 (b = 0
+                // with a held) one knob at zero. |θ| keeps a ≥ 0 without
+                // a floor the optimiser could not climb back from. b/p is
+                // θ², smooth through its bound: on a logarithm, once a
+                // misfit drove b/p toward 0, ln(b/p) ran off to −∞ where
+                // b's gradient vanishes, and every later fit that started
+                // there kept b = 0 (measured: a soft strip's stiffness fit
+                // left the tip at 4.5× its noise); on |θ| a fit whose best
+                // b is 0 sat on the kink and stopped short in the others.
+                // (The floor keeps b > 0, which the model without
+                // back-relaxation requires.)
+                p.b_nm_per_c_s = (tb * tb).max(B_FLOOR) * self.instant_unit() * p.p_per_s;
                 p.a_nm_per_c = ta.abs() * self.instant_unit();
             }
         }
@@ -351,7 +366,11 @@ impl Space {
                     if self.has(Effect::BackRelaxation) {
                         p.b_nm_per_c_s / (instant_or_gain(p) * p.p_per_s.max(1e-9))
                     } else {
-                        dc_per_charge(p).ln()
+                        // A start at b = 0, where θ²'s gradient vanishes, starts
+                        // just inside instead.
+                        ((p.b_nm_per_c_s / p.p_per_s.max(1e-9)) / self.instant_unit())
+                            .sqrt()
+                            .max(B_START_MIN)
                     }
                 }
                 Knob::P => ln(p.p_per_s, 1e-9),
