@@ -368,7 +368,7 @@ impl Space {
                     } else {
                         // A start at b = 0, where θ²'s gradient vanishes, starts
                         // just inside instead.
-                        ((p.b_nm_per_c_s / p.p_per_s.max(1e-9)) / self.instant_unit())
+                        (dc_per_charge(p) / self.instant_unit())
                             .sqrt()
                             .max(B_START_MIN)
                     }
