@@ -8,9 +8,23 @@
 //! known exactly: the moment is `C a`, and a `C` off by its error moves `a`
 //! the other way. The two-step estimator's covariance (Murphy and Topel,
 //! 1985) adds it: with `G = ∂θ̂_b/∂θ_c = −(J_bᵀJ_b)⁻¹ J_bᵀ J_bc`,
-//! `cov θ_b = s_b² (J_bᵀJ_b)⁻¹ + G cov θ_c Gᵀ` and `cov(θ_b, θ_c) = G cov θ_c`.
+//! `cov θ_b = V_b + G cov θ_c Gᵀ` and `cov(θ_b, θ_c) = G cov θ_c`.
+//!
+//! Each stage's own `V` is a cluster-robust sandwich, `(JᵀJ)⁻¹ B (JᵀJ)⁻¹`
+//! with `B = Σ_c g_c g_cᵀ` and `g_c = J_cᵀ r_c` summed over a cluster `c`
+//! of residuals (a window of [`CLUSTER_S`] of one recording, all its
+//! channels), and never narrower than the white-noise `s² (JᵀJ)⁻¹`. A
+//! misfit leaves residuals that run together for many samples; counted as
+//! independent they made every term of a wrong model "significant" (#12):
+//! the sandwich counts each window once. On a right model the residuals
+//! are the sensors' white noise, and the two agree.
 
 use nalgebra::DMatrix;
+
+/// Length of a recording's window whose residuals form one cluster, s:
+/// long against the sensors' noise correlation and a mode's ringing, short
+/// enough that a session gives many more windows than knobs.
+pub const CLUSTER_S: f64 = 1.0;
 
 /// A stage's Jacobian at the end of the fit.
 pub struct Block {
@@ -18,8 +32,11 @@ pub struct Block {
     pub knobs: Vec<usize>,
     /// `∂r/∂θ` of the stage's weighted residuals over its own knobs.
     pub jacobian: DMatrix<f64>,
-    /// The stage's residual sum of squares.
-    pub rss: f64,
+    /// The stage's weighted residuals, in the Jacobian's row order.
+    pub residuals: Vec<f64>,
+    /// Each row's cluster: dense labels, rows of one window of one
+    /// recording alike (see [`CLUSTER_S`]).
+    pub clusters: Vec<usize>,
 }
 
 /// The covariance of all `k` knobs and the knobs it bounds: the circuit's
@@ -39,6 +56,7 @@ pub fn two_stage(
     let mut held = None;
     if let Some(c) = circuit {
         if let (on, Some(cc)) = conditional(c) {
+            let cc = cc.cov;
             let global: Vec<usize> = on.iter().map(|&a| c.knobs[a]).collect();
             put(&mut cov, &global, &global, &cc);
             active.extend(&global);
@@ -48,12 +66,11 @@ pub fn two_stage(
     if let Some((b, upstream)) = beam {
         if let (on, Some(bb)) = conditional(b) {
             let global: Vec<usize> = on.iter().map(|&a| b.knobs[a]).collect();
-            let mut total = bb.clone();
+            let mut total = bb.cov.clone();
             if let Some((on_c, global_c, cc)) = &held {
                 let jb = columns(&b.jacobian, &on);
                 let jbc = columns(upstream, on_c);
-                // (J_bᵀJ_b)⁻¹ is the conditional covariance over s_b².
-                let g = -(&bb / variance(b, on.len())) * (jb.transpose() * jbc);
+                let g = -(bb.inverse_information) * (jb.transpose() * jbc);
                 let cross = &g * cc;
                 total += &cross * g.transpose();
                 put(&mut cov, &global, global_c, &cross);
@@ -82,7 +99,8 @@ fn put(cov: &mut DMatrix<f64>, rows: &[usize], cols: &[usize], m: &DMatrix<f64>)
 
 /// `s² = RSS/(m − k)` of a stage with `k` active knobs.
 fn variance(b: &Block, k: usize) -> f64 {
-    b.rss / (b.jacobian.nrows().saturating_sub(k).max(1)) as f64
+    let rss: f64 = b.residuals.iter().map(|r| r * r).sum();
+    rss / (b.jacobian.nrows().saturating_sub(k).max(1)) as f64
 }
 
 /// The columns `on` of `jac`.
@@ -90,11 +108,19 @@ fn columns(jac: &DMatrix<f64>, on: &[usize]) -> DMatrix<f64> {
     DMatrix::from_fn(jac.nrows(), on.len(), |i, a| jac[(i, on[a])])
 }
 
+/// A stage's covariance given its other inputs.
+struct Conditional {
+    /// `(JᵀJ)⁻¹`.
+    inverse_information: DMatrix<f64>,
+    /// The cluster-robust covariance, its variances at least `s² (JᵀJ)⁻¹`'s.
+    cov: DMatrix<f64>,
+}
+
 /// Of a stage's knobs, those its residuals move (a knob held at its floor
 /// of zero has a zero column: it is left out of the inverse, so the others
-/// keep their variance), and their covariance `s² (JᵀJ)⁻¹` given the
-/// stage's other inputs, if it inverts.
-fn conditional(b: &Block) -> (Vec<usize>, Option<DMatrix<f64>>) {
+/// keep their variance), and their covariance given the stage's other
+/// inputs, if it inverts.
+fn conditional(b: &Block) -> (Vec<usize>, Option<Conditional>) {
     let jac = &b.jacobian;
     let norms: Vec<f64> = (0..jac.ncols()).map(|j| jac.column(j).norm()).collect();
     let top = norms.iter().fold(0.0f64, |m, &x| m.max(x));
@@ -103,6 +129,113 @@ fn conditional(b: &Block) -> (Vec<usize>, Option<DMatrix<f64>>) {
         .collect();
     let sub = columns(jac, &on);
     let s2 = variance(b, on.len());
-    let cov = (sub.transpose() * &sub).try_inverse().map(|c| c * s2);
-    (on, cov)
+    let Some(inv) = (sub.transpose() * &sub).try_inverse() else {
+        return (on, None);
+    };
+    let cov = robust(&inv, &meat(&sub, &b.residuals, &b.clusters), s2);
+    (
+        on,
+        Some(Conditional {
+            inverse_information: inv,
+            cov,
+        }),
+    )
+}
+
+/// `B = Σ_c g_c g_cᵀ`, `g_c = Σ_{rows of c} Jᵢᵀ rᵢ`.
+fn meat(jac: &DMatrix<f64>, r: &[f64], clusters: &[usize]) -> DMatrix<f64> {
+    let k = jac.ncols();
+    let n = clusters.iter().max().map_or(0, |m| m + 1);
+    let mut g = DMatrix::from_element(n, k, 0.0);
+    for (i, (&c, &ri)) in clusters.iter().zip(r).enumerate() {
+        for j in 0..k {
+            g[(c, j)] += jac[(i, j)] * ri;
+        }
+    }
+    g.transpose() * g
+}
+
+/// `A B A` with `A = (JᵀJ)⁻¹`, each knob's row and column scaled up where
+/// its variance falls below the white-noise `s² A`'s (a scaling `D V D`
+/// keeps it a covariance): few clusters can understate a spread, and noise
+/// is never less than the sensors'.
+fn robust(inv: &DMatrix<f64>, meat: &DMatrix<f64>, s2: f64) -> DMatrix<f64> {
+    let mut v = inv * meat * inv;
+    let k = v.nrows();
+    let scale: Vec<f64> = (0..k)
+        .map(|i| {
+            let white = s2 * inv[(i, i)];
+            if v[(i, i)] > 0.0 && v[(i, i)] < white {
+                (white / v[(i, i)]).sqrt()
+            } else if v[(i, i)] > 0.0 {
+                1.0
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
+    for i in 0..k {
+        for j in 0..k {
+            v[(i, j)] *= scale[i] * scale[j];
+        }
+    }
+    // A knob no cluster moves keeps the white-noise variance.
+    for i in 0..k {
+        if scale[i].is_nan() {
+            for j in 0..k {
+                v[(i, j)] = if i == j { s2 * inv[(i, i)] } else { 0.0 };
+                v[(j, i)] = v[(i, j)];
+            }
+        }
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{conditional, Block};
+    use nalgebra::DMatrix;
+
+    /// A constant fitted to `r`: its variance from the two estimators.
+    fn variance_of_mean(r: &[f64], window: usize) -> f64 {
+        let b = Block {
+            knobs: vec![0],
+            jacobian: DMatrix::from_element(r.len(), 1, 1.0),
+            residuals: r.to_vec(),
+            clusters: (0..r.len()).map(|i| i / window).collect(),
+        };
+        conditional(&b).1.unwrap().cov[(0, 0)]
+    }
+
+    #[test]
+    fn residuals_that_run_together_widen_the_interval_white_ones_do_not() {
+        let n = 4000;
+        // White: ±1 from a xorshift generator.
+        let mut x = 0x2545_f491_u32;
+        let white: Vec<f64> = (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                if x & 1 == 0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            })
+            .collect();
+        let white_var = variance_of_mean(&white, 100);
+        let s2 = white.iter().map(|r| r * r).sum::<f64>() / (n - 1) as f64;
+        assert!(
+            (white_var / (s2 / n as f64) - 1.0).abs() < 0.5,
+            "{white_var}"
+        );
+        // A misfit: the same ±1 in runs of 200 samples. The white-noise
+        // formula says s²/n; the runs make it 200 times that.
+        let runs: Vec<f64> = (0..n)
+            .map(|i| if (i / 200) % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let run_var = variance_of_mean(&runs, 100);
+        assert!(run_var > 50.0 * s2 / n as f64, "{run_var}");
+    }
 }

@@ -306,7 +306,7 @@ impl<'a> Fitter<'a> {
                 .filter(|c| stage.sees(c.channel))
                 .flat_map(|c| c.residuals.iter().copied())
                 .collect();
-            let rss = base.iter().map(|r| r * r).sum();
+            let clusters = self.clusters(*stage, recordings);
             let run = |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec);
             match stage {
                 Stage::Circuit => {
@@ -314,7 +314,8 @@ impl<'a> Fitter<'a> {
                     circuit = Some(Block {
                         knobs: free.clone(),
                         jacobian: p.jacobian_at(theta, &base)?,
-                        rss,
+                        residuals: base,
+                        clusters,
                     });
                 }
                 Stage::Beam => {
@@ -330,7 +331,8 @@ impl<'a> Fitter<'a> {
                         Block {
                             knobs: free.clone(),
                             jacobian: own,
-                            rss,
+                            residuals: base,
+                            clusters,
                         },
                         up,
                     ));
@@ -339,6 +341,32 @@ impl<'a> Fitter<'a> {
         }
         let beam = beam.as_ref().map(|(b, up)| (b, up));
         Ok(covariance::two_stage(theta.len(), circuit.as_ref(), beam))
+    }
+
+    /// The cluster of each residual `stage` sees over `recordings`, in
+    /// [`Self::stage_residuals`]' order: a window of
+    /// [`covariance::CLUSTER_S`] of one recording, every channel in it.
+    fn clusters(&self, stage: Stage, recordings: &[usize]) -> Vec<usize> {
+        let mut labels = Vec::new();
+        let mut first = 0;
+        for &i in recordings {
+            let window = (covariance::CLUSTER_S / self.session.recordings[i].dt_s)
+                .round()
+                .max(1.0) as usize;
+            let mut last = 0;
+            for t in self.targets.recordings[i]
+                .targets
+                .iter()
+                .filter(|t| stage.sees(t.channel))
+            {
+                for &row in &t.rows {
+                    labels.push(first + row / window);
+                    last = last.max(row / window);
+                }
+            }
+            first += last + 1;
+        }
+        labels
     }
 
     /// The residual count `stage` sees over `recordings`.
