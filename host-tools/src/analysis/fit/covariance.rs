@@ -162,15 +162,16 @@ fn meat(jac: &DMatrix<f64>, r: &[f64], clusters: &[usize]) -> DMatrix<f64> {
 fn robust(inv: &DMatrix<f64>, meat: &DMatrix<f64>, s2: f64) -> DMatrix<f64> {
     let mut v = inv * meat * inv;
     let k = v.nrows();
+    let white: Vec<f64> = (0..k).map(|i| s2 * inv[(i, i)]).collect();
+    // A knob no cluster moves (no variance) cannot be scaled up: its row
+    // and column are cleared below and it keeps the white-noise variance.
     let scale: Vec<f64> = (0..k)
         .map(|i| {
-            let white = s2 * inv[(i, i)];
-            if v[(i, i)] > 0.0 && v[(i, i)] < white {
-                (white / v[(i, i)]).sqrt()
-            } else if v[(i, i)] > 0.0 {
-                1.0
+            let vi = v[(i, i)];
+            if vi > 0.0 {
+                (white[i] / vi).sqrt().max(1.0)
             } else {
-                f64::NAN
+                0.0
             }
         })
         .collect();
@@ -179,14 +180,10 @@ fn robust(inv: &DMatrix<f64>, meat: &DMatrix<f64>, s2: f64) -> DMatrix<f64> {
             v[(i, j)] *= scale[i] * scale[j];
         }
     }
-    // A knob no cluster moves keeps the white-noise variance.
-    for i in 0..k {
-        if scale[i].is_nan() {
-            for j in 0..k {
-                v[(i, j)] = if i == j { s2 * inv[(i, i)] } else { 0.0 };
-                v[(j, i)] = v[(i, j)];
-            }
-        }
+    for i in (0..k).filter(|&i| scale[i] == 0.0) {
+        v.row_mut(i).fill(0.0);
+        v.column_mut(i).fill(0.0);
+        v[(i, i)] = white[i];
     }
     v
 }
@@ -196,7 +193,8 @@ mod tests {
     use super::{conditional, Block};
     use nalgebra::DMatrix;
 
-    /// A constant fitted to `r`: its variance from the two estimators.
+    /// A constant fitted to `r`: its variance from [`conditional`] with
+    /// clusters of `window` residuals.
     fn variance_of_mean(r: &[f64], window: usize) -> f64 {
         let b = Block {
             knobs: vec![0],

@@ -389,10 +389,9 @@ impl<'a> Fitter<'a> {
         if n_data == 0 {
             return Err(FitError::NoData);
         }
-        let driven = recordings.iter().any(|&i| {
-            let v_v = &self.session.recordings[i].rec.v_v;
-            v_v.as_flat().iter().any(|&v| v != 0.0)
-        });
+        let driven = recordings
+            .iter()
+            .any(|&i| !self.session.recordings[i].driven().is_empty());
         if !driven {
             return Err(FitError::NoDrive);
         }
