@@ -208,8 +208,12 @@ fn channel_traces(
     let mut traces = Vec::new();
     let mut frames = None;
     let mut measured_trace = None;
-    if let Some(m) = measured {
-        let points = points(m, ch, scale);
+    // A drive alone (`simulate` of a file without measurements) has no
+    // measured samples: no legend entry for them either.
+    if let Some((m, points)) = measured
+        .map(|m| (m, points(m, ch, scale)))
+        .filter(|(_, p)| !p.is_empty())
+    {
         let sparse = 2 * points.len() < m.t_s.len();
         if sparse {
             frames = m.channel(ch);
@@ -495,6 +499,14 @@ mod tests {
         assert_eq!((i[0].style, i[0].colour), (Style::Line, MEASURED_COLOUR));
         assert_eq!(i[2].colour, model_colour(1));
         assert_eq!(i[2].label, "i1 final");
+        // A drive with nothing measured on the channel: no measured trace
+        // and no legend entry for one.
+        let unmeasured = free(100, |_| None);
+        let tip = channel_traces(Some(&unmeasured), &models, Channel::TipY, 1e3, 0, "");
+        assert_eq!(tip.len(), 2);
+        assert!(tip
+            .iter()
+            .all(|t| t.colour != MEASURED_COLOUR && t.points.len() == 100));
         // The same models in the autocorrelation plot: the same colours.
         let rho = autocorrelation_traces(
             &[("baseline", vec![1.0, 0.1]), ("final", vec![1.0, 0.0])],

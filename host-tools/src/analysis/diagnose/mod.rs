@@ -14,9 +14,11 @@
 //! damping; back-relaxation needs the zero below zero). Of the effects
 //! that pass, the one with the lowest held-out error joins the model, or
 //! where the held-out part cannot tell passing effects apart, the one the
-//! session's evidence calls for ([`choose`]); the search repeats on top of
-//! it, so several causes can
-//! be named, strongest first. The verdict:
+//! session's evidence calls for ([`choose`]). The model that joined is
+//! fitted again from the data's own start, and the better of its two fits
+//! is kept: a fit that starts from the model so far can stop in a corner
+//! the earlier terms bent toward. The search repeats on top of it, so
+//! several causes can be named, strongest first. The verdict:
 //! - `none`: nothing accepted and the held-out residuals of every sensor
 //!   (currents, load cell, camera: [`floors`]) are at its noise floor
 //!   (weighted RSS per residual below [`NOISE_FLOOR_RATIO`]);
@@ -39,6 +41,7 @@ pub mod floors;
 pub mod report;
 pub mod rests;
 mod search;
+mod starts;
 mod verdict;
 pub mod whiteness;
 

@@ -6,9 +6,9 @@ use super::analyses;
 use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
 use super::rests::rest_structure;
+use super::starts;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
-use crate::analysis::fit::modal::{self, Ringing};
 use crate::analysis::fit::{ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
@@ -251,6 +251,17 @@ impl Search<'_> {
             found.accepted.extend(m);
             found.fit = fit;
             found.hold = score;
+            // The model that joined, fitted again from the data's own
+            // start: the next round's candidates start from it, and a
+            // candidate that only finished its descent would gain for
+            // nothing of its own.
+            let again = self
+                .fitter
+                .fit(self.train, &found.fit.effects, None, self.fixed)?;
+            if again.score.rss < found.fit.score.rss {
+                found.hold = self.fitter.score(self.hold, &again.spec)?;
+                found.fit = again;
+            }
             round += 1;
         }
         Ok(found)
@@ -274,15 +285,10 @@ impl Search<'_> {
         moves: &[Vec<Effect>],
         current: &FitResult,
     ) -> Result<Vec<Passed<Vec<Effect>>>, FitError> {
-        // The model's and the load cell's blocked modes, once a round:
-        // every candidate of the round that moves or damps the mode starts
-        // from them.
-        let modes = moves
-            .iter()
-            .flatten()
-            .any(|e| reads_the_mode(*e))
-            .then(|| blocked_modes(self.session, self.train, &current.spec))
-            .flatten();
+        // The model's and the measured blocked modes, once a round: every
+        // candidate of the round that moves or damps the mode starts from
+        // them.
+        let modes = starts::modes(self.session, self.train, &current.spec, moves);
         let results: Vec<Result<Passed<Vec<Effect>>, FitError>> = moves
             .par_iter()
             .map(|m| {
@@ -290,7 +296,7 @@ impl Search<'_> {
                 effects.extend(m);
                 let start = m
                     .iter()
-                    .fold(current.spec, |start, &e| mode_start(e, &start, modes));
+                    .fold(current.spec, |spec, &e| starts::start(e, &spec, modes));
                 let fit = self
                     .fitter
                     .fit(self.train, &effects, Some(&start), self.fixed)?;
@@ -375,61 +381,6 @@ pub fn tested_channels<'a>(
         .iter()
         .zip(&last.channels)
         .filter(|(b, _)| b.has_signal || b.channel.is_camera())
-}
-
-/// Whether a candidate moves or damps the beam's first mode.
-fn reads_the_mode(e: Effect) -> bool {
-    matches!(
-        e,
-        Effect::BeamStiffness | Effect::HydrodynamicLoading | Effect::Damping
-    )
-}
-
-/// `(model, measured)` first blocked mode, the measurement searched
-/// between 0.2 and 3 times the model's frequency.
-fn blocked_modes(
-    session: &Session,
-    train: &[usize],
-    current: &ModelSpec,
-) -> Option<(Ringing, Ringing)> {
-    let model = modal::model_blocked_ringing(current)?;
-    let data =
-        modal::measured_blocked_ringing(session, train, current, 0.2 * model.hz, 3.0 * model.hz)?;
-    Some((model, data))
-}
-
-/// Where a candidate that moves or damps the beam's first mode starts:
-/// where the model's mode rings at the measured frequency (`EI` for
-/// beam-stiffness, added mass for hydrodynamic loading) and decays at the
-/// measured rate (the constant damping ratio takes all of the missing
-/// ratio; the water's linear drag). Others start at the current
-/// model, their own terms off.
-fn mode_start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) -> ModelSpec {
-    let mut start = *current;
-    if !reads_the_mode(e) {
-        return start;
-    }
-    let Some((model, data)) = modes else {
-        return start;
-    };
-    // f ∝ √(EI / mass per length).
-    let ratio2 = (data.hz / model.hz).powi(2);
-    let missing = (data.damping_ratio - model.damping_ratio).max(0.0);
-    match e {
-        Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
-        // The constant ratio is the measured ratio itself, at every mode.
-        Effect::Damping => start.ext.damping_ratio += missing,
-        _ => {
-            let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
-            start.ext.added_mass_kg_per_m =
-                (mass / ratio2 - start.params.mass_per_length_kg_per_m).max(0.0);
-            // Linear drag d damps as 2ζω = d / (mass with the water's).
-            let w = 2.0 * std::f64::consts::PI * data.hz;
-            let wet = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
-            start.ext.drag_n_s_per_m2 += 2.0 * missing * w * wet;
-        }
-    }
-    start
 }
 
 /// Whether the term that makes `e` what it is differs from "off" beyond

@@ -1,0 +1,68 @@
+//! Where a round's candidates start their fit: the model so far with the
+//! candidate's own terms off, except for the terms that move or damp the
+//! beam's first mode, which start where the model rings as the data do
+//! (the blocked mode's frequency and decay, read once a round).
+
+use crate::analysis::fit::modal::{self, Ringing};
+use crate::analysis::fit::Effect;
+use crate::model::predict::ModelSpec;
+use crate::session::Session;
+
+/// `(model, measured)` first blocked mode beside `current` on the
+/// training recordings `train`, when some move of `moves` reads it.
+pub fn modes(
+    session: &Session,
+    train: &[usize],
+    current: &ModelSpec,
+    moves: &[Vec<Effect>],
+) -> Option<(Ringing, Ringing)> {
+    if !moves.iter().flatten().any(|&e| reads_the_mode(e)) {
+        return None;
+    }
+    let model = modal::model_blocked_ringing(current)?;
+    let data =
+        modal::measured_blocked_ringing(session, train, current, 0.2 * model.hz, 3.0 * model.hz)?;
+    Some((model, data))
+}
+
+/// Whether a candidate moves or damps the beam's first mode.
+fn reads_the_mode(e: Effect) -> bool {
+    matches!(
+        e,
+        Effect::BeamStiffness | Effect::HydrodynamicLoading | Effect::Damping
+    )
+}
+
+/// Where a candidate that moves or damps the beam's first mode starts:
+/// where the model's mode rings at the measured frequency (`EI` for
+/// beam-stiffness, added mass for hydrodynamic loading) and decays at the
+/// measured rate (the constant damping ratio takes all of the missing
+/// ratio; the water's linear drag). Others start at the current
+/// model, their own terms off.
+pub fn start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) -> ModelSpec {
+    let mut start = *current;
+    if !reads_the_mode(e) {
+        return start;
+    }
+    let Some((model, data)) = modes else {
+        return start;
+    };
+    // f ∝ √(EI / mass per length).
+    let ratio2 = (data.hz / model.hz).powi(2);
+    let missing = (data.damping_ratio - model.damping_ratio).max(0.0);
+    match e {
+        Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
+        // The constant ratio is the measured ratio itself, at every mode.
+        Effect::Damping => start.ext.damping_ratio += missing,
+        _ => {
+            let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
+            start.ext.added_mass_kg_per_m =
+                (mass / ratio2 - start.params.mass_per_length_kg_per_m).max(0.0);
+            // Linear drag d damps as 2ζω = d / (mass with the water's).
+            let w = 2.0 * std::f64::consts::PI * data.hz;
+            let wet = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
+            start.ext.drag_n_s_per_m2 += 2.0 * missing * w * wet;
+        }
+    }
+    start
+}
