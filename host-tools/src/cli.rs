@@ -296,6 +296,11 @@ pub struct FitArgs {
     /// Where to write the fitted parameters (TOML, as `simulate --params` reads).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Where to write the fit as JSON: every parameter with its 95 %
+    /// interval, the noise per sensor, the information criteria and the
+    /// fit per channel.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
 }
 
 /// How the tip is held.

@@ -184,7 +184,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     // An output that cannot be written fails before the fit, not after.
-    if let Some(out) = &args.out {
+    for out in args.out.iter().chain(&args.json) {
         check_writable(out)?;
     }
     let session = Session::read(&args.session)?;
@@ -193,7 +193,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
     let all: Vec<usize> = (0..session.recordings.len()).collect();
     let bar = spinner("fitting");
     let started = Instant::now();
-    let fit = fitter.fit(&all, &effects, None, fixed)?;
+    let fit = fitter.fit_from_either_start(&all, &effects, fixed)?;
     bar.finish_and_clear();
     print!(
         "{}",
@@ -210,6 +210,12 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
         let file = fit.model_file();
         std::fs::write(out, file.to_toml()).with_context(|| out.display().to_string())?;
         eprintln!("wrote {}", out.display());
+    }
+    if let Some(json) = &args.json {
+        let summary = finrs::analysis::fit::report::FitSummary::new(&fit, fitter.targets());
+        std::fs::write(json, serde_json::to_string_pretty(&summary)?)
+            .with_context(|| json.display().to_string())?;
+        eprintln!("wrote {}", json.display());
     }
     Ok(())
 }

@@ -211,3 +211,63 @@ fn a_fit_started_at_zero_dc_moment_leaves_it() {
     let per = fit.score.rss / fit.score.m as f64;
     assert!(per < 1.15, "RSS/m = {per}");
 }
+
+#[test]
+fn fit_json_holds_what_the_text_prints_for_a_program_to_read() {
+    let truth = sample();
+    let dir = std::env::temp_dir().join(format!("finrs-fit-json-{}", std::process::id()));
+    common::write_session(&dir, &truth, &common::short_protocol(), 12);
+    let json = dir.join("fit.json");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_finrs"))
+        .arg("fit")
+        .arg(&dir)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["effects"].as_array().unwrap().len(), 0);
+    let estimates = v["estimates"].as_array().unwrap();
+    let knobs: Vec<&str> = estimates
+        .iter()
+        .map(|e| e["knob"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        knobs,
+        [
+            "r1_ohm",
+            "r2_ohm",
+            "c_f",
+            "a_nm_per_c",
+            "b_nm_per_c_s",
+            "p_per_s"
+        ]
+    );
+    for e in estimates {
+        let (value, low, high) = (
+            e["value"].as_f64().unwrap(),
+            e["low"].as_f64().unwrap(),
+            e["high"].as_f64().unwrap(),
+        );
+        assert!(low <= value && value <= high, "{e}");
+        // The text's line for the knob, to its printed digits.
+        let line = format!("{:<26} {:>12.5e}", e["knob"].as_str().unwrap(), value);
+        assert!(stdout.contains(&line), "{line:?} not in\n{stdout}");
+    }
+    // R1 is read from the currents alone: its interval holds the truth.
+    let r1 = &estimates[0];
+    assert!(r1["low"].as_f64().unwrap() <= truth.params.r1_ohm);
+    assert!(r1["high"].as_f64().unwrap() >= truth.params.r1_ohm);
+    assert!(v["noise"]["currents"].as_f64().unwrap() > 0.0);
+    let per = v["rss_per_residual"].as_f64().unwrap();
+    assert!(per > 0.5 && per < 1.5, "{per}");
+    assert!(!v["channels"].as_array().unwrap().is_empty());
+    std::fs::remove_dir_all(&dir).ok();
+}

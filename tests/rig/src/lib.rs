@@ -35,8 +35,10 @@
 
 pub mod beam;
 pub mod bench;
+pub mod coverage;
 pub mod expect;
 pub mod heatmap;
+pub mod runner;
 pub mod sample;
 pub mod session;
 pub mod strip;

@@ -127,6 +127,24 @@ pub fn expected_of(s: &Scenario) -> anyhow::Result<Expected> {
     Ok(expected(&d.hidden, &d.bench, protocol(s)))
 }
 
+/// The rig's true values behind the scenario's session, for the knobs
+/// that mean the same in the fitted model ([`crate::coverage::truth`]).
+pub fn truth_of(s: &Scenario) -> anyhow::Result<BTreeMap<String, f64>> {
+    let d = draw(s)?;
+    Ok(crate::coverage::truth(&d.sample, &d.hidden))
+}
+
+/// The catalogue effects the scenario's strip has, visible or not: the
+/// model structure that is right for it.
+pub fn structure_of(s: &Scenario) -> anyhow::Result<Vec<&'static str>> {
+    let e = expected_of(s)?;
+    Ok(e.required
+        .into_iter()
+        .chain(e.allowed)
+        .filter(|n| CATALOGUE.contains(n) || *n == SEGMENT_VARIATION)
+        .collect())
+}
+
 /// Writes the scenario's session into `dir` and says what a right
 /// diagnosis of it names.
 pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {

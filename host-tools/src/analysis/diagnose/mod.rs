@@ -41,7 +41,6 @@ pub mod floors;
 pub mod report;
 pub mod rests;
 mod search;
-mod starts;
 mod verdict;
 pub mod whiteness;
 

@@ -110,7 +110,10 @@ pub struct Untestable {
 }
 
 /// The verdict as `finrs diagnose` prints it: verdict and causes, the
-/// held-out gain, then every candidate tried, one line each.
+/// held-out gain, then every candidate tried, one line each. A candidate's
+/// held-out RSS gain comes first, as the rule reads it; its mean NRMSE
+/// gain beside it weighs every channel alike and can differ in sign (a
+/// term that halves one channel's misfit and worsens many small ones).
 impl std::fmt::Display for Verdict {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let causes = if self.causes.is_empty() {
@@ -131,10 +134,11 @@ impl std::fmt::Display for Verdict {
         for c in &self.candidates {
             writeln!(
                 f,
-                "  round {} {:<30} dBIC {:>12.1}  held-out gain {:>7.2} %  {}",
+                "  round {} {:<30} dBIC {:>12.1}  held-out RSS gain {:>8.2} %  (NRMSE {:>8.2} %)  {}",
                 c.round + 1,
                 c.name,
                 c.delta_bic,
+                c.holdout_rss_gain_percent,
                 c.holdout_gain_percent,
                 if c.passed { "passed" } else { "-" }
             )?;

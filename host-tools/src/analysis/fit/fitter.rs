@@ -7,6 +7,7 @@ use super::covariance::{self, Block};
 use super::data::SessionTargets;
 use super::effect::Effect;
 use super::error::FitError;
+use super::mode_start;
 use super::space::Space;
 use super::stage::{descend, Problem, Stage};
 use super::start;
@@ -218,6 +219,41 @@ impl<'a> Fitter<'a> {
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
         pool().install(|| self.fit_here(recordings, effects, start, fixed))
+    }
+
+    /// `effects` fitted on `recordings` from two starts, the lower cost
+    /// kept: the data's own ([`Self::fit`] without a start), and the
+    /// baseline's fit on the same recordings with the effects added as the
+    /// diagnosis adds them ([`mode_start`]: the terms that move or damp the
+    /// first mode start where the measured mode rings). Either start alone
+    /// can stop in a corner: from the data's own, the off-class rig's large
+    /// deflections ended with `EI` at a tenth of the truth.
+    pub fn fit_from_either_start(
+        &self,
+        recordings: &[usize],
+        effects: &[Effect],
+        fixed: ModelSpec,
+    ) -> Result<FitResult, FitError> {
+        let from_data = self.fit(recordings, effects, None, fixed)?;
+        if effects.is_empty() {
+            return Ok(from_data);
+        }
+        let baseline = self.fit(recordings, &[], None, fixed)?;
+        let modes = mode_start::modes(
+            self.session,
+            recordings,
+            &baseline.spec,
+            &[effects.to_vec()],
+        );
+        let start = effects
+            .iter()
+            .fold(baseline.spec, |spec, &e| mode_start::start(e, &spec, modes));
+        let from_modes = self.fit(recordings, effects, Some(&start), fixed)?;
+        Ok(if from_modes.score.rss < from_data.score.rss {
+            from_modes
+        } else {
+            from_data
+        })
     }
 
     fn fit_here(

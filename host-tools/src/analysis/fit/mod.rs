@@ -16,6 +16,7 @@ mod effect;
 mod error;
 mod fitter;
 pub mod modal;
+pub mod mode_start;
 pub mod report;
 mod space;
 mod stage;

@@ -1,6 +1,9 @@
 //! The fit's report as text, for the terminal.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
+
+use serde::Serialize;
 
 use super::data::SessionTargets;
 use super::fitter::FitResult;
@@ -62,4 +65,99 @@ pub fn text(fit: &FitResult, targets: &SessionTargets) -> String {
         );
     }
     s
+}
+
+/// The fit as `finrs fit --json` writes it: what [`text`] prints, for a
+/// program (a coverage run, a notebook) rather than a reader.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct FitSummary {
+    /// Effects on top of the baseline, catalogue names.
+    pub effects: Vec<String>,
+    /// Every fitted parameter with its 95 % interval.
+    pub estimates: Vec<EstimateSummary>,
+    /// Noise level per sensor from the opening rests, in its unit.
+    pub noise: BTreeMap<String, f64>,
+    /// Residuals counted.
+    pub residuals: usize,
+    /// Weighted RSS per residual (1 at the noise floor).
+    pub rss_per_residual: f64,
+    /// Parameters counted by AIC and BIC.
+    pub parameters: usize,
+    /// Akaike's information criterion.
+    pub aic: f64,
+    /// Bayesian information criterion.
+    pub bic: f64,
+    /// Mean NRMSE over the channels with signal.
+    pub nrmse: f64,
+    /// Every channel with signal: recording, channel, fit % and RMS in
+    /// noise units.
+    pub channels: Vec<ChannelSummary>,
+}
+
+/// One parameter of a [`FitSummary`].
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct EstimateSummary {
+    /// The knob's name (as in the parameter file).
+    pub knob: String,
+    /// Its estimate, SI.
+    pub value: f64,
+    /// Lower end of the 95 % interval.
+    pub low: f64,
+    /// Upper end of the 95 % interval.
+    pub high: f64,
+}
+
+/// One channel of a [`FitSummary`].
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ChannelSummary {
+    /// Recording's file name.
+    pub recording: String,
+    /// Channel's column name.
+    pub channel: String,
+    /// MATLAB's fit percentage.
+    pub fit_percent: f64,
+    /// RMS of the residual in noise units.
+    pub rms_in_noise: f64,
+}
+
+impl FitSummary {
+    /// The summary of `fit` over `targets`.
+    pub fn new(fit: &FitResult, targets: &SessionTargets) -> FitSummary {
+        FitSummary {
+            effects: fit.effects.iter().map(|e| e.name().to_string()).collect(),
+            estimates: fit
+                .estimates
+                .iter()
+                .map(|e| EstimateSummary {
+                    knob: e.knob.name().to_string(),
+                    value: e.value,
+                    low: e.low,
+                    high: e.high,
+                })
+                .collect(),
+            noise: targets
+                .sigma
+                .iter()
+                .map(|(sensor, sigma)| (sensor.name().to_string(), *sigma))
+                .collect(),
+            residuals: fit.score.m,
+            rss_per_residual: fit.score.rss / fit.score.m.max(1) as f64,
+            parameters: fit.parameters,
+            aic: fit.aic,
+            bic: fit.bic,
+            nrmse: fit.score.nrmse,
+            channels: fit
+                .score
+                .channels
+                .iter()
+                .filter(|c| c.has_signal)
+                .map(|c| ChannelSummary {
+                    recording: c.recording.clone(),
+                    channel: c.channel.name().to_string(),
+                    fit_percent: c.fit_percent,
+                    rms_in_noise: c.rms_in_noise,
+                })
+                .collect(),
+        }
+    }
 }

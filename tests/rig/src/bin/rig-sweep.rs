@@ -3,12 +3,12 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
 use finrs_rig::expect::{names_given, score, Expected};
+use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::sweep::{csv, expected_of, markdown, plan, write_scenario, Outcome, Scenario};
 
 /// Writes and diagnoses off-class rig sessions, one seed each, and counts
@@ -16,18 +16,8 @@ use finrs_rig::sweep::{csv, expected_of, markdown, plan, write_scenario, Outcome
 #[derive(Parser)]
 #[command(version)]
 struct Cli {
-    /// First seed (the hidden-effect tests use seeds below 1000).
-    #[arg(long, default_value_t = 10_000)]
-    first_seed: u64,
-    /// Sessions.
-    #[arg(long, default_value_t = 100)]
-    sessions: usize,
-    /// The `finrs` binary that diagnoses.
-    #[arg(long, default_value = "target/release/finrs")]
-    finrs: PathBuf,
-    /// Sessions diagnosed at once.
-    #[arg(long, default_value_t = 2)]
-    jobs: usize,
+    #[command(flatten)]
+    run: SweepArgs,
     /// Directory for the matrix (sweep.md, sweep.csv, sweep.png), each
     /// session's result (results/seed-N.json: a sweep run again resumes
     /// from them) and, with --keep, the sessions.
@@ -155,20 +145,20 @@ fn diagnose_one(cli: &Cli, s: &Scenario) -> anyhow::Result<(Expected, Said)> {
     let expected = write_scenario(s, &dir)?;
     let json = dir.join("verdict.json");
     let start = Instant::now();
-    let run = Command::new(&cli.finrs)
+    let run = Command::new(&cli.run.finrs)
         .arg("diagnose")
         .arg(&dir)
         .arg("--json")
         .arg(&json)
         .output()
-        .with_context(|| format!("running {}", cli.finrs.display()))?;
+        .with_context(|| format!("running {}", cli.run.finrs.display()))?;
     let seconds = start.elapsed().as_secs_f64();
     // A diagnosis killed by a signal (the sweep interrupted) is not a
     // result: nothing is kept, and a resumed sweep runs it again.
     anyhow::ensure!(
         run.status.code().is_some(),
         "{} was stopped by a signal ({})",
-        cli.finrs.display(),
+        cli.run.finrs.display(),
         run.status
     );
     let (verdict, causes, gain_percent) = if run.status.success() {
@@ -196,14 +186,9 @@ fn diagnose_one(cli: &Cli, s: &Scenario) -> anyhow::Result<(Expected, Said)> {
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    anyhow::ensure!(cli.jobs >= 1, "--jobs must be at least 1");
-    anyhow::ensure!(
-        cli.finrs.is_file(),
-        "{} is not a file: build it (cargo build --release -p finrs) or give --finrs",
-        cli.finrs.display()
-    );
+    cli.run.check()?;
     std::fs::create_dir_all(cli.out.join("results"))?;
-    let mut scenarios = plan(cli.first_seed, cli.sessions);
+    let mut scenarios = plan(cli.run.first_seed, cli.run.sessions);
     if let Some(s) = cli
         .only
         .iter()
@@ -211,41 +196,26 @@ fn main() -> anyhow::Result<()> {
     {
         anyhow::bail!(
             "--only {s}: not a seed of this sweep ({} to {})",
-            cli.first_seed,
-            cli.first_seed + cli.sessions as u64 - 1
+            cli.run.first_seed,
+            cli.run.first_seed + cli.run.sessions as u64 - 1
         );
     }
     if !cli.only.is_empty() {
         scenarios.retain(|x| cli.only.contains(&x.seed));
     }
-    let next = Mutex::new(scenarios.iter());
-    let outcomes = Mutex::new(Vec::new());
-    std::thread::scope(|scope| {
-        for _ in 0..cli.jobs {
-            scope.spawn(|| loop {
-                let Some(s) = next.lock().expect("no panics under the lock").next() else {
-                    break;
-                };
-                match one(&cli, s) {
-                    Ok(o) => {
-                        eprintln!(
-                            "seed {:>6} {:<45} {:<12} {:<50} {} ({:.0} s)",
-                            o.scenario.seed,
-                            o.scenario.row(),
-                            o.verdict,
-                            o.causes.join(","),
-                            if o.score.is_right() { "right" } else { "WRONG" },
-                            o.seconds
-                        );
-                        outcomes.lock().expect("no panics under the lock").push(o);
-                    }
-                    Err(e) => eprintln!("seed {}: {e:#}", s.seed),
-                }
-            });
-        }
+    let outcomes: Vec<Outcome> = each_session(&scenarios, cli.run.jobs, |s| {
+        let o = one(&cli, s)?;
+        eprintln!(
+            "seed {:>6} {:<45} {:<12} {:<50} {} ({:.0} s)",
+            o.scenario.seed,
+            o.scenario.row(),
+            o.verdict,
+            o.causes.join(","),
+            if o.score.is_right() { "right" } else { "WRONG" },
+            o.seconds
+        );
+        Ok(o)
     });
-    let mut outcomes = outcomes.into_inner().expect("no panics under the lock");
-    outcomes.sort_by_key(|o| o.scenario.seed);
     let md = markdown(&outcomes);
     std::fs::write(cli.out.join("sweep.md"), &md)?;
     std::fs::write(cli.out.join("sweep.csv"), csv(&outcomes))?;

@@ -1,10 +1,12 @@
-//! Where a round's candidates start their fit: the model so far with the
-//! candidate's own terms off, except for the terms that move or damp the
-//! beam's first mode, which start where the model rings as the data do
-//! (the blocked mode's frequency and decay, read once a round).
+//! Where a fit of the terms that move or damp the beam's first mode
+//! starts: the model so far with the new terms off, except that those
+//! terms start where the model rings as the data do (the blocked mode's
+//! frequency and decay). The diagnosis starts each round's candidates
+//! here; `finrs fit` tries it beside the data's own start
+//! ([`Fitter::fit_from_either_start`](super::Fitter::fit_from_either_start)).
 
-use crate::analysis::fit::modal::{self, Ringing};
-use crate::analysis::fit::Effect;
+use super::modal::{self, Ringing};
+use super::Effect;
 use crate::model::predict::ModelSpec;
 use crate::session::Session;
 

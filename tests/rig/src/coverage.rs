@@ -1,0 +1,271 @@
+//! How often `finrs fit`'s 95 % intervals hold the rig's true values.
+//!
+//! The rig knows every value behind a session, so an interval can be
+//! scored where a fitted knob means what one of the rig's values means:
+//! - the circuit, `R1`, `R2` and `C` (under the electrochemical
+//!   nonlinearity too, whose leak and capacitance have these as their
+//!   small-voltage values);
+//! - the lead network, `a = K`, `b = K z` and `p` (both write the moment
+//!   as `K (s + z)/(s + p)` on the charge), unless a back-relaxation branch
+//!   adds a second network that the fitted term only approximates;
+//! - `EI`, the laminate's times the strip's factor;
+//! - each segment's deviations from the first, `factor − 1`.
+//!
+//! Damping is not scored: the off-class strip gives each mode a ratio of
+//! its own, which no single `ζ` of the model is. Nor are the terms whose
+//! rig forms differ from the fitted ones (drag, crosstalk through a lag,
+//! the drying's rate against its own session clock).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use crate::sample::{Hidden, Sample};
+
+/// The rig's true value of each knob (named as `finrs fit --json` names
+/// it) that means the same in the rig and in the fitted model.
+pub fn truth(sample: &Sample, hidden: &Hidden) -> BTreeMap<String, f64> {
+    let mut t = BTreeMap::new();
+    t.insert("r1_ohm".to_string(), sample.r1_ohm);
+    t.insert("r2_ohm".to_string(), sample.r2_ohm);
+    t.insert("c_f".to_string(), sample.c_f);
+    if hidden.back_branch.is_none() {
+        t.insert("a_nm_per_c".to_string(), sample.k_nm_per_c);
+        t.insert(
+            "b_nm_per_c_s".to_string(),
+            sample.k_nm_per_c * sample.z_per_s,
+        );
+        t.insert("p_per_s".to_string(), sample.p_per_s);
+    }
+    t.insert(
+        "ei_nm2".to_string(),
+        sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0),
+    );
+    if let Some(factors) = &hidden.segment_factors {
+        // The first segment is the reference the others deviate from.
+        for (i, f) in factors.iter().enumerate().skip(1) {
+            for (what, x) in [("r1", f.r1), ("c", f.c), ("k", f.k)] {
+                t.insert(format!("segment_{}_{what}_deviation", i + 1), x - 1.0);
+            }
+        }
+    }
+    t
+}
+
+/// One fitted knob against its true value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scored {
+    /// The knob's name.
+    pub knob: String,
+    /// The rig's value.
+    pub truth: f64,
+    /// The estimate.
+    pub value: f64,
+    /// Lower end of its 95 % interval.
+    pub low: f64,
+    /// Upper end.
+    pub high: f64,
+}
+
+impl Scored {
+    /// Whether the interval holds the truth.
+    pub fn covered(&self) -> bool {
+        self.low <= self.truth && self.truth <= self.high
+    }
+
+    /// The error in half-widths of the interval (within 1: covered, for a
+    /// symmetric interval).
+    pub fn error_in_half_widths(&self) -> f64 {
+        let half = 0.5 * (self.high - self.low);
+        if half > 0.0 {
+            (self.value - self.truth).abs() / half
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The error relative to the truth.
+    pub fn relative_error(&self) -> f64 {
+        (self.value - self.truth).abs() / self.truth.abs().max(f64::MIN_POSITIVE)
+    }
+}
+
+/// Scores each estimate of a `finrs fit --json` document `fit` that has a
+/// true value in `truth`; an estimate without one is left out.
+pub fn score(
+    fit: &serde_json::Value,
+    truth: &BTreeMap<String, f64>,
+) -> anyhow::Result<Vec<Scored>> {
+    let estimates = fit["estimates"]
+        .as_array()
+        .ok_or_else(|| anyhow::anyhow!("the fit's JSON has no `estimates` list"))?;
+    let mut out = Vec::new();
+    for e in estimates {
+        let knob = e["knob"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("an estimate without a `knob`: {e}"))?;
+        let Some(&t) = truth.get(knob) else {
+            continue;
+        };
+        let number = |field: &str| {
+            e[field]
+                .as_f64()
+                .ok_or_else(|| anyhow::anyhow!("estimate {knob}: `{field}` is not a number"))
+        };
+        out.push(Scored {
+            knob: knob.to_string(),
+            truth: t,
+            value: number("value")?,
+            low: number("low")?,
+            high: number("high")?,
+        });
+    }
+    Ok(out)
+}
+
+/// Coverage of one knob over the sessions of one model structure.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tally {
+    /// Sessions whose fit had the knob.
+    pub sessions: usize,
+    /// Of them, those whose interval held the truth.
+    pub covered: usize,
+    /// Errors in half-widths, one per session.
+    pub errors: Vec<f64>,
+    /// Relative errors, one per session.
+    pub relative: Vec<f64>,
+}
+
+impl Tally {
+    /// Fraction covered.
+    pub fn coverage(&self) -> f64 {
+        self.covered as f64 / self.sessions.max(1) as f64
+    }
+}
+
+/// Per knob, the tally of `scored` (one list per session).
+pub fn tally<'a>(scored: impl IntoIterator<Item = &'a [Scored]>) -> BTreeMap<String, Tally> {
+    let mut out: BTreeMap<String, Tally> = BTreeMap::new();
+    for session in scored {
+        for s in session {
+            let t = out.entry(s.knob.clone()).or_default();
+            t.sessions += 1;
+            t.covered += usize::from(s.covered());
+            t.errors.push(s.error_in_half_widths());
+            t.relative.push(s.relative_error());
+        }
+    }
+    out
+}
+
+fn median(x: &[f64]) -> f64 {
+    let mut v = x.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// A Markdown table of `tallies`, one per model structure (its label).
+pub fn markdown(tallies: &[(&str, BTreeMap<String, Tally>)]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| structure | knob | sessions | covered | coverage | median error / half-width | median relative error |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for (label, t) in tallies {
+        for (knob, k) in t {
+            let _ = writeln!(
+                s,
+                "| {label} | `{knob}` | {} | {} | {:.0} % | {:.2} | {:.2} % |",
+                k.sessions,
+                k.covered,
+                100.0 * k.coverage(),
+                median(&k.errors),
+                100.0 * median(&k.relative)
+            );
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sample::SegmentFactors;
+
+    fn sample() -> Sample {
+        Sample {
+            r1_ohm: 150.0,
+            r2_ohm: 700.0,
+            c_f: 1e-4,
+            k_nm_per_c: 5.0,
+            z_per_s: 0.2,
+            p_per_s: 0.1,
+            length_m: 0.05,
+            width_m: 0.01,
+            core_m: 2.818e-4,
+            film_m: 2e-6,
+        }
+    }
+
+    #[test]
+    fn the_lead_network_is_the_models_a_b_p_and_segments_deviate_from_the_first() {
+        let mut hidden = Hidden {
+            ei_factor: Some(0.5),
+            segment_factors: Some(vec![
+                SegmentFactors::ONE,
+                SegmentFactors {
+                    r1: 1.1,
+                    c: 0.9,
+                    k: 1.05,
+                },
+            ]),
+            ..Hidden::default()
+        };
+        let t = truth(&sample(), &hidden);
+        assert_eq!(t["a_nm_per_c"], 5.0);
+        assert!((t["b_nm_per_c_s"] - 1.0).abs() < 1e-12);
+        assert_eq!(t["p_per_s"], 0.1);
+        assert!((t["ei_nm2"] - 0.5 * sample().laminate_ei_nm2()).abs() < 1e-18);
+        assert!((t["segment_2_r1_deviation"] - 0.1).abs() < 1e-12);
+        assert!((t["segment_2_c_deviation"] + 0.1).abs() < 1e-12);
+        assert!(!t.contains_key("segment_1_r1_deviation"));
+        // A second branch: the network is no longer the model's a, b, p.
+        hidden.back_branch = Some((1.5, 3.0));
+        let t = truth(&sample(), &hidden);
+        assert!(!t.contains_key("a_nm_per_c") && !t.contains_key("p_per_s"));
+        assert!(t.contains_key("r1_ohm"));
+    }
+
+    #[test]
+    fn an_interval_is_scored_against_the_truth_and_tallied_per_knob() {
+        let fit = serde_json::json!({"estimates": [
+            {"knob": "r1_ohm", "value": 151.0, "low": 149.0, "high": 153.0},
+            {"knob": "c_f", "value": 1.2e-4, "low": 1.1e-4, "high": 1.3e-4},
+            {"knob": "damping_ratio", "value": 0.05, "low": 0.04, "high": 0.06},
+        ]});
+        let t = truth(&sample(), &Hidden::default());
+        let s = score(&fit, &t).unwrap();
+        // Damping has no truth and is left out.
+        assert_eq!(s.len(), 2);
+        assert!(s[0].covered());
+        assert!((s[0].error_in_half_widths() - 0.5).abs() < 1e-12);
+        assert!(!s[1].covered());
+        assert!((s[1].relative_error() - 0.2).abs() < 1e-9);
+        let tallies = tally([s.as_slice(), &s[..1]]);
+        assert_eq!(tallies["r1_ohm"].sessions, 2);
+        assert_eq!(tallies["r1_ohm"].covered, 2);
+        assert_eq!(tallies["c_f"].coverage(), 0.0);
+        let md = markdown(&[("true", tallies)]);
+        assert!(
+            md.contains("| true | `r1_ohm` | 2 | 2 | 100 % | 0.50 | 0.67 % |"),
+            "{md}"
+        );
+        // A document without estimates is refused, naming what is missing.
+        let err = score(&serde_json::json!({}), &t).unwrap_err();
+        assert!(err.to_string().contains("estimates"), "{err}");
+    }
+}
