@@ -212,10 +212,10 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", out.display());
     }
     if let Some(json) = &args.json {
-        let summary = finrs::analysis::fit::report::FitSummary::new(&fit, fitter.targets());
-        std::fs::write(json, serde_json::to_string_pretty(&summary)?)
-            .with_context(|| json.display().to_string())?;
-        eprintln!("wrote {}", json.display());
+        write_json(
+            json,
+            &finrs::analysis::fit::report::FitSummary::new(&fit, fitter.targets()),
+        )?;
     }
     Ok(())
 }
@@ -240,10 +240,7 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
     print!("{}", d.verdict);
     eprintln!("diagnosed in {:.1} s", started.elapsed().as_secs_f64());
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&d.verdict)?;
-        create_parent(path)?;
-        std::fs::write(path, text + "\n").with_context(|| path.display().to_string())?;
-        eprintln!("wrote {}", path.display());
+        write_json(path, &d.verdict)?;
     }
     if let Some(dir) = &args.report {
         finrs::analysis::diagnose::report::write(dir, &session, &d)?;
@@ -260,9 +257,7 @@ pub fn seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
     let c = finrs::analysis::seed_check::seed_check()?;
     print!("{c}");
     if let Some(path) = json {
-        std::fs::write(&path, serde_json::to_string_pretty(&c)? + "\n")
-            .with_context(|| path.display().to_string())?;
-        eprintln!("wrote {}", path.display());
+        write_json(&path, &c)?;
     }
     Ok(())
 }
@@ -433,6 +428,16 @@ fn spinner(msg: &'static str) -> ProgressBar {
 }
 
 /// Creates the folder a file goes into.
+/// Writes `value` to `path` as pretty JSON ending in a newline, its folder
+/// created, and says so on stderr.
+fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+    create_parent(path)?;
+    std::fs::write(path, serde_json::to_string_pretty(value)? + "\n")
+        .with_context(|| path.display().to_string())?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
 fn create_parent(path: &Path) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
