@@ -38,6 +38,7 @@
 pub mod analyses;
 pub mod choose;
 pub mod floors;
+pub mod identify;
 pub mod report;
 pub mod rests;
 mod search;

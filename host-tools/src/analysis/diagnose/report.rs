@@ -70,6 +70,7 @@ pub fn write(dir: &Path, session: &Session, d: &Diagnosis) -> Result<(), ReportE
     summary(&mut s, session, v);
     baseline_misses(&mut s, v);
     candidates(&mut s, v);
+    identifiability(&mut s, v);
     parameters(&mut s, d);
     let (b, f) = &d.holdout_scores;
     let tested: Vec<Tested> = super::tested_channels(b, f)
@@ -272,6 +273,48 @@ fn candidates(s: &mut String, v: &Verdict) {
             c.holdout_rss_gain_percent,
             if c.passed { "yes" } else { "no" },
             terms.join(", ")
+        );
+    }
+}
+
+/// What the session could show of each effect the final model lacks.
+fn identifiability(s: &mut String, v: &Verdict) {
+    if v.identifiability.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n## What this session could show\n");
+    let _ = writeln!(
+        s,
+        "Each testable effect the final model lacks, at the smallest strength the \
+         search could name (both gates passed, the signature simulated and what \
+         the model's own knobs absorb removed), against a strength a real strip \
+         plausibly has (docs/diagnosis.md).\n"
+    );
+    let _ = writeln!(s, "| effect | strength | smallest detectable | plausible | could show | absorbed by the model % | confounded with |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    for i in &v.identifiability {
+        let smallest = match i.smallest_detectable {
+            Some(x) => format!("{x:.2e}"),
+            None if i.effect == "large-deflection" => {
+                format!("signature {:.2} of the gate", i.holdout_signature_over_gate)
+            }
+            None => format!("none up to {}", i.ceiling),
+        };
+        let like: Vec<String> = i
+            .confounded_with
+            .iter()
+            .map(|(n, share)| format!("{n} ({share:.0} %)"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {:.2} | {} |",
+            i.effect,
+            i.strength,
+            smallest,
+            i.plausible,
+            if i.detectable { "yes" } else { "no" },
+            i.absorbed_percent,
+            like.join(", ")
         );
     }
 }

@@ -5,6 +5,7 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
+use super::identify;
 use super::rests::rest_structure;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
@@ -130,6 +131,17 @@ pub fn diagnose(
         (false, true) => "explained",
         (_, false) => "unexplained",
     };
+    progress("identifiability");
+    let lacking: Vec<Effect> = Effect::ALL
+        .into_iter()
+        .filter(|e| !found.fit.effects.contains(e))
+        .filter(|e| !untestable.iter().any(|u| u.effect == e.name()))
+        .collect();
+    let (identifiability, identifiability_refused) =
+        match identify::identify(session, &fitter, &found.fit, fixed, &lacking, &hold) {
+            Ok(v) => (v, None),
+            Err(e) => (Vec::new(), Some(identify::error_chain(&e))),
+        };
     let score_of = |fit: &FitResult, hold: &Score| ModelScore {
         holdout_nrmse: hold.nrmse,
         holdout_rss_per_residual: per(hold),
@@ -157,6 +169,8 @@ pub fn diagnose(
         untestable,
         rest,
         analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
+        identifiability,
+        identifiability_refused,
     };
     Ok(Diagnosis {
         verdict,

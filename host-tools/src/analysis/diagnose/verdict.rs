@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use super::analyses;
 use super::floors::SensorFloor;
+use super::identify::Identifiability;
 use super::rests::RestStructure;
 use crate::analysis::fit::{FitResult, Score};
 
@@ -98,6 +99,13 @@ pub struct Verdict {
     pub rest: RestStructure,
     /// Where the baseline's misfit lives across the session.
     pub analyses: analyses::Analyses,
+    /// Per testable effect the final model lacks: whether this session's
+    /// protocol could show it at a plausible strength, and which others
+    /// it is confounded with.
+    pub identifiability: Vec<Identifiability>,
+    /// Why identifiability could not be assessed at all, if so (the final
+    /// model refused a step of its own knobs).
+    pub identifiability_refused: Option<String>,
 }
 
 /// A catalogue effect the session cannot show.
@@ -152,6 +160,12 @@ impl std::fmt::Display for Verdict {
         }
         for u in &self.untestable {
             writeln!(f, "  not testable here: {}: {}", u.effect, u.why)?;
+        }
+        for i in &self.identifiability {
+            writeln!(f, "  {i}")?;
+        }
+        if let Some(why) = &self.identifiability_refused {
+            writeln!(f, "  what the session could show was not assessed: {why}")?;
         }
         for b in &self.rest.bench {
             writeln!(f, "  bench, not the strip: {}", b.detail)?;
