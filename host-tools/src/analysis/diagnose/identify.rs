@@ -532,8 +532,8 @@ fn remainder(
 }
 
 /// The coefficients of `columns[cols]` that best fit `d` over the rows
-/// `keep` selects (least squares by SVD: a knob the rows do not see gets
-/// no coefficient).
+/// `keep` selects (least squares by a pseudo-inverse: a knob the rows do
+/// not see gets no coefficient).
 fn least_squares(
     d: &[f64],
     columns: &[Vec<f64>],
@@ -547,7 +547,7 @@ fn least_squares(
     if picked.is_empty() {
         return vec![0.0; cols.len()];
     }
-    // Normal equations in the columns' own scale, solved by SVD with a
+    // Normal equations, then solved in the columns' own scale with a
     // relative cut-off: a few knobs, many rows.
     let n = cols.len();
     let mut ata = DMatrix::<f64>::zeros(n, n);
@@ -566,25 +566,51 @@ fn least_squares(
             ata[(a, b)] = ata[(b, a)];
         }
     }
-    // A model that overflowed somewhere gives nothing to absorb with (an
-    // SVD of NaN would never converge).
+    // A model that overflowed somewhere gives nothing to absorb with (a
+    // decomposition of NaN never converges).
     if ata.iter().chain(atb.iter()).any(|x| !x.is_finite()) {
         return vec![0.0; n];
     }
-    let scale: Vec<f64> = (0..n).map(|a| ata[(a, a)].sqrt().max(1e-300)).collect();
-    let scaled = DMatrix::from_fn(n, n, |a, b| ata[(a, b)] / (scale[a] * scale[b]));
-    let rhs = DVector::from_fn(n, |a, _| atb[a] / scale[a]);
-    let Some(x) = scaled
-        .try_svd(true, true, f64::EPSILON, SVD_ITERATIONS)
-        .and_then(|svd| svd.solve(&rhs, 1e-10).ok())
+    // In the columns' own scale the matrix has a unit diagonal and entries
+    // within ±1; a column the rows do not see stays out (coefficient 0).
+    let seen: Vec<bool> = (0..n).map(|a| ata[(a, a)] > 0.0).collect();
+    let scale: Vec<f64> = (0..n)
+        .map(|a| if seen[a] { ata[(a, a)].sqrt() } else { 1.0 })
+        .collect();
+    let scaled = DMatrix::from_fn(n, n, |a, b| {
+        if seen[a] && seen[b] {
+            ata[(a, b)] / (scale[a] * scale[b])
+        } else {
+            0.0
+        }
+    });
+    let rhs = DVector::from_fn(n, |a, _| if seen[a] { atb[a] / scale[a] } else { 0.0 });
+    if scaled.iter().chain(rhs.iter()).any(|x| !x.is_finite()) {
+        return vec![0.0; n];
+    }
+    // The pseudo-inverse from the symmetric eigen-decomposition, small
+    // eigenvalues cut: knobs the rows cannot tell apart share the fit.
+    let Some(eig) = nalgebra::SymmetricEigen::try_new(scaled, f64::EPSILON, EIGEN_ITERATIONS)
     else {
         return vec![0.0; n];
     };
+    let top = eig.eigenvalues.iter().fold(0.0_f64, |m, &l| m.max(l.abs()));
+    let mut x = DVector::<f64>::zeros(n);
+    for (k, &l) in eig.eigenvalues.iter().enumerate() {
+        if l.is_finite() && l > 1e-10 * top {
+            let v = eig.eigenvectors.column(k);
+            x += v * (v.dot(&rhs) / l);
+        }
+    }
+    if x.iter().any(|v| !v.is_finite()) {
+        return vec![0.0; n];
+    }
     (0..n).map(|a| x[a] / scale[a]).collect()
 }
 
-/// Iterations the SVD of a few knobs' normal matrix may take.
-const SVD_ITERATIONS: usize = 1000;
+/// Iterations the eigen-decomposition of a few knobs' normal matrix may
+/// take.
+const EIGEN_ITERATIONS: usize = 1000;
 
 /// `d -= columns[cols] · x`.
 fn subtract(d: &mut [f64], columns: &[Vec<f64>], cols: &[usize], x: &[f64]) {
