@@ -27,7 +27,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::search::{DELTA_BIC, HOLDOUT_RSS_GAIN};
-use crate::analysis::fit::{Effect, FitError, FitResult, Fitter, Knob, Space};
+use crate::analysis::fit::{normal, Effect, FitError, FitResult, Fitter, Knob, Space};
 use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
 use crate::session::Session;
@@ -566,51 +566,8 @@ fn least_squares(
             ata[(a, b)] = ata[(b, a)];
         }
     }
-    // A model that overflowed somewhere gives nothing to absorb with (a
-    // decomposition of NaN never converges).
-    if ata.iter().chain(atb.iter()).any(|x| !x.is_finite()) {
-        return vec![0.0; n];
-    }
-    // In the columns' own scale the matrix has a unit diagonal and entries
-    // within ±1; a column the rows do not see stays out (coefficient 0).
-    let seen: Vec<bool> = (0..n).map(|a| ata[(a, a)] > 0.0).collect();
-    let scale: Vec<f64> = (0..n)
-        .map(|a| if seen[a] { ata[(a, a)].sqrt() } else { 1.0 })
-        .collect();
-    let scaled = DMatrix::from_fn(n, n, |a, b| {
-        if seen[a] && seen[b] {
-            ata[(a, b)] / (scale[a] * scale[b])
-        } else {
-            0.0
-        }
-    });
-    let rhs = DVector::from_fn(n, |a, _| if seen[a] { atb[a] / scale[a] } else { 0.0 });
-    if scaled.iter().chain(rhs.iter()).any(|x| !x.is_finite()) {
-        return vec![0.0; n];
-    }
-    // The pseudo-inverse from the symmetric eigen-decomposition, small
-    // eigenvalues cut: knobs the rows cannot tell apart share the fit.
-    let Some(eig) = nalgebra::SymmetricEigen::try_new(scaled, f64::EPSILON, EIGEN_ITERATIONS)
-    else {
-        return vec![0.0; n];
-    };
-    let top = eig.eigenvalues.iter().fold(0.0_f64, |m, &l| m.max(l.abs()));
-    let mut x = DVector::<f64>::zeros(n);
-    for (k, &l) in eig.eigenvalues.iter().enumerate() {
-        if l.is_finite() && l > 1e-10 * top {
-            let v = eig.eigenvectors.column(k);
-            x += v * (v.dot(&rhs) / l);
-        }
-    }
-    if x.iter().any(|v| !v.is_finite()) {
-        return vec![0.0; n];
-    }
-    (0..n).map(|a| x[a] / scale[a]).collect()
+    normal::solve(&ata, &atb)
 }
-
-/// Iterations the eigen-decomposition of a few knobs' normal matrix may
-/// take.
-const EIGEN_ITERATIONS: usize = 1000;
 
 /// `d -= columns[cols] · x`.
 fn subtract(d: &mut [f64], columns: &[Vec<f64>], cols: &[usize], x: &[f64]) {

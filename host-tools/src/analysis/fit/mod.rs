@@ -17,6 +17,7 @@ mod error;
 mod fitter;
 pub mod modal;
 pub mod mode_start;
+pub mod normal;
 pub mod report;
 mod space;
 mod stage;
