@@ -19,6 +19,7 @@ mod error;
 mod float;
 mod geometry;
 mod meta;
+mod output;
 mod read;
 mod timing;
 mod voltages;

@@ -1,5 +1,7 @@
 //! Parsing a recording from text, rule by rule.
 
+use std::fs::File;
+use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 use super::error::RecordingError;
@@ -27,10 +29,10 @@ impl Recording {
         // memory. Whatever that refuses is read again whole and refused
         // from there: one message for a file however it is read (the
         // whole file's UTF-8 is checked before any row, for one).
-        let mut file = std::fs::File::open(path).map_err(cannot)?;
+        let file = std::fs::File::open(path).map_err(cannot)?;
         let len = file.metadata().map_err(cannot)?.len();
         if len > 4 * CHUNK_BYTES as u64 {
-            if let Some(rec) = read_in_chunks(&name, &mut file, len, keep) {
+            if let Some(rec) = read_in_chunks(&name, &file, len, keep) {
                 return Ok(rec);
             }
         }
@@ -85,26 +87,19 @@ const CHUNK_BYTES: usize = 64 << 10;
 
 /// Reads `file` (`len` bytes) in chunks of whole lines; `None` if anything
 /// is refused or cannot be read.
-fn read_in_chunks(name: &str, file: &mut std::fs::File, len: u64, keep: Keep) -> Option<Recording> {
-    use std::io::Read;
-    let mut buf = Vec::with_capacity(2 * CHUNK_BYTES);
-    let mut more = |buf: &mut Vec<u8>| -> Option<bool> {
-        let n = (&mut *file)
-            .take(CHUNK_BYTES as u64)
-            .read_to_end(buf)
-            .ok()?;
-        Some(n > 0)
-    };
+fn read_in_chunks(name: &str, file: &File, len: u64, keep: Keep) -> Option<Recording> {
     // The metadata and the header, up to the end of the first line that
     // is not metadata.
+    let mut first = Chunks::new(file, 0, len);
     let bom = "\u{feff}".as_bytes();
     let head_end = loop {
-        let start = if buf.starts_with(bom) { bom.len() } else { 0 };
+        let held = &first.buf[..first.filled];
+        let start = if held.starts_with(bom) { bom.len() } else { 0 };
         let mut at = start;
         let mut found = None;
-        for nl in memchr::memchr_iter(b'\n', &buf[start..]) {
+        for nl in memchr::memchr_iter(b'\n', &held[start..]) {
             let end = start + nl;
-            if !buf[at..end].starts_with(b"#") {
+            if !held[at..end].starts_with(b"#") {
                 found = Some(end + 1);
                 break;
             }
@@ -112,34 +107,108 @@ fn read_in_chunks(name: &str, file: &mut std::fs::File, len: u64, keep: Keep) ->
         }
         match found {
             Some(end) => break end,
-            None if more(&mut buf)? => continue,
+            None if first.more()? => continue,
             None => return None,
         }
     };
-    let head_text = std::str::from_utf8(&buf[..head_end]).ok()?;
+    let head_text = std::str::from_utf8(&first.buf[..head_end]).ok()?;
     let head_text = head_text.strip_prefix('\u{feff}').unwrap_or(head_text);
     let head = read_head(name, &mut lines(head_text)).ok()?;
-    let mut line = head.1 + 1;
+    first.taken = head_end;
+    let line = head.1 + 1;
     let mut rows = Rows::new(name, head, len as usize, keep);
-    buf.drain(..head_end);
-    loop {
-        let more_to_read = more(&mut buf)?;
-        // Whole lines only; at the end, the last line without its `\n`.
-        let complete = match memchr::memrchr(b'\n', &buf) {
-            Some(nl) if more_to_read => nl + 1,
-            _ if more_to_read => continue,
-            _ => buf.len(),
-        };
-        let text = std::str::from_utf8(&buf[..complete]).ok()?;
-        if complete > 0 {
-            for (_, row) in lines(text) {
-                rows.row(line, row).ok()?;
-                line += 1;
-            }
+    read_rows(&mut first, line, &mut rows)?;
+    rows.finish().ok()
+}
+
+/// Checks and keeps the rows `chunks` holds, the first on `line`; `None`
+/// if any is refused or the file cannot be read.
+fn read_rows(chunks: &mut Chunks, mut line: usize, rows: &mut Rows) -> Option<()> {
+    while let Some(text) = chunks.lines()? {
+        for (_, row) in lines(text) {
+            rows.row(line, row).ok()?;
+            line += 1;
         }
-        buf.drain(..complete);
-        if !more_to_read {
-            return rows.finish().ok();
+    }
+    Some(())
+}
+
+/// Bytes `at..end` of a file read a chunk at a time, handed out as whole
+/// lines (the last at `end` without its line end, if it has none).
+struct Chunks<'f> {
+    file: &'f File,
+    /// The next byte of the file to read.
+    at: u64,
+    /// Where to stop reading.
+    end: u64,
+    /// The bytes read and not yet dropped: `buf[..filled]`.
+    buf: Vec<u8>,
+    filled: usize,
+    /// How many of them were handed out.
+    taken: usize,
+}
+
+impl<'f> Chunks<'f> {
+    fn new(file: &'f File, at: u64, end: u64) -> Chunks<'f> {
+        Chunks {
+            file,
+            at,
+            end,
+            // Zeroed once; each read lands in it (no growing per chunk).
+            buf: vec![0; 2 * CHUNK_BYTES],
+            filled: 0,
+            taken: 0,
+        }
+    }
+
+    /// Reads the next chunk after the bytes held, dropping those handed
+    /// out: `Some(false)` at `end`, `None` if the file cannot be read or
+    /// ends first.
+    fn more(&mut self) -> Option<bool> {
+        if self.at >= self.end {
+            return Some(false);
+        }
+        self.buf.copy_within(self.taken..self.filled, 0);
+        self.filled -= self.taken;
+        self.taken = 0;
+        let want = (self.end - self.at).min(CHUNK_BYTES as u64) as usize;
+        if self.buf.len() < self.filled + want {
+            // A line longer than a chunk.
+            self.buf.resize(self.filled + want, 0);
+        }
+        let n = self
+            .file
+            .read_at(&mut self.buf[self.filled..self.filled + want], self.at)
+            .ok()?;
+        if n == 0 {
+            return None;
+        }
+        self.at += n as u64;
+        self.filled += n;
+        Some(true)
+    }
+
+    /// The next whole lines as text, ending at a line end (or at `end`);
+    /// `Some(None)` once every byte is handed out, `None` if the file
+    /// cannot be read or is not UTF-8 there.
+    fn lines(&mut self) -> Option<Option<&str>> {
+        loop {
+            let held = &self.buf[self.taken..self.filled];
+            let complete = if self.at >= self.end {
+                held.len()
+            } else {
+                memchr::memrchr(b'\n', held).map_or(0, |nl| nl + 1)
+            };
+            if complete > 0 {
+                let start = self.taken;
+                self.taken += complete;
+                return std::str::from_utf8(&self.buf[start..start + complete])
+                    .ok()
+                    .map(Some);
+            }
+            if !self.more()? {
+                return Some(None);
+            }
         }
     }
 }
@@ -630,10 +699,10 @@ mod tests {
         let path =
             std::env::temp_dir().join(format!("finrs-read-chunks-{}.csv", std::process::id()));
         std::fs::write(&path, text).unwrap();
-        let mut file = std::fs::File::open(&path).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
         let len = text.len() as u64;
         assert!(len > 4 * CHUNK_BYTES as u64);
-        let chunked = read_in_chunks("big", &mut file, len, Keep::All);
+        let chunked = read_in_chunks("big", &file, len, Keep::All);
         std::fs::remove_file(&path).unwrap();
         let want = Recording::parse("big", text).unwrap();
         assert_eq!(want.t_s.len(), 30_000);

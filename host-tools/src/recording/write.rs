@@ -7,6 +7,7 @@ use std::path::Path;
 use super::error::RecordingError;
 use super::float::Formatter;
 use super::meta::Metadata;
+use super::output::Output;
 use super::read::{column_name, lines, read_head, voltage, BadNumber, RowRules};
 use super::{Channel, Recording, Voltages};
 
@@ -255,14 +256,21 @@ impl RecordingView<'_> {
         }
     }
 
-    /// Checks, then writes to `path` in chunks as the text is formatted.
+    /// Checks, then writes to `path` as the text is formatted: into a new
+    /// file that takes the place of any old one once complete (see
+    /// `output.rs`), so a failed write leaves the old file as it was.
     pub fn write(&self, path: &Path) -> Result<(), RecordingError> {
         let name = path.display().to_string();
         self.validate(&name)?;
         let cannot = |e: std::io::Error| RecordingError::file(&name, format!("cannot write: {e}"));
-        let mut file = std::fs::File::create(path).map_err(cannot)?;
-        self.write_text(|chunk| file.write_all(chunk))
-            .map_err(cannot)
+        let output = Output::create(path).map_err(cannot)?;
+        match self.write_text(|chunk| (&output.file).write_all(chunk)) {
+            Ok(()) => output.finish().map_err(cannot),
+            Err(e) => {
+                output.abandon();
+                Err(cannot(e))
+            }
+        }
     }
 }
 
