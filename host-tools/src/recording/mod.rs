@@ -20,6 +20,7 @@ mod float;
 mod geometry;
 mod meta;
 mod output;
+mod plain_row;
 mod read;
 mod timing;
 mod voltages;
