@@ -36,7 +36,12 @@ pub fn max_written_error(x: f64) -> f64 {
     0.5001 * MEASURED_QUANTUM + 2.0 * f64::EPSILON * x.abs()
 }
 
-/// Writes finite numbers into one output buffer without allocating.
+/// The most bytes a number takes as written: sign, whole part, point and
+/// decimals (`ryu` writes at most 24; `-inf` and `NaN` fewer).
+pub(crate) const WIDEST: usize = 32;
+
+/// Writes numbers into a window of an output buffer without allocating:
+/// each call fills the start of `dst` and says how many bytes it wrote.
 #[derive(Default)]
 pub(crate) struct Formatter {
     ryu: ryu::Buffer,
@@ -44,11 +49,12 @@ pub(crate) struct Formatter {
 }
 
 impl Formatter {
-    /// Appends `x` exactly: the shortest decimal that reads back as `x`,
-    /// without `ryu`'s trailing `.0`. `x` must be finite (checked by the
-    /// caller, which refuses NaN and infinity by name).
-    pub fn exact(&mut self, out: &mut Vec<u8>, x: f64) {
-        debug_assert!(x.is_finite());
+    /// Writes `x` exactly: the shortest decimal that reads back as `x`,
+    /// without `ryu`'s trailing `.0`. NaN and infinity are written as
+    /// `NaN`, `inf`, `-inf` (which the reader refuses: only unchecked text
+    /// can hold them).
+    #[inline]
+    pub fn exact(&mut self, dst: &mut [u8; WIDEST], x: f64) -> usize {
         // Fast path for what a DAQ writes (times to the ms, voltages to a
         // DAC step): if `x` is the nearest f64 to a decimal of at most
         // MEASURED_DECIMALS decimals, that decimal reads back as `x`. The
@@ -58,62 +64,103 @@ impl Formatter {
         if x.abs() < 1e5 {
             let quanta = round(x * SCALE);
             if quanta as f64 / SCALE == x {
-                return self.quanta(out, quanta);
+                return quanta_text(dst, quanta, &mut self.itoa);
             }
         }
-        let s = self.ryu.format_finite(x);
-        let s = s.strip_suffix(".0").unwrap_or(s);
-        out.extend_from_slice(s.as_bytes());
+        self.shortest(dst, x)
     }
 
-    /// Appends a measured value rounded to [`MEASURED_DECIMALS`] decimals,
-    /// trailing zeros dropped (`0.0125`, `-3`, `0`); `x` must be finite.
-    pub fn measured(&mut self, out: &mut Vec<u8>, x: f64) {
-        debug_assert!(x.is_finite());
-        let scaled = x * SCALE;
-        if scaled.abs() >= MAX_QUANTA {
-            return self.exact(out, x);
-        }
-        self.quanta(out, round(scaled))
-    }
-
-    /// Appends `quanta * MEASURED_QUANTUM` as a decimal, trailing zeros
-    /// dropped.
-    fn quanta(&mut self, out: &mut Vec<u8>, quanta: i64) {
-        if quanta < 0 {
-            out.push(b'-');
-        }
-        let q = quanta.unsigned_abs();
-        let (whole, frac) = (q / FRACTION, q % FRACTION);
-        if whole < 10 {
-            out.push(b'0' + whole as u8);
+    /// [`Formatter::exact`] past its fast path: `ryu`, or the name of a
+    /// value that is not finite.
+    #[inline(never)]
+    fn shortest(&mut self, dst: &mut [u8; WIDEST], x: f64) -> usize {
+        let text = if x.is_finite() {
+            let s = self.ryu.format_finite(x);
+            s.strip_suffix(".0").unwrap_or(s)
+        } else if x.is_nan() {
+            "NaN"
+        } else if x > 0.0 {
+            "inf"
         } else {
-            out.extend_from_slice(self.itoa.format(whole).as_bytes());
-        }
-        if frac == 0 {
-            return;
-        }
-        // The point, the first two decimals from a table and the last eight
-        // as one word (SWAR), then the trailing zeros cut, counted from the
-        // word: no loop over digits.
-        let (high, low) = ((frac / 100_000_000) as usize, frac % 100_000_000);
-        let digits = eight_digit_values(low);
-        let mut text = [b'.'; 3 + 8];
-        text[1..3].copy_from_slice(&DIGIT_PAIRS[2 * high..2 * high + 2]);
-        text[3..].copy_from_slice(&(digits | 0x3030_3030_3030_3030).to_le_bytes());
-        // The last digit lies in the word's top byte; frac > 0, so if all
-        // eight are zero the pair's second digit is not, unless it is 0
-        // too and the first one ends the text.
-        let zeros = if digits != 0 {
-            (digits.leading_zeros() / 8) as usize
-        } else if high % 10 != 0 {
-            8
-        } else {
-            9
+            "-inf"
         };
-        // A fixed-size copy, then the zeros cut: no call to `memcpy`.
-        out.extend_from_slice(&text);
-        out.truncate(out.len() - zeros);
+        dst[..text.len()].copy_from_slice(text.as_bytes());
+        text.len()
+    }
+
+    /// Writes a measured value rounded to [`MEASURED_DECIMALS`] decimals,
+    /// trailing zeros dropped (`0.0125`, `-3`, `0`); not finite, as
+    /// [`Formatter::exact`].
+    #[inline]
+    pub fn measured(&mut self, dst: &mut [u8; WIDEST], x: f64) -> usize {
+        let scaled = x * SCALE;
+        // Also false for NaN.
+        if scaled.abs() < MAX_QUANTA {
+            return quanta_text(dst, round(scaled), &mut self.itoa);
+        }
+        self.exact(dst, x)
+    }
+}
+
+/// The window of `WIDEST` bytes of `buf` from `at`, `buf` lengthened if
+/// it ends sooner.
+#[inline]
+pub(crate) fn window(buf: &mut Vec<u8>, at: usize) -> &mut [u8; WIDEST] {
+    if buf.len() < at + WIDEST {
+        buf.resize(at + WIDEST, 0);
+    }
+    buf[at..]
+        .first_chunk_mut::<WIDEST>()
+        .expect("lengthened to hold it")
+}
+
+/// Writes `quanta * MEASURED_QUANTUM` as a decimal, trailing zeros dropped;
+/// returns its length.
+#[inline]
+fn quanta_text(dst: &mut [u8; WIDEST], quanta: i64, itoa: &mut itoa::Buffer) -> usize {
+    // The sign always written, then kept or overwritten: no branch on a
+    // sign that alternates unpredictably.
+    dst[0] = b'-';
+    let mut n = usize::from(quanta < 0);
+    let q = quanta.unsigned_abs();
+    // Measured values mostly lie below one unit: no division then.
+    let (whole, frac) = if q < FRACTION {
+        (0, q)
+    } else {
+        (q / FRACTION, q % FRACTION)
+    };
+    if whole < 10 {
+        dst[n] = b'0' + whole as u8;
+        n += 1;
+    } else {
+        let text = itoa.format(whole).as_bytes();
+        // |quanta| < 2^63: at most nine digits before the point.
+        dst[n..n + text.len()].copy_from_slice(text);
+        n += text.len();
+    }
+    // The point, the first two decimals from a table and the last eight
+    // as one word (SWAR), then the trailing zeros cut, counted from the
+    // word: no loop over digits.
+    let (high, low) = ((frac / 100_000_000) as usize, frac % 100_000_000);
+    let digits = eight_digit_values(low);
+    let text = &mut dst[n..n + 11];
+    text[0] = b'.';
+    text[1..3].copy_from_slice(&DIGIT_PAIRS[2 * high..2 * high + 2]);
+    text[3..].copy_from_slice(&(digits | 0x3030_3030_3030_3030).to_le_bytes());
+    // The last digit lies in the word's top byte; frac > 0, so if all
+    // eight are zero the pair's second digit is not, unless it is 0 too
+    // and the first one ends the text.
+    let zeros = if digits != 0 {
+        (digits.leading_zeros() / 8) as usize
+    } else if high % 10 != 0 {
+        8
+    } else {
+        9
+    };
+    if frac == 0 {
+        n
+    } else {
+        n + 11 - zeros
     }
 }
 
@@ -166,15 +213,15 @@ mod tests {
     use super::*;
 
     fn exact(x: f64) -> String {
-        let mut out = Vec::new();
-        Formatter::default().exact(&mut out, x);
-        String::from_utf8(out).unwrap()
+        let mut dst = [0; WIDEST];
+        let n = Formatter::default().exact(&mut dst, x);
+        String::from_utf8(dst[..n].to_vec()).unwrap()
     }
 
     fn measured(x: f64) -> String {
-        let mut out = Vec::new();
-        Formatter::default().measured(&mut out, x);
-        String::from_utf8(out).unwrap()
+        let mut dst = [0; WIDEST];
+        let n = Formatter::default().measured(&mut dst, x);
+        String::from_utf8(dst[..n].to_vec()).unwrap()
     }
 
     #[test]
@@ -243,8 +290,9 @@ mod tests {
             zeros in 0u32..11,
         ) {
             for q in [q, q / 10i64.pow(zeros) * 10i64.pow(zeros)] {
-                let mut out = Vec::new();
-                Formatter::default().quanta(&mut out, q);
+                let mut dst = [0; WIDEST];
+                let n = quanta_text(&mut dst, q, &mut itoa::Buffer::new());
+                let out = dst[..n].to_vec();
                 let (sign, q_abs) = (if q < 0 { "-" } else { "" }, q.unsigned_abs());
                 let text = format!("{sign}{}.{:010}", q_abs / FRACTION, q_abs % FRACTION);
                 let want = text.trim_end_matches('0').trim_end_matches('.');

@@ -5,7 +5,7 @@ use std::io::Write as _;
 use std::path::Path;
 
 use super::error::RecordingError;
-use super::float::Formatter;
+use super::float::{window, Formatter, WIDEST};
 use super::meta::Metadata;
 use super::output::Output;
 use super::read::{column_name, lines, read_head, voltage, BadNumber, RowRules};
@@ -145,28 +145,36 @@ impl RecordingView<'_> {
         mut sink: impl FnMut(&[u8]) -> std::io::Result<()>,
     ) -> std::io::Result<()> {
         let head = self.head_text();
-        let mut out = Vec::with_capacity(head.len().max(CHUNK_BYTES + 4096));
-        out.extend_from_slice(head.as_bytes());
+        // Each number is written into a window of the buffer; room for a
+        // chunk and a whole row beyond it (the buffer grows if a row needs
+        // more).
+        let width = 1 + self.v_v.segments() + self.channels.len();
+        let mut buf = vec![0; head.len().max(CHUNK_BYTES) + width * (WIDEST + 1)];
+        buf[..head.len()].copy_from_slice(head.as_bytes());
+        let mut at = head.len();
         let mut f = Formatter::default();
         for (row, &t) in self.t_s.iter().enumerate() {
-            finite(&mut out, t, |out, x| f.exact(out, x));
+            at += f.exact(window(&mut buf, at), t);
             for &v in self.v_v.row(row).into_iter().flatten() {
-                out.push(b',');
-                finite(&mut out, v, |out, x| f.exact(out, x));
+                window(&mut buf, at)[0] = b',';
+                at += 1;
+                at += f.exact(window(&mut buf, at), v);
             }
             for (_, values) in &self.channels {
-                out.push(b',');
+                window(&mut buf, at)[0] = b',';
+                at += 1;
                 if let Some(x) = values.get(row) {
-                    finite(&mut out, x, |out, x| f.measured(out, x));
+                    at += f.measured(window(&mut buf, at), x);
                 }
             }
-            out.push(b'\n');
-            if out.len() >= CHUNK_BYTES {
-                sink(&out)?;
-                out.clear();
+            window(&mut buf, at)[0] = b'\n';
+            at += 1;
+            if at >= CHUNK_BYTES {
+                sink(&buf[..at])?;
+                at = 0;
             }
         }
-        sink(&out)
+        sink(&buf[..at])
     }
 
     /// As [`Recording::validate`].
@@ -271,15 +279,5 @@ impl RecordingView<'_> {
                 Err(cannot(e))
             }
         }
-    }
-}
-
-/// Writes `x` with `format` if finite, else as `NaN`, `inf` or `-inf`
-/// (which the reader refuses: only unchecked text can hold them).
-fn finite(out: &mut Vec<u8>, x: f64, mut format: impl FnMut(&mut Vec<u8>, f64)) {
-    if x.is_finite() {
-        format(out, x);
-    } else {
-        let _ = std::io::Write::write_fmt(out, format_args!("{x}"));
     }
 }
