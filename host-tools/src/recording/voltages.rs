@@ -59,7 +59,12 @@ impl Voltages {
     /// If `row` does not hold one voltage per segment.
     pub fn push(&mut self, row: &[f64]) {
         assert_eq!(row.len(), self.segments, "one voltage per segment");
-        self.v_v.extend_from_slice(row);
+        // One at a time: a row is a few values, too few for the call to
+        // `memcpy` a copy of a slice of unknown length becomes.
+        self.v_v.reserve(row.len());
+        for &v in row {
+            self.v_v.push(v);
+        }
     }
 
     /// Voltages per row.
