@@ -9,7 +9,7 @@ use super::float::{window, Formatter, WIDEST};
 use super::meta::Metadata;
 use super::output::Output;
 use super::read::{column_name, lines, read_head, voltage, BadNumber, RowRules};
-use super::{Channel, Recording, Voltages};
+use super::{Channel, Recording, Voltages, SAFE_VOLTAGE_LIMIT_V};
 
 /// Bytes of text gathered before each write to the file: the output never
 /// lies in memory whole (a 20 000-row prediction is 1.6 MB of text).
@@ -240,7 +240,23 @@ impl RecordingView<'_> {
                 bad_channel = Some((row, 1 + n + j, x));
             }
         }
-        let checked_rows = bad_channel.map_or(rows, |(row, _, _)| row + 1);
+        // Time and drive in a tight pass each first: times finite, from 0
+        // and increasing, voltages within the safe range (NaN and infinity
+        // are not). Only if that fails are the rows checked one by one, for
+        // the first rule broken and its message.
+        let increasing = self.t_s.first().is_some_and(|&t| t >= 0.0)
+            && self.t_s.windows(2).all(|w| w[1] > w[0])
+            && self.t_s.iter().all(|t| t.is_finite());
+        let in_range = self
+            .v_v
+            .as_flat()
+            .iter()
+            .all(|v| v.abs() <= SAFE_VOLTAGE_LIMIT_V);
+        let checked_rows = if increasing && in_range {
+            0
+        } else {
+            bad_channel.map_or(rows, |(row, _, _)| row + 1)
+        };
         let mut rules = RowRules::default();
         for (row, (&t, v)) in self.t_s.iter().zip(self.v_v.rows()).enumerate() {
             if row == checked_rows {
