@@ -698,6 +698,84 @@ fn header_columns(
 mod tests {
     use super::*;
 
+    /// Rows read as `read` does (the plain path first) and by the general
+    /// path alone: the same recording, or the same refusal.
+    fn both_paths(
+        rows: &[String],
+    ) -> (
+        Result<Recording, RecordingError>,
+        Result<Recording, RecordingError>,
+    ) {
+        let head = "# format = \"ipmc-bench/1\"\n# segments = 2\n# length_m = 0.05\n\
+                    # width_m = 0.01\n# thickness_m = 0.0002858\n# fixture = \"free\"\n\
+                    # medium = \"air\"\nt_s,v1_V,v2_V,i1_A,tip_y_m\n";
+        let read = |plain: bool| {
+            let head = read_head("x.csv", &mut lines(head)).unwrap();
+            let line = head.1 + 1;
+            let mut kept = Rows::new("x.csv", head, 0, Keep::All);
+            for (k, row) in rows.iter().enumerate() {
+                if plain {
+                    kept.row(line + k, row)?;
+                } else {
+                    kept.any_row(line + k, row)?;
+                }
+            }
+            kept.finish()
+        };
+        (read(true), read(false))
+    }
+
+    proptest::proptest! {
+        /// The plain path keeps exactly what the general path keeps, and
+        /// leaves to it every row it would refuse.
+        #[test]
+        fn the_plain_path_reads_as_the_general_path(
+            rows in proptest::collection::vec(
+                (
+                    proptest::bool::weighted(0.9),
+                    proptest::collection::vec(
+                        "-?[0-9]{1,3}(\\.[0-9]{1,8})?|5|[0-9]{9}|1e-3|-|x| ?",
+                        4..7,
+                    ),
+                ),
+                1..8,
+            ),
+        ) {
+            // Mostly a time that increases, so that rows after the first
+            // are read too.
+            let rows: Vec<String> = rows
+                .iter()
+                .enumerate()
+                .map(|(k, (ordered, fields))| match ordered {
+                    true => format!("{k}.25,{}", fields[1..].join(",")),
+                    false => fields.join(","),
+                })
+                .collect();
+            let (plain, general) = both_paths(&rows);
+            proptest::prop_assert_eq!(plain, general, "{:?}", rows);
+        }
+    }
+
+    #[test]
+    fn rows_breaking_a_rule_are_refused_as_before() {
+        for rows in [
+            &["0,1,2,0.5,", "0,1,2,0.5,"][..],
+            &["1,1,2,0.5,", "0.5,1,2,0.5,"],
+            &["-1,1,2,0.5,"],
+            &["0,4.5,2,0.5,"],
+            &["0,,2,0.5,"],
+            &[",1,2,0.5,"],
+            &["0,1,2,0.5"],
+            &["0,1,2,0.5,1,2"],
+            &["0,1,2,1e-3,", "1,1,2,x,"],
+        ] {
+            let rows: Vec<String> = rows.iter().map(|r| r.to_string()).collect();
+            let (plain, general) = both_paths(&rows);
+            assert!(plain.is_err(), "{rows:?}");
+            assert_eq!(plain, general, "{rows:?}");
+        }
+    }
+
     proptest::proptest! {
         /// Whatever the fast path reads, it reads as `str::parse` does, and
         /// it always finds the field's end.
