@@ -14,11 +14,16 @@
 //! Only a plain file of our own is replaced so: a symbolic link, a file
 //! with other hard links, a device or pipe, a read-only file, another
 //! user's file, or a folder we cannot create a file in is written in place
-//! as before (opened, truncated, written).
+//! as before (opened, truncated, written). Links and owners are Unix's;
+//! elsewhere a file is written in place.
 
+#[cfg(unix)]
 use std::ffi::OsString;
-use std::fs::{File, OpenOptions};
+use std::fs::File;
+#[cfg(unix)]
+use std::fs::OpenOptions;
 use std::io::{self, ErrorKind};
+#[cfg(unix)]
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 
@@ -43,7 +48,15 @@ impl Output {
         }
     }
 
+    /// A new file beside `target`, if `target` may be replaced by one
+    /// (never off Unix: its links and owners are not checked there).
+    #[cfg(not(unix))]
+    fn beside(_target: &Path) -> Option<Output> {
+        None
+    }
+
     /// A new file beside `target`, if `target` may be replaced by one.
+    #[cfg(unix)]
     fn beside(target: &Path) -> Option<Output> {
         let old = match std::fs::symlink_metadata(target) {
             Ok(m) => {
@@ -119,7 +132,7 @@ impl Output {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, unix))]
 mod tests {
     use super::*;
     use std::io::Write;
