@@ -26,7 +26,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::search::{DELTA_BIC, HOLDOUT_RSS_GAIN};
+use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
 use crate::analysis::fit::{normal, Effect, FitError, FitResult, Fitter, Knob, Space};
 use crate::model::predict::ModelSpec;
 use crate::recording::Channel;

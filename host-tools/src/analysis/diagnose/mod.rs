@@ -38,6 +38,7 @@
 pub mod analyses;
 pub mod choose;
 pub mod floors;
+mod gates;
 pub mod identify;
 pub mod report;
 pub mod rests;
@@ -46,9 +47,7 @@ mod verdict;
 pub mod whiteness;
 
 pub use floors::{sensor_floors, SensorFloor, NOISE_FLOOR_RATIO};
+pub use gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
-pub use search::{
-    diagnose, split, tested_channels, untestable, DELTA_BIC, HOLDOUT_RSS_GAIN, INPUT_LAGS,
-    MAX_CAUSES,
-};
+pub use search::{diagnose, split, tested_channels, untestable, INPUT_LAGS, MAX_CAUSES};
 pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};

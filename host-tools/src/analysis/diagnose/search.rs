@@ -5,6 +5,7 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
+use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
 use super::identify;
 use super::rests::rest_structure;
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
@@ -15,10 +16,6 @@ use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
 use crate::session::Session;
 
-/// BIC improvement an effect must reach on the training recordings.
-pub const DELTA_BIC: f64 = -10.0;
-/// Relative drop of held-out weighted RSS an effect must reach.
-pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
 /// Effects accepted at most: a damped, soft strip needs two before any
 /// other (every real strip, docs/FORMAT.md), and a third and fourth are
 /// what a session hides.
