@@ -111,8 +111,13 @@ mod app {
         let Some(input) = io.read(*cx.local.tick) else {
             return;
         };
-        let out = cx.shared.controller.lock(|c| c.tick(&input, frames));
-        io.write_v(&out.voltages_v);
+        let (out, faulted) = cx.shared.controller.lock(|c| {
+            let out = c.tick(&input, frames);
+            (out, c.fault_state().is_some())
+        });
+        // A latched fault keeps the outputs off: the controller's 0 V would
+        // hold a bridge braked, not open.
+        io.write_v((!faulted).then_some(&out.voltages_v));
         io.feed_watchdog();
         *cx.local.tick += 1;
         // The next period's conversion already finished: this one overran.
@@ -123,8 +128,8 @@ mod app {
         }
         let fault = cx.shared.controller.lock(|c| c.fault_state());
         if let Some((code, segment)) = fault {
-            // The controller commands zero from now on; turn the outputs
-            // off at once rather than at the next tick.
+            // Off at once (a fault raised after this tick's write), and at
+            // every tick while it is latched.
             io.off();
             if !*cx.local.latched {
                 *cx.local.latched = true;

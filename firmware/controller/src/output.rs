@@ -1,4 +1,4 @@
-//! Segment outputs: an H-bridge from two PWM outputs (sign-magnitude) or a
+//! Segment outputs: an H-bridge from two PWM outputs (slow decay) or a
 //! DAC into a bipolar amplifier. They take voltages that the
 //! [`Limiter`](finrs_drive::Limiter) has already limited, yet still clamp
 //! to their own physical range and never panic.
@@ -23,9 +23,11 @@
 //! }
 //!
 //! let mut bridge = HBridge::new(Pwm(0), Pwm(0), 8.0).unwrap();
-//! bridge.set_v(-2.0); // a quarter of the supply, on side B
+//! // A quarter of the supply, reversed: leg B held on, leg A braking for
+//! // the other three quarters of each period.
+//! bridge.set_v(-2.0);
 //! let (a, b) = bridge.release();
-//! assert_eq!((a.0, b.0), (0, 250));
+//! assert_eq!((a.0, b.0), (750, 1000));
 //! ```
 
 use core::fmt;
@@ -66,6 +68,19 @@ fn abs(v: f32) -> f32 {
     }
 }
 
+/// `x` (finite or infinite) clamped to `0..=max` and rounded down.
+fn floor_clamped(x: f32, max: u16) -> u16 {
+    let max_f = f32::from(max);
+    if x >= max_f {
+        max
+    } else if x > 0.0 {
+        // 0 < x < 65535: the cast truncates, which is the floor.
+        x as u16
+    } else {
+        0
+    }
+}
+
 /// `x` (finite) clamped to `0..=max` and rounded to the nearest integer.
 fn round_clamped(x: f32, max: u16) -> u16 {
     let max_f = f32::from(max);
@@ -80,13 +95,30 @@ fn round_clamped(x: f32, max: u16) -> u16 {
     ((x + 0.5) as u16).min(max)
 }
 
-/// An H-bridge driven sign-magnitude by two PWM outputs: positive volts
-/// drive side A at duty |v| / `supply_v` with B at 0, negative volts the
-/// other way round; off is both at 0. The average segment voltage is duty
-/// × `supply_v`, so a |v| above `supply_v` is clamped to full duty.
+/// An H-bridge of an IN1/IN2 driver (DRV8833 class: IN 1/0 drives OUT1
+/// high and OUT2 low, 0/1 the reverse, 1/1 both low, 0/0 both open) driven
+/// in slow decay: for positive volts leg A is held fully on and leg B
+/// carries the PWM, low for the fraction |v| / `supply_v` of each period
+/// (forward) and high for the rest (both outputs low: the strip's terminals
+/// shorted); negative volts the other way round; 0 V both on (held at 0 V).
+/// The terminals are driven at every instant, so their average over a
+/// period is that fraction × `supply_v`, whatever the strip does. The
+/// fraction is rounded down to a whole step, never above |v| / `supply_v`,
+/// and a |v| above `supply_v` is clamped to full drive.
+///
+/// Slow decay, not the coast of one leg low and the other PWM'd: in the
+/// off-time a coasting bridge leaves the strip open, and the strip, mostly
+/// a capacitor, keeps its charge, so its terminal voltage averages well
+/// above the duty × supply (a host simulation of the switching,
+/// `tests/bridge_decay.rs`, measures both).
+///
+/// [`off`](SegmentOutput::off) opens both outputs (both inputs low: the
+/// state the driver's pull-downs give an unprogrammed or reset MCU, and the
+/// one the fault handlers force by register writes): no current flows, and
+/// the strip's terminals float at most at the charge it holds.
 ///
 /// PWM errors cannot be returned through [`SegmentOutput`]: on one, the
-/// bridge tries to turn both sides off and counts it
+/// bridge tries to open both outputs and counts it
 /// ([`errors`](Self::errors)), for the firmware to report.
 #[derive(Debug)]
 pub struct HBridge<A: SetDutyCycle, B: SetDutyCycle> {
@@ -136,9 +168,11 @@ impl<A: SetDutyCycle, B: SetDutyCycle> HBridge<A, B> {
         (self.a, self.b)
     }
 
-    fn duty(pwm: &impl SetDutyCycle, magnitude_v: f32, supply_v: f32) -> u16 {
+    /// The PWM'd leg's duty for `magnitude_v`: high (braking) for all but
+    /// the forward steps, which are rounded down.
+    fn braking_duty(pwm: &impl SetDutyCycle, magnitude_v: f32, supply_v: f32) -> u16 {
         let max = pwm.max_duty_cycle();
-        round_clamped(magnitude_v / supply_v * f32::from(max), max)
+        max - floor_clamped(magnitude_v / supply_v * f32::from(max), max)
     }
 
     fn failed(&mut self) {
@@ -154,13 +188,15 @@ impl<A: SetDutyCycle, B: SetDutyCycle> SegmentOutput for HBridge<A, B> {
         if v.is_nan() {
             return self.off();
         }
-        // Turn the idle side off first, so that both sides are never on.
+        // The held leg first: between the two writes the bridge brakes (both
+        // outputs low), never drives the other way.
+        // Forward is IN1 (leg A) high with IN2 (leg B) low.
         let ok = if v >= 0.0 {
-            let duty = Self::duty(&self.a, v, self.supply_v);
-            self.b.set_duty_cycle_fully_off().is_ok() && self.a.set_duty_cycle(duty).is_ok()
+            let duty = Self::braking_duty(&self.b, v, self.supply_v);
+            self.a.set_duty_cycle_fully_on().is_ok() && self.b.set_duty_cycle(duty).is_ok()
         } else {
-            let duty = Self::duty(&self.b, abs(v), self.supply_v);
-            self.a.set_duty_cycle_fully_off().is_ok() && self.b.set_duty_cycle(duty).is_ok()
+            let duty = Self::braking_duty(&self.a, abs(v), self.supply_v);
+            self.b.set_duty_cycle_fully_on().is_ok() && self.a.set_duty_cycle(duty).is_ok()
         };
         if !ok {
             self.failed();

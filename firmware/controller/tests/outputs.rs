@@ -70,22 +70,26 @@ fn after(max: u16, supply_v: f32, v: f32) -> (u16, u16) {
     duties(b)
 }
 
+/// (leg A, leg B) duties after `v`. Slow decay: one leg held fully on, the
+/// other high (braking) for all but the forward steps.
 #[test]
 fn h_bridge_sign_and_rounding() {
-    assert_eq!(after(1000, 8.0, 2.0), (250, 0));
-    assert_eq!(after(1000, 8.0, -2.0), (0, 250));
-    assert_eq!(after(1000, 8.0, 0.0), (0, 0));
-    assert_eq!(after(1000, 8.0, -0.0), (0, 0));
-    // 2.5 rounds up, 2.25 down.
-    assert_eq!(after(10, 4.0, 1.0), (3, 0));
-    assert_eq!(after(10, 4.0, 0.9), (2, 0));
-    assert_eq!(after(10, 4.0, -0.9), (0, 2));
+    assert_eq!(after(1000, 8.0, 2.0), (1000, 750));
+    assert_eq!(after(1000, 8.0, -2.0), (750, 1000));
+    // 0 V is held: both legs on, both outputs low.
+    assert_eq!(after(1000, 8.0, 0.0), (1000, 1000));
+    assert_eq!(after(1000, 8.0, -0.0), (1000, 1000));
+    // The forward steps are rounded down: 2.5 and 2.25 steps drive 2.
+    assert_eq!(after(10, 4.0, 1.0), (10, 8));
+    assert_eq!(after(10, 4.0, 0.9), (10, 8));
+    assert_eq!(after(10, 4.0, -0.9), (8, 10));
+    assert_eq!(after(10, 4.0, 0.39), (10, 10), "under one step drives none");
     // Full scale of a 16-bit timer.
     assert_eq!(after(u16::MAX, 5.0, 5.0), (u16::MAX, 0));
 }
 
 #[test]
-fn h_bridge_clamps_to_its_supply_and_turns_off_on_nan() {
+fn h_bridge_clamps_to_its_supply_and_opens_on_nan() {
     assert_eq!(after(1000, 3.0, 4.0), (1000, 0));
     assert_eq!(after(1000, 3.0, -400.0), (0, 1000));
     assert_eq!(after(1000, 3.0, f32::INFINITY), (1000, 0));
@@ -94,16 +98,23 @@ fn h_bridge_clamps_to_its_supply_and_turns_off_on_nan() {
 }
 
 #[test]
-fn h_bridge_starts_off_and_turns_the_idle_side_off_first() {
+fn h_bridge_starts_open_and_sets_the_held_leg_first() {
     let (mut b, log) = bridge(100, 4.0);
-    assert_eq!(*log.borrow(), [('A', 0), ('B', 0)], "new() turns off");
+    assert_eq!(*log.borrow(), [('A', 0), ('B', 0)], "new() opens both");
     log.borrow_mut().clear();
     b.set_v(2.0);
     b.set_v(-1.0);
     b.off();
     assert_eq!(
         *log.borrow(),
-        [('B', 0), ('A', 50), ('A', 0), ('B', 25), ('A', 0), ('B', 0)]
+        [
+            ('A', 100),
+            ('B', 50),
+            ('B', 100),
+            ('A', 75),
+            ('A', 0),
+            ('B', 0)
+        ]
     );
     assert_eq!(b.errors(), 0);
     assert_eq!(duties(b), (0, 0));
@@ -135,12 +146,16 @@ fn a_pwm_error_turns_both_sides_off_and_counts() {
         fail,
         log: log.clone(),
     };
-    let mut b = HBridge::new(pwm('A', true), pwm('B', false), 4.0).unwrap();
-    b.set_v(-2.0);
-    assert_eq!(b.errors(), 0, "side A is not driven for negative volts");
-    b.set_v(2.0);
-    assert_eq!(b.errors(), 1);
-    assert_eq!(duties(b), (0, 0));
+    // Side A fails on any duty but 0, and every set_v writes one to it
+    // (its braking duty or fully on).
+    for v in [2.0, -2.0] {
+        let mut b = HBridge::new(pwm('A', true), pwm('B', false), 4.0).unwrap();
+        b.off();
+        assert_eq!(b.errors(), 0, "opening writes 0 to both legs");
+        b.set_v(v);
+        assert_eq!(b.errors(), 1, "{v} V");
+        assert_eq!(duties(b), (0, 0), "opened after the error at {v} V");
+    }
 }
 
 #[derive(Default)]
@@ -208,10 +223,18 @@ proptest! {
     ) {
         let (a, b) = after(max, supply_v, v);
         prop_assert!(a <= max && b <= max);
-        prop_assert!(a == 0 || b == 0, "one side at a time");
-        if v.is_finite() {
+        if v.is_nan() {
+            prop_assert_eq!((a, b), (0, 0), "NaN opens the bridge");
+        } else {
+            prop_assert!(a == max || b == max, "one leg held on");
+            // Forward steps: never above |v| / supply, at most one below.
+            let forward = f32::from(max - a.min(b));
             let want = (v.abs() / supply_v).min(1.0) * f32::from(max);
-            prop_assert!((f32::from(a.max(b)) - want).abs() <= 0.5 + want * 1e-6);
+            prop_assert!(forward <= want * (1.0 + 1e-6), "{forward} > {want}");
+            prop_assert!(forward > want - 1.0 - want * 1e-6, "{forward} << {want}");
+            if v > 0.0 {
+                prop_assert!(a == max, "positive volts hold leg A");
+            }
         }
         let code = dac_after(gain, 3.3, zero, v);
         prop_assert!(code <= 4095);

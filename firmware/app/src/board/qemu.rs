@@ -216,10 +216,16 @@ impl Io {
         })
     }
 
-    /// Applies the commanded voltages and steps the plant one sample.
-    pub fn write_v(&mut self, v: &[f32; N]) {
-        for (s, &v) in self.segments.iter_mut().zip(v) {
-            s.set_v(v);
+    /// Applies the commanded voltages (`None`: every output off) and steps
+    /// the plant one sample.
+    pub fn write_v(&mut self, v: Option<&[f32; N]>) {
+        match v {
+            Some(v) => {
+                for (s, &v) in self.segments.iter_mut().zip(v) {
+                    s.set_v(v);
+                }
+            }
+            None => self.off(),
         }
         let applied = self.segments.map(|s| s.v);
         self.plant.step(&mut self.x, &applied);

@@ -3,11 +3,14 @@
 //! pin map in words; [`pins`] is the one place in code.
 //!
 //! - Segments: `N` of them (1..=8, `config::N`, set at build time by
-//!   `FINRS_SEGMENTS`). Each is an H-bridge (sign-magnitude, one PWM input
-//!   per bridge leg, [`PWM_HZ`]) from TIM1, TIM8, TIM2 or TIM4 through
-//!   `finrs_controller::HBridge`; the bridge driver (e.g. a DRV8871-class
-//!   IN1/IN2 driver) inserts its own dead time, so plain PWM outputs with no
-//!   complementary channels are enough. Up to two segments
+//!   `FINRS_SEGMENTS`). Each is an H-bridge (slow decay: one input held
+//!   high, the other PWM'd, [`PWM_HZ`]) from TIM1, TIM8, TIM2 or TIM4
+//!   through `finrs_controller::HBridge`; the bridge driver (a DRV8833, an
+//!   IN1/IN2 driver rated down to 2.7 V) inserts its own dead time, so
+//!   plain PWM outputs with no complementary channels are enough. A channel
+//!   is held high by a compare value of ARR + 1, the HAL's
+//!   `max_duty_cycle` (RM0090, PWM mode 1: OCxREF stays high when CCRx
+//!   exceeds ARR). Up to two segments
 //!   (`config::DAC_SEGMENTS`, `FINRS_DAC_SEGMENTS`) use DAC1 (PA4) and DAC2
 //!   (PA5) into a bipolar amplifier through `finrs_controller::DacOutput`
 //!   instead; their bridge pins and timer channels stay unused. Only the
@@ -558,8 +561,12 @@ impl Io {
         })
     }
 
-    /// Writes the controller's voltages to the segments.
-    pub fn write_v(&mut self, v: &[f32; N]) {
+    /// Writes the controller's voltages to the segments, or turns them off
+    /// (`None`: a bridge opened, where 0 V would brake it).
+    pub fn write_v(&mut self, v: Option<&[f32; N]>) {
+        let Some(v) = v else {
+            return self.off();
+        };
         for (segment, &v) in self.segments.iter_mut().zip(v) {
             segment.set_v(v);
         }

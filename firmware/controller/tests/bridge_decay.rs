@@ -1,0 +1,255 @@
+//! The bridge's switching at 25 kHz into the strip's circuit, simulated
+//! exactly between edges: the slow decay that [`HBridge`] drives keeps the
+//! strip's average terminal voltage at duty × supply, within the limit;
+//! the coast it replaced (one leg PWM'd, the other low) does not.
+//!
+//! The strip is the model's own circuit (`R1` in series with `C`, `R2`
+//! across both, eq. 2.1–2.2). An IN1/IN2 driver of the DRV8833 class drives
+//! its outputs from its inputs: 1/0 OUT1 at the supply and OUT2 low, 0/1 the
+//! reverse, 1/1 both low (slow decay), 0/0 both open (coast). Driven, the
+//! terminal voltage is what the outputs give; open, no current flows into
+//! the strip, `C` discharges through `R1` and `R2` in series and the
+//! terminals sit at `V_C R2 / (R1 + R2)` (below the supply: the outputs'
+//! body diodes never conduct, which the simulation checks).
+
+use std::cell::Cell;
+use std::convert::Infallible;
+use std::rc::Rc;
+
+use embedded_hal::pwm::{ErrorType, SetDutyCycle};
+use finrs_controller::{HBridge, SegmentOutput};
+use model_core::Params;
+
+/// The board's bridge supply and limit (firmware/support/src/config.rs).
+const SUPPLY_V: f64 = 5.0;
+const LIMIT_V: f64 = 4.0;
+/// TIM1 at 168 MHz counting to 25 kHz: 6720 steps a period.
+const PWM_STEPS: u16 = 6720;
+const PERIOD_S: f64 = 1.0 / 25_000.0;
+
+/// A timer channel whose duty the test reads back.
+#[derive(Clone)]
+struct Leg(Rc<Cell<u16>>);
+
+impl ErrorType for Leg {
+    type Error = Infallible;
+}
+
+impl SetDutyCycle for Leg {
+    fn max_duty_cycle(&self) -> u16 {
+        PWM_STEPS
+    }
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
+        self.0.set(duty);
+        Ok(())
+    }
+}
+
+/// The driver's inputs over one period: edge-aligned PWM (RM0090, PWM mode
+/// 1 counting up: the output is high while the counter is below the
+/// compare value, held high when the compare value is above the
+/// auto-reload), both legs from one timer.
+#[derive(Clone, Copy, Debug)]
+struct Inputs {
+    duty_a: u16,
+    duty_b: u16,
+}
+
+/// What the driver does to the terminals: a voltage, or open.
+fn driver(in1: bool, in2: bool) -> Option<f64> {
+    match (in1, in2) {
+        (true, false) => Some(SUPPLY_V),
+        (false, true) => Some(-SUPPLY_V),
+        (true, true) => Some(0.0),
+        (false, false) => None,
+    }
+}
+
+/// The strip's circuit: the charge on `C` as its voltage.
+struct Strip {
+    r1_ohm: f64,
+    r2_ohm: f64,
+    c_f: f64,
+    v_c: f64,
+}
+
+impl Strip {
+    fn new(p: &Params) -> Self {
+        Self {
+            r1_ohm: p.r1_ohm,
+            r2_ohm: p.r2_ohm,
+            c_f: p.c_f,
+            v_c: 0.0,
+        }
+    }
+
+    /// Holds the terminals at `u` (or open) for `dt_s`; returns the
+    /// integrals of the terminal voltage and of `C`'s over it, exactly.
+    fn hold(&mut self, u: Option<f64>, dt_s: f64) -> (f64, f64) {
+        let start = self.v_c;
+        match u {
+            Some(u) => {
+                let tau_s = self.r1_ohm * self.c_f;
+                let decay = (-dt_s / tau_s).exp();
+                self.v_c = u + (start - u) * decay;
+                (u * dt_s, u * dt_s + (start - u) * tau_s * (1.0 - decay))
+            }
+            None => {
+                let tau_s = (self.r1_ohm + self.r2_ohm) * self.c_f;
+                let share = self.r2_ohm / (self.r1_ohm + self.r2_ohm);
+                assert!(
+                    (start * share).abs() <= SUPPLY_V,
+                    "an open terminal at {} V would turn a body diode on",
+                    start * share
+                );
+                let decay = (-dt_s / tau_s).exp();
+                self.v_c = start * decay;
+                let c_integral = start * tau_s * (1.0 - decay);
+                (share * c_integral, c_integral)
+            }
+        }
+    }
+
+    /// One PWM period; returns the mean terminal voltage, the mean and the
+    /// largest magnitude of `C`'s voltage over it (monotonic within a span,
+    /// so largest at a span's end).
+    fn period(&mut self, inputs: Inputs) -> (f64, f64, f64) {
+        let step_s = PERIOD_S / f64::from(PWM_STEPS);
+        let (a, b) = (inputs.duty_a, inputs.duty_b);
+        // The edges split the period into at most three spans.
+        let (first, second) = (a.min(b), a.max(b));
+        let (mut terminal, mut c, mut c_peak) = (0.0, 0.0, self.v_c.abs());
+        for (from, to) in [(0, first), (first, second), (second, PWM_STEPS)] {
+            if to > from {
+                let u = driver(from < a, from < b);
+                let (t, v) = self.hold(u, f64::from(to - from) * step_s);
+                terminal += t;
+                c += v;
+                c_peak = c_peak.max(self.v_c.abs());
+            }
+        }
+        (terminal / PERIOD_S, c / PERIOD_S, c_peak)
+    }
+}
+
+/// What the strip settles to under fixed inputs.
+#[derive(Debug)]
+struct Settled {
+    /// Terminal voltage, mean over the last periods, V.
+    terminal_v: f64,
+    /// `C`'s voltage, its mean and largest magnitude over them, V.
+    c_mean_v: f64,
+    c_peak_v: f64,
+}
+
+/// Runs the strip from rest for ten of its slowest time constants, then
+/// measures a thousand periods.
+fn settle(p: &Params, inputs: Inputs) -> Settled {
+    let mut strip = Strip::new(p);
+    let slowest_s = (p.r1_ohm + p.r2_ohm) * p.c_f;
+    let periods = (10.0 * slowest_s / PERIOD_S).ceil() as usize;
+    for _ in 0..periods {
+        strip.period(inputs);
+    }
+    let (mut terminal, mut c_sum, mut c_peak) = (0.0, 0.0, 0.0f64);
+    let n = 1000;
+    for _ in 0..n {
+        let (t, c, peak) = strip.period(inputs);
+        terminal += t;
+        c_sum += c;
+        c_peak = c_peak.max(peak);
+    }
+    Settled {
+        terminal_v: terminal / n as f64,
+        c_mean_v: c_sum / n as f64,
+        c_peak_v: c_peak,
+    }
+}
+
+/// The inputs [`HBridge`] sets for `v`.
+fn slow_decay(v: f32) -> Inputs {
+    let (a, b) = (Leg(Rc::default()), Leg(Rc::default()));
+    let mut bridge = HBridge::new(a.clone(), b.clone(), SUPPLY_V as f32).unwrap();
+    bridge.set_v(v);
+    Inputs {
+        duty_a: a.0.get(),
+        duty_b: b.0.get(),
+    }
+}
+
+/// The inputs of the drive this replaced: the duty on one leg, the other
+/// low, open for the rest of the period.
+fn coast(v: f32) -> Inputs {
+    let duty = (f64::from(v.abs()) / SUPPLY_V * f64::from(PWM_STEPS)).round() as u16;
+    if v >= 0.0 {
+        Inputs {
+            duty_a: duty,
+            duty_b: 0,
+        }
+    } else {
+        Inputs {
+            duty_a: 0,
+            duty_b: duty,
+        }
+    }
+}
+
+/// The seed's two circuits: `main.m`'s (`τ1` 16 ms) and Table 4-2's
+/// (1.6 s), both with `R1 / (R1 + R2)` near 0.19.
+fn strips() -> [(&'static str, Params); 2] {
+    [
+        ("main.m", Params::main_m_2006()),
+        ("Table 4-2", Params::table_4_2_2006()),
+    ]
+}
+
+#[test]
+fn slow_decay_holds_the_strip_at_the_commanded_voltage_within_the_limit() {
+    for (name, p) in strips() {
+        for v in [0.5f32, 2.0, -2.0, 4.0, -4.0] {
+            let s = settle(&p, slow_decay(v));
+            let v = f64::from(v);
+            // One PWM step is 0.74 mV; the forward steps are rounded down.
+            let step_v = SUPPLY_V / f64::from(PWM_STEPS);
+            assert!(
+                s.terminal_v.abs() <= v.abs() + 1e-9 && s.terminal_v.abs() > v.abs() - step_v,
+                "{name}, {v} V: terminal {s:?}"
+            );
+            assert!(s.terminal_v.signum() == v.signum(), "{name}, {v} V: {s:?}");
+            // No mean current through R1 once settled: C sits at the mean.
+            assert!(
+                (s.c_mean_v - s.terminal_v).abs() < 1e-6,
+                "{name}, {v} V: {s:?}"
+            );
+            assert!(s.terminal_v.abs() <= LIMIT_V, "{name}, {v} V: {s:?}");
+            // The 25 kHz ripple on C: under 2 mV at 4 V on main.m's 16 ms.
+            assert!(s.c_peak_v <= LIMIT_V + 2e-3, "{name}, {v} V: {s:?}");
+        }
+    }
+}
+
+#[test]
+fn coast_leaves_the_strip_charged_above_the_command_and_the_limit() {
+    for (name, p) in strips() {
+        // Steady state by hand: charging for the duty d, discharging
+        // through R1 + R2 for the rest: V_C = d Vs / (d + (1 − d) R1 / (R1 + R2)),
+        // and the terminals' mean comes out equal to it.
+        let r = p.r1_ohm / (p.r1_ohm + p.r2_ohm);
+        for v in [2.0f32, 4.0, -4.0] {
+            let s = settle(&p, coast(v));
+            let d = f64::from(v.abs()) / SUPPLY_V;
+            let want = d * SUPPLY_V / (d + (1.0 - d) * r);
+            assert!(
+                (s.terminal_v.abs() - want).abs() < 2e-3 * want,
+                "{name}, {v} V: {s:?}, expected {want:.3} V"
+            );
+            assert!(
+                s.terminal_v.abs() > 1.15 * f64::from(v.abs()),
+                "{name}, {v} V: {s:?}"
+            );
+        }
+        let at_limit = settle(&p, coast(4.0));
+        assert!(at_limit.terminal_v > LIMIT_V + 0.5, "{name}: {at_limit:?}");
+        assert!(at_limit.c_mean_v > LIMIT_V + 0.5, "{name}: {at_limit:?}");
+    }
+}
