@@ -6,6 +6,8 @@
 //! - [`config`]: the segment count and DAC segments chosen at build time
 //!   (`FINRS_SEGMENTS`, `FINRS_DAC_SEGMENTS`), the sample rate, limits and
 //!   sensor scales both boards run with.
+//! - [`pins`]: the analogue inputs' pins, ADCs and channels, checked
+//!   against the datasheet.
 //! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
 //!   load-cell offset and noise, the injected fault).
 //! - [`watermark`]: the stack high-water mark's paint pattern and scan.
@@ -13,5 +15,6 @@
 #![deny(unsafe_code, missing_docs)]
 
 pub mod config;
+pub mod pins;
 pub mod sim;
 pub mod watermark;

@@ -75,15 +75,26 @@ pub const FRAME_RTT_BYTES: usize = if N <= 3 { 8192 } else { 16384 };
 /// trigger, so they are normally done already).
 const SECONDARY_ADC_POLLS: u32 = 200;
 
-/// The ADC channels of the pin map (`BOARD.md` has the whole table; the
-/// bridge and DAC pins are taken in `init`, segment by segment). Which of
-/// them a build uses follows `config::N` and `config::DAC_SEGMENTS`.
+/// The ADC channels of the pin map, from `finrs_firmware_support::pins`
+/// (checked there against the datasheet; `BOARD.md` has the whole table;
+/// the bridge and DAC pins are taken in `init`, segment by segment). Which
+/// of them a build uses follows `config::N` and `config::DAC_SEGMENTS`.
 pub mod pins {
+    use finrs_firmware_support::pins::{LOAD_CELL, SHUNTS};
+
     /// ADC channel of the load cell (PA1, ADC1).
-    pub const LOAD_CELL_CHANNEL: u8 = 1;
+    pub const LOAD_CELL_CHANNEL: u8 = LOAD_CELL.channel;
     /// ADC channels of the shunts of segments 0..=7: PA2, PA3, PC1 (ADC1),
-    /// PC2, PC4, PC5, PB0 (ADC2), PB1 (ADC3).
-    pub const SHUNT_CHANNELS: [u8; 8] = [2, 3, 11, 12, 14, 15, 8, 9];
+    /// PB1, PC4, PC5, PB0 (ADC2), PC2 (ADC3).
+    pub const SHUNT_CHANNELS: [u8; 8] = {
+        let mut ch = [0; 8];
+        let mut i = 0;
+        while i < 8 {
+            ch[i] = SHUNTS[i].channel;
+            i += 1;
+        }
+        ch
+    };
 }
 
 /// Whether segment `i` is wired in this build and driven by DAC1 (0) or
@@ -128,6 +139,10 @@ const _: () = {
     // its end is the end of all.
     assert!(ADC2_SHUNTS <= ADC1_SHUNTS + 1 && ADC3_SHUNTS <= ADC1_SHUNTS + 1);
     assert!(USES_DAC1 || !USES_DAC2, "DAC2 is used only with DAC1");
+    // The groups above are the ones the pin table wires the shunts to.
+    use finrs_firmware_support::pins::adc_of_segment;
+    assert!(adc_of_segment(0) == 1 && adc_of_segment(2) == 1);
+    assert!(adc_of_segment(3) == 2 && adc_of_segment(6) == 2 && adc_of_segment(7) == 3);
 };
 
 /// One bridge leg: a PWM channel of one of the four timers.
@@ -379,7 +394,15 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     });
 
     // The ADC pins go to analog mode for good (a pin's mode outlives its
-    // handle).
+    // handle). The typed pins below are the support crate's table's.
+    const _: () = {
+        use finrs_firmware_support::pins::{LOAD_CELL, SHUNTS};
+        assert!(LOAD_CELL.pin.is(b'A', 1));
+        assert!(SHUNTS[0].pin.is(b'A', 2) && SHUNTS[1].pin.is(b'A', 3));
+        assert!(SHUNTS[2].pin.is(b'C', 1) && SHUNTS[3].pin.is(b'B', 1));
+        assert!(SHUNTS[4].pin.is(b'C', 4) && SHUNTS[5].pin.is(b'C', 5));
+        assert!(SHUNTS[6].pin.is(b'B', 0) && SHUNTS[7].pin.is(b'C', 2));
+    };
     let _ = a.pa1.into_analog();
     let _ = a.pa2.into_analog();
     if N > 1 {
@@ -389,7 +412,7 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
         let _ = c.pc1.into_analog();
     }
     if N > 3 {
-        let _ = c.pc2.into_analog();
+        let _ = b.pb1.into_analog();
     }
     if N > 4 {
         let _ = c.pc4.into_analog();
@@ -401,7 +424,7 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
         let _ = b.pb0.into_analog();
     }
     if N > 7 {
-        let _ = b.pb1.into_analog();
+        let _ = c.pc2.into_analog();
     }
     init_adcs(&dp.ADC1, &dp.ADC2, &dp.ADC3, &dp.ADC_COMMON, &mut rcc);
     init_trigger(dp.TIM5, &mut rcc);
@@ -460,20 +483,30 @@ fn init_adcs(
     common: &pac::ADC_COMMON,
     rcc: &mut pac::RCC,
 ) {
+    // One reset for all three, before any is set up: RCC_APB2RSTR has one
+    // ADC reset bit, ADCRST (bit 8, RM0090: "ADC interface reset (common to
+    // all ADCs)"), and the HAL
+    // resets ADC2 and ADC3 through that same bit (stm32f4xx-hal 0.23,
+    // rcc/f4/enable.rs: `bus_reset!(ADC2 => 8)`, `bus_reset!(ADC3 => 8)`).
+    // A reset after ADC1's set-up wiped it (no JEOC, so no sample task, no
+    // watchdog feed: a reset every 20 ms) and put the common prescaler back
+    // to /2, 42 MHz against the 36 MHz maximum.
     pac::ADC1::enable(rcc);
+    if ADC2_SHUNTS > 0 {
+        pac::ADC2::enable(rcc);
+    }
+    if ADC3_SHUNTS > 0 {
+        pac::ADC3::enable(rcc);
+    }
     pac::ADC1::reset(rcc);
     common.ccr().modify(|_, w| w.adcpre().div4());
     let mut group1 = [pins::LOAD_CELL_CHANNEL; 4];
     group1[1..=ADC1_SHUNTS].copy_from_slice(&pins::SHUNT_CHANNELS[..ADC1_SHUNTS]);
     init_group(adc1, &group1[..=ADC1_SHUNTS], true);
     if ADC2_SHUNTS > 0 {
-        pac::ADC2::enable(rcc);
-        pac::ADC2::reset(rcc);
         init_group(adc2, &pins::SHUNT_CHANNELS[3..3 + ADC2_SHUNTS], false);
     }
     if ADC3_SHUNTS > 0 {
-        pac::ADC3::enable(rcc);
-        pac::ADC3::reset(rcc);
         init_group(adc3, &pins::SHUNT_CHANNELS[7..8], false);
     }
 }
