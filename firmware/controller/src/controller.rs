@@ -42,12 +42,20 @@ pub trait FrameSink {
 }
 
 /// Why a command was refused. A refused command changes nothing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CommandRefused {
     /// SetWave: the program or envelope breaks a rule (field and rule).
     Wave(WaveError),
     /// SetLimit: the new limit breaks a rule (or would raise the limit).
     Limit(LimitError),
+    /// SetWave: the program asks more than the voltage limit somewhere
+    /// (its peak and the limit, V); the limiter would clip it.
+    AboveLimit {
+        /// The program's peak magnitude, V.
+        peak_v: f32,
+        /// The limit in force, V.
+        limit_v: f32,
+    },
     /// SetWave while a fault is latched: ClearFault first.
     Faulted,
     /// ClearFault while the fault's report has not been sent yet: a fault
@@ -60,6 +68,10 @@ impl fmt::Display for CommandRefused {
         match self {
             Self::Wave(e) => write!(f, "SetWave refused: {e}"),
             Self::Limit(e) => write!(f, "SetLimit refused: {e}"),
+            Self::AboveLimit { peak_v, limit_v } => write!(
+                f,
+                "SetWave refused: the program peaks at {peak_v} V, above the {limit_v} V limit"
+            ),
             Self::Faulted => f.write_str("SetWave refused: a fault is latched (ClearFault first)"),
             Self::FaultNotReported => {
                 f.write_str("ClearFault refused: the fault has not been reported yet")
@@ -192,13 +204,17 @@ impl<const N: usize> Controller<N> {
 
     /// Applies a host command; a refused command changes nothing.
     ///
-    /// - SetWave: refused while a fault is latched, or with the field and
-    ///   rule [`Generator::new`] names; else the program starts at its time
-    ///   0 on the next tick, the slew limit carrying the outputs over.
+    /// - SetWave: refused while a fault is latched, with the field and
+    ///   rule [`Generator::new`] names, or if the program's peak
+    ///   ([`Generator::peak_abs_v`]) is above the voltage limit; else the
+    ///   program starts at its time 0 on the next tick, the slew limit
+    ///   carrying the outputs over.
     /// - Tare: (re)starts a tare of `tare_samples` readings.
     /// - Stop: outputs slew to 0 V and stay there until a SetWave.
     /// - SetLimit: lowers the voltage limit (a raise or an invalid value is
-    ///   refused with the [`LimitError`]).
+    ///   refused with the [`LimitError`]). Lowering is never refused for
+    ///   the running program's sake: a program above the new limit is
+    ///   clipped by the limiter.
     /// - ClearFault: clears the latch once its Fault frame has been sent
     ///   (refused before); outputs stay at 0 V until a SetWave. Without a
     ///   latched fault it does nothing.
@@ -208,7 +224,12 @@ impl<const N: usize> Controller<N> {
                 if self.fault.is_some() {
                     return Err(CommandRefused::Faulted);
                 }
-                self.generator = Generator::new(program, envelope).map_err(CommandRefused::Wave)?;
+                let generator = Generator::new(program, envelope).map_err(CommandRefused::Wave)?;
+                let (peak_v, limit_v) = (generator.peak_abs_v(), self.limiter.limits().max_abs_v());
+                if peak_v > limit_v {
+                    return Err(CommandRefused::AboveLimit { peak_v, limit_v });
+                }
+                self.generator = generator;
                 self.mode = Mode::Running { start_tick: None };
             }
             Command::Tare => {

@@ -563,3 +563,73 @@ fn commands_from_the_down_channel_bytes() {
     }
     assert_eq!(c.outputs_v(), [0.4; N]);
 }
+
+#[test]
+fn a_wave_above_the_limit_is_refused_not_clipped() {
+    let (mut c, mut ch, t0) = tared();
+    assert_eq!(c.limits().max_abs_v(), 2.0);
+    let before = c.generator().program();
+    let refused = c.command(steps(2.5));
+    assert_eq!(
+        refused,
+        Err(CommandRefused::AboveLimit {
+            peak_v: 2.5,
+            limit_v: 2.0
+        })
+    );
+    assert_eq!(
+        refused.unwrap_err().to_string(),
+        "SetWave refused: the program peaks at 2.5 V, above the 2 V limit"
+    );
+    assert_eq!(c.generator().program(), before, "refused: nothing changed");
+    // A sine's peak is its amplitude plus the offset's magnitude.
+    let sine = |amplitude_v, offset_v| Command::SetWave {
+        program: Program::Travelling {
+            amplitude_v,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 90.0,
+            offset_v,
+        },
+        envelope: Envelope {
+            ramp_in_s: 1.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        },
+    };
+    assert!(matches!(
+        c.command(sine(1.5, -0.6)),
+        Err(CommandRefused::AboveLimit { .. })
+    ));
+    c.command(sine(1.5, -0.5)).unwrap();
+    // Levels beyond the N segments are not driven, so they do not count.
+    let mut levels_v = [1.0; 8];
+    levels_v[N..].fill(9.0);
+    c.command(Command::SetWave {
+        program: Program::Steps { levels_v },
+        envelope: Envelope {
+            ramp_in_s: 0.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        },
+    })
+    .unwrap();
+    c.command(steps(2.0)).unwrap();
+    for t in t0..t0 + 20 {
+        c.tick(&input(t, 1000, IDLE), &mut ch);
+    }
+    assert_eq!(c.outputs_v(), [2.0; N]);
+    // A lowered limit is never refused; the running wave is clipped, and a
+    // new one above it is refused.
+    c.command(Command::SetLimit { max_abs_v: 0.5 }).unwrap();
+    assert_eq!(
+        c.tick(&input(t0 + 20, 1000, IDLE), &mut ch).voltages_v,
+        [0.5; N]
+    );
+    assert_eq!(
+        c.command(steps(1.0)),
+        Err(CommandRefused::AboveLimit {
+            peak_v: 1.0,
+            limit_v: 0.5
+        })
+    );
+}

@@ -265,7 +265,14 @@ proptest! {
                     let limit_before = c.limits();
                     let program_before = c.generator().program();
                     let fault_before = c.fault_state();
-                    if c.command(*command).is_err() {
+                    let accepted = c.command(*command).is_ok();
+                    if accepted && matches!(command, Command::SetWave { .. }) {
+                        prop_assert!(
+                            c.generator().peak_abs_v() <= c.limits().max_abs_v(),
+                            "a wave above the limit was taken"
+                        );
+                    }
+                    if !accepted {
                         prop_assert_eq!(c.limits(), limit_before, "refused: nothing changed");
                         prop_assert_eq!(format!("{:?}", c.generator().program()), format!("{:?}", program_before));
                         prop_assert_eq!(c.fault_state(), fault_before);

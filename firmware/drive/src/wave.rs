@@ -225,6 +225,39 @@ impl<const N: usize> Generator<N> {
         })
     }
 
+    /// The largest magnitude the program asks of any of the N segments, V:
+    /// the envelope's gain is at most 1, and each kind reaches its peak
+    /// (a sine its amplitude plus the offset's magnitude, a standing wave
+    /// at the root, a pulse train while on). The firmware refuses a program
+    /// whose peak is above its limit rather than clip it into a square wave.
+    pub fn peak_abs_v(&self) -> f32 {
+        match self.program {
+            Program::Travelling {
+                amplitude_v,
+                offset_v,
+                ..
+            }
+            | Program::Standing {
+                amplitude_v,
+                offset_v,
+                ..
+            } => amplitude_v + math::abs(offset_v),
+            Program::Steps { levels_v } => levels_v[..N]
+                .iter()
+                .fold(0.0, |peak: f32, &v| peak.max(math::abs(v))),
+            Program::Pulses {
+                amplitude_v, on_s, ..
+            } => {
+                if on_s > 0.0 {
+                    amplitude_v
+                } else {
+                    0.0
+                }
+            }
+            Program::Chirp { amplitude_v, .. } => amplitude_v,
+        }
+    }
+
     /// The program.
     pub fn program(&self) -> Program {
         self.program

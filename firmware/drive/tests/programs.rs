@@ -456,3 +456,66 @@ fn refuses_each_broken_field_by_name_and_rule() {
     assert!(Generator::<4>::new(travelling(0.0, 100.0), e).is_ok());
     assert!(Generator::<4>::new(travelling(1000.0, 0.001), e).is_ok());
 }
+
+/// The peak each kind asks for is the largest voltage it reaches on a fine
+/// grid of times, and no voltage on the grid is above it.
+#[test]
+fn peak_is_the_largest_voltage_each_kind_reaches() {
+    let grid = times(2.0, 1e-4);
+    let check = |g: &dyn Fn(f32) -> Vec<f32>, peak: f32, name: &str| {
+        let reached = grid
+            .iter()
+            .flat_map(|&t| g(t as f32))
+            .fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(reached <= peak * (1.0 + 1e-6), "{name}: {reached} > {peak}");
+        assert!(reached >= peak * 0.999, "{name}: {reached} << {peak}");
+    };
+    let kinds = [
+        ("travelling", TRAVELLING),
+        (
+            "standing",
+            Program::Standing {
+                amplitude_v: 1.5,
+                frequency_hz: 2.0,
+                offset_v: -0.5,
+            },
+        ),
+        (
+            "pulses",
+            Program::Pulses {
+                amplitude_v: 3.0,
+                on_s: 0.1,
+                off_s: 0.2,
+            },
+        ),
+        (
+            "chirp",
+            Program::Chirp {
+                amplitude_v: 2.5,
+                start_hz: 1.0,
+                end_hz: 20.0,
+                duration_s: 2.0,
+            },
+        ),
+        (
+            "steps",
+            Program::Steps {
+                levels_v: [0.5, -3.5, 1.0, 9.0, 9.0, 9.0, 9.0, 9.0],
+            },
+        ),
+    ];
+    for (name, p) in kinds {
+        let g = Generator::<3>::new(p, ALWAYS).unwrap();
+        check(&|t| g.voltages_v(t).to_vec(), g.peak_abs_v(), name);
+    }
+    // Pulses that are never on ask for nothing.
+    let never = Program::Pulses {
+        amplitude_v: 3.0,
+        on_s: 0.0,
+        off_s: 0.2,
+    };
+    assert_eq!(
+        Generator::<3>::new(never, ALWAYS).unwrap().peak_abs_v(),
+        0.0
+    );
+}
