@@ -26,12 +26,20 @@
 //!   ([`FRAME_RTT_BYTES`]), down channel 0 the commands; all never block.
 //! - IWDG: [`WATCHDOG_MS`], fed by the sample task; frozen while a debugger
 //!   halts the core.
-//! - Panic and HardFault: every used timer's PWM outputs are forced low and
-//!   its compare registers zeroed, and every used DAC set to its 0 V code,
-//!   by register writes (no driver can be trusted then)
-//!   before the message is logged; then `udf` stops the core for probe-rs
-//!   as panic-probe would (which we therefore do not link: its handler
-//!   would log before it could zero anything), and the watchdog resets it.
+//! - Panic, HardFault, NMI and any interrupt without a handler: every used
+//!   timer's PWM outputs are forced low (the bridge open) and its compare
+//!   registers zeroed, and every used DAC set to its 0 V code, by register
+//!   writes (no driver can be trusted then) before anything else. A panic
+//!   then logs its message and `udf` stops the core for probe-rs as
+//!   panic-probe would (which we therefore do not link: its handler would
+//!   log before it could zero anything); the others wait. The watchdog
+//!   resets the core.
+//! - Debug halt: the PWM timers run on (DBGMCU's DBG_TIMx_STOP bits are
+//!   left clear). A stopped general-purpose timer would hold its pins at
+//!   the level they had, in slow decay possibly one leg high and the other
+//!   low, the full supply across the strip, above the limit; running, the
+//!   bridge goes on at the last commanded average, within the limit. The
+//!   watchdog is frozen, so that a breakpoint does not reset the board.
 
 // The ADC and timer counts are constants that vary with the build's
 // segment count: a comparison always true in one build is not in another.
@@ -297,9 +305,18 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             .pclk2(84.MHz()),
     );
     Mono::start(core.SYST, SYSCLK_HZ);
-    // RTT keeps working while idle sleeps (WFI); the watchdog and the
-    // output timers stop while a debugger halts the core.
+    // RTT keeps working while idle sleeps (WFI). While a debugger halts
+    // the core the watchdog stops (below) and the output timers run on
+    // (module doc: a stopped timer can hold a bridge at the full supply);
+    // their stop bits are cleared whatever a debugger set.
     dp.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
+    dp.DBGMCU.apb1_fz().modify(|_, w| {
+        w.dbg_tim2_stop().clear_bit();
+        w.dbg_tim4_stop().clear_bit()
+    });
+    dp.DBGMCU
+        .apb2_fz()
+        .modify(|_, w| w.dbg_tim1_stop().clear_bit().dbg_tim8_stop().clear_bit());
 
     let a = dp.GPIOA.split(&mut rcc);
     let b = dp.GPIOB.split(&mut rcc);
@@ -664,7 +681,8 @@ pub async fn housekeeping(_: &mut Housekeeping) -> ! {
 /// even if the counter runs on), DAC data to the 0 V code. Only the
 /// peripherals this build clocks are touched.
 fn zero_outputs_now() {
-    // SAFETY: called only on the way to a halt (panic, HardFault), when no
+    // SAFETY: called only on the way to a halt (panic, HardFault, NMI, an
+    // unexpected interrupt), when no
     // other code will touch these peripherals again; each write is to a
     // timer's own compare and mode registers or the DAC's data registers.
     #[allow(unsafe_code)]
@@ -710,10 +728,43 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 }
 
 /// A fault other than a panic: outputs to zero, then wait for the watchdog.
+/// Nothing is logged: a HardFault can preempt a critical section, the
+/// logger's among them. `cargo run` passes `--no-catch-hardfault` to
+/// probe-rs (`.cargo/config.toml`), whose `run` otherwise halts the core at
+/// this vector, before this body can zero anything, with the watchdog
+/// frozen by the halt.
 #[cortex_m_rt::exception]
 #[allow(unsafe_code)] // cortex-m-rt requires the HardFault handler to be `unsafe fn`
 unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
     zero_outputs_now();
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+/// The non-maskable interrupt (on this part the clock security system, if
+/// enabled, or a debugger's request): nothing here expects one, so it is a
+/// fault. Outputs to zero, then wait for the watchdog; nothing is logged,
+/// for the HardFault's reason.
+#[cortex_m_rt::exception]
+#[allow(unsafe_code)] // an NMI handler must be `unsafe fn`: it preempts critical sections
+unsafe fn NonMaskableInt() {
+    zero_outputs_now();
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+/// Any exception or interrupt that has no handler of its own: outputs to
+/// zero, the IRQ number logged (every one of these is masked by a critical
+/// section, so the logger's is not broken into), then interrupts off, so
+/// no task drives again, and wait for the watchdog.
+#[cortex_m_rt::exception]
+#[allow(unsafe_code)] // cortex-m-rt requires the default handler to be `unsafe fn`
+unsafe fn DefaultHandler(irqn: i16) {
+    zero_outputs_now();
+    defmt::error!("unexpected interrupt {}: outputs off", irqn);
+    cortex_m::interrupt::disable();
     loop {
         cortex_m::asm::nop();
     }
