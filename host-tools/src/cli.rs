@@ -100,23 +100,18 @@ pub struct SendArgs {
     pub probe: ProbeArgs,
 }
 
-/// `finrs wave`.
+/// A wave for the firmware as `finrs wave` and `finrs run --wave` shape it.
 #[derive(Args)]
-pub struct WaveArgs {
-    /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
-    /// pulses:AMP,ON_S,OFF_S or standing:AMP,HZ.
-    pub wave: String,
+pub struct FirmwareWaveArgs {
     #[command(flatten)]
     pub shape: ShapeArgs,
     /// Time at full amplitude, s (default: for ever).
     #[arg(long, default_value_t = f64::INFINITY)]
     pub hold_s: f64,
-    #[command(flatten)]
-    pub send: SendArgs,
 }
 
-impl WaveArgs {
-    /// The wave's shaping with `finrs wave`'s defaults: no offset, 1 s ramp
+impl FirmwareWaveArgs {
+    /// The wave's shaping with the firmware's defaults: no offset, 1 s ramp
     /// in, no ramp out, 10 s sweeps.
     pub fn options(&self) -> finrs::wave::WaveOptions {
         let s = &self.shape;
@@ -128,6 +123,34 @@ impl WaveArgs {
             sweep_s: s.sweep_s.unwrap_or(10.0),
         }
     }
+
+    /// The flag of a shaping option given, if any (for a command that
+    /// takes them only with a wave).
+    pub fn given(&self) -> Option<&'static str> {
+        let s = &self.shape;
+        [
+            (s.segments.is_some(), "--segments"),
+            (s.offset_v.is_some(), "--offset-v"),
+            (s.ramp_in_s.is_some(), "--ramp-in-s"),
+            (s.ramp_out_s.is_some(), "--ramp-out-s"),
+            (s.sweep_s.is_some(), "--sweep-s"),
+            (self.hold_s != f64::INFINITY, "--hold-s"),
+        ]
+        .into_iter()
+        .find_map(|(given, flag)| given.then_some(flag))
+    }
+}
+
+/// `finrs wave`.
+#[derive(Args)]
+pub struct WaveArgs {
+    /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
+    /// pulses:AMP,ON_S,OFF_S or standing:AMP,HZ.
+    pub wave: String,
+    #[command(flatten)]
+    pub shaping: FirmwareWaveArgs,
+    #[command(flatten)]
+    pub send: SendArgs,
 }
 
 /// Which debug probe and chip, and how long to wait for them.
@@ -270,6 +293,12 @@ pub struct RunArgs {
     pub flash_timeout_s: f64,
     #[command(flatten)]
     pub record: RecordArgs,
+    /// A wave to start once the firmware runs, as `finrs wave` takes it
+    /// (the firmware boots stopped and drives nothing until asked).
+    #[arg(long)]
+    pub wave: Option<String>,
+    #[command(flatten)]
+    pub shaping: FirmwareWaveArgs,
 }
 
 /// `finrs diagnose`.

@@ -23,8 +23,8 @@ use finrs_drive::MAX_SEGMENTS;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{
-    timeout, DiagnoseArgs, FitArgs, FixtureArg, LogArgs, RunArgs, SendArgs, SimWaveArgs,
-    SimulateArgs, WaveArgs,
+    timeout, DiagnoseArgs, FirmwareWaveArgs, FitArgs, FixtureArg, LogArgs, RunArgs, SendArgs,
+    SimWaveArgs, SimulateArgs, WaveArgs,
 };
 
 /// `finrs simulate`.
@@ -278,7 +278,7 @@ pub fn log(args: LogArgs) -> anyhow::Result<()> {
                 finrs::link::probe::FORCE_UP_CHANNEL,
                 probe.chip
             ))?;
-            record(&probe, &Firmware::Running(args.elf.clone()), &opts)?
+            record(&probe, &Firmware::Running(args.elf.clone()), &opts, None)?
         }
     };
     eprint!("{report}");
@@ -287,6 +287,14 @@ pub fn log(args: LogArgs) -> anyhow::Result<()> {
 
 /// `finrs run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    // Refused here, before any probe is looked for.
+    let start = match &args.wave {
+        Some(spec) => Some(firmware_wave(spec, &args.shaping)?),
+        None => match args.shaping.given() {
+            Some(flag) => bail!("{flag} shapes a wave: give it with --wave"),
+            None => None,
+        },
+    };
     let mut probe = args.probe.options()?;
     probe.flash_timeout = timeout("--flash-timeout-s", args.flash_timeout_s)?;
     let opts = args.record.options(format!(
@@ -297,20 +305,38 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     ))?;
     eprint!(
         "{}",
-        record(&probe, &Firmware::Flash(args.elf.clone()), &opts)?
+        record(
+            &probe,
+            &Firmware::Flash(args.elf.clone()),
+            &opts,
+            start.as_ref()
+        )?
     );
     Ok(())
 }
 
-/// Connects through the probe, then records until Ctrl-C or the duration,
-/// with a live status line. Returns the report.
+/// Connects through the probe, sends `start` (a wave) if given, then
+/// records until Ctrl-C or the duration, with a live status line. Returns
+/// the report.
 fn record(
     probe: &finrs::link::probe::ProbeOptions,
     firmware: &Firmware,
     opts: &capture::CaptureOptions,
+    start: Option<&finrs_frames::Command>,
 ) -> anyhow::Result<String> {
     let status = StatusLine::new();
     let mut connected = capture::connect(probe, firmware, &status).map_err(capture_flags)?;
+    if let Some(command) = start {
+        let bytes = finrs::link::command::encode(command);
+        finrs::link::probe::write_all(
+            &mut connected.link,
+            finrs::link::probe::COMMAND_DOWN_CHANNEL,
+            &bytes,
+            probe.timeout,
+        )
+        .map_err(probe_flags)?;
+        eprintln!("sent {command:?}");
+    }
     // Armed only now: until here Ctrl-C ends the process as usual.
     let stop = interrupted()?;
     capture::capture(
@@ -395,11 +421,16 @@ impl Drop for StatusLine {
 
 /// `finrs wave`.
 pub fn wave(args: WaveArgs) -> anyhow::Result<()> {
-    let segments = args.shape.segments.unwrap_or(3);
     // Refused here, before any probe is looked for.
-    let command = finrs::link::command::wave_command(&args.wave, segments, &args.options())
-        .map_err(wave_flags)?;
+    let command = firmware_wave(&args.wave, &args.shaping)?;
     send(&args.send, &command)
+}
+
+/// The SetWave command for `spec` shaped by `shaping`, checked with the
+/// firmware's own rules.
+fn firmware_wave(spec: &str, shaping: &FirmwareWaveArgs) -> anyhow::Result<finrs_frames::Command> {
+    let segments = shaping.shape.segments.unwrap_or(3);
+    finrs::link::command::wave_command(spec, segments, &shaping.options()).map_err(wave_flags)
 }
 
 /// `finrs limit`.

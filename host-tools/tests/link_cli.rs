@@ -242,6 +242,23 @@ fn invalid_commands_are_refused_on_the_host_before_any_probe() {
             "limit 5 V: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         ),
         (
+            &[
+                "run",
+                "fw.elf",
+                "--out",
+                "x.csv",
+                "--wave",
+                "sine:3,1,0",
+                "--offset-v",
+                "1.5",
+            ],
+            "peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V",
+        ),
+        (
+            &["run", "fw.elf", "--out", "x.csv", "--ramp-in-s", "2"],
+            "--ramp-in-s shapes a wave: give it with --wave",
+        ),
+        (
             &["run", "fw.elf", "--out", "x.csv", "--flash-timeout-s", "0"],
             "--flash-timeout-s must be a positive number of seconds, got 0.0",
         ),

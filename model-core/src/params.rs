@@ -171,7 +171,7 @@ impl Params {
     /// seed set): `main.m`'s electrics and DC moment per volt, with a lead
     /// network `K (s + z)/(s + p)`, `z = 0.077/s`, `p = 0.1/s`, whose instant
     /// moment is `p/z = 1.30` times the DC one. Its fast moment is what the
-    /// firmware's QEMU plant uses: the power-up program's 1 Hz travelling
+    /// firmware's QEMU plant uses: the default program's 1 Hz travelling
     /// wave barely moves either seed set (a 10 s lag, or Table 4-2's
     /// 1.6 s charging), and the firmware-in-the-loop test needs a force
     /// well above the load cell's resolution.

@@ -49,7 +49,7 @@ pub enum ConfigRule {
     MarginTooWide,
     /// Must be at most `adc_full_scale`.
     AboveFullScale,
-    /// finrs-drive's power-up program was refused by its own generator (a
+    /// The idle program (0 V) was refused by finrs-drive's generator (a
     /// bug there, not in the configuration).
     RefusedByGenerator,
 }

@@ -4,7 +4,7 @@
 
 use core::fmt;
 
-use finrs_drive::{default_program, Generator, LimitError, Limiter, Limits, WaveError};
+use finrs_drive::{Envelope, Generator, LimitError, Limiter, Limits, Program, WaveError};
 use finrs_frames::{
     encode_dropped, encode_fault, encode_sample, Command, Dropped, Fault, FaultCode, Sample,
     DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
@@ -82,12 +82,24 @@ impl fmt::Display for CommandRefused {
 
 impl core::error::Error for CommandRefused {}
 
+/// The program a controller holds before any SetWave: 0 V on every
+/// segment (it never runs: the controller starts stopped).
+const IDLE_PROGRAM: Program = Program::Steps { levels_v: [0.0; 8] };
+const IDLE_ENVELOPE: Envelope = Envelope {
+    ramp_in_s: 0.0,
+    hold_s: f32::INFINITY,
+    ramp_out_s: 0.0,
+};
+
 /// What drives the outputs when no fault is latched.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Mode {
-    /// Power-up: outputs held at 0 V until the first tare is done, then the
-    /// program starts.
-    PowerUpTare,
+    /// Power-up: outputs held at 0 V until the first tare is done; then
+    /// the program a SetWave gave meanwhile starts (`then_run`), or the
+    /// outputs stay at 0 V. Nothing drives the strip until the host asks:
+    /// after any reset (a watchdog's in a crash loop among them) the
+    /// firmware waits, stopped.
+    PowerUpTare { then_run: bool },
     /// The program drives the outputs; it started at `start_tick` (set by
     /// the first tick after a SetWave, so that it starts at its time 0).
     Running { start_tick: Option<u64> },
@@ -125,17 +137,16 @@ pub struct Controller<const N: usize> {
 }
 
 impl<const N: usize> Controller<N> {
-    /// Checks `config` and starts: the power-up program
-    /// ([`finrs_drive::default_program`]) with outputs held at 0 V until a
-    /// first tare of `tare_samples` readings is done.
+    /// Checks `config` and starts stopped: outputs at 0 V, a first tare of
+    /// `tare_samples` readings under way, and no program until a SetWave
+    /// (one given during the tare starts when it is done).
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         const { assert!(N >= 1 && N <= finrs_frames::MAX_SEGMENTS, "1..=8 segments") };
         config.validate()?;
-        let (program, envelope) = default_program();
         // Valid for every N (the tests build it for N = 1..=8); refusing
-        // it here beats a panic should finrs-drive ever change it.
-        let generator = Generator::new(program, envelope).map_err(|_| ConfigError {
-            field: "default_program",
+        // it here beats a panic should finrs-drive ever change its rules.
+        let generator = Generator::new(IDLE_PROGRAM, IDLE_ENVELOPE).map_err(|_| ConfigError {
+            field: "idle_program",
             rule: ConfigRule::RefusedByGenerator,
         })?;
         Ok(Self {
@@ -143,7 +154,7 @@ impl<const N: usize> Controller<N> {
             dt_s: config.dt_s(),
             generator,
             limiter: Limiter::new(config.limits),
-            mode: Mode::PowerUpTare,
+            mode: Mode::PowerUpTare { then_run: false },
             fault: None,
             pending_fault: None,
             faults_while_latched: 0,
@@ -230,7 +241,10 @@ impl<const N: usize> Controller<N> {
                     return Err(CommandRefused::AboveLimit { peak_v, limit_v });
                 }
                 self.generator = generator;
-                self.mode = Mode::Running { start_tick: None };
+                self.mode = match self.mode {
+                    Mode::PowerUpTare { .. } => Mode::PowerUpTare { then_run: true },
+                    _ => Mode::Running { start_tick: None },
+                };
             }
             Command::Tare => {
                 self.tare = Some(Tare {
@@ -238,7 +252,12 @@ impl<const N: usize> Controller<N> {
                     taken: 0,
                 })
             }
-            Command::Stop => self.mode = Mode::Stopped,
+            Command::Stop => {
+                self.mode = match self.mode {
+                    Mode::PowerUpTare { .. } => Mode::PowerUpTare { then_run: false },
+                    _ => Mode::Stopped,
+                }
+            }
             Command::SetLimit { max_abs_v } => self
                 .limiter
                 .limits_mut()
@@ -342,8 +361,12 @@ impl<const N: usize> Controller<N> {
             self.tare_offset_counts =
                 (t.sum_counts / n) as f32 + (t.sum_counts % n) as f32 / n as f32;
             self.tare = None;
-            if self.mode == Mode::PowerUpTare {
-                self.mode = Mode::Running { start_tick: None };
+            if let Mode::PowerUpTare { then_run } = self.mode {
+                self.mode = if then_run {
+                    Mode::Running { start_tick: None }
+                } else {
+                    Mode::Stopped
+                };
             }
         }
     }
@@ -388,7 +411,7 @@ impl<const N: usize> Controller<N> {
             return self.limiter.stop();
         }
         let wanted = match &mut self.mode {
-            Mode::PowerUpTare | Mode::Stopped => [0.0; N],
+            Mode::PowerUpTare { .. } | Mode::Stopped => [0.0; N],
             Mode::Running { start_tick } => {
                 let start = *start_tick.get_or_insert(tick);
                 // A tick behind the start (a caller's bug) asks for time 0.

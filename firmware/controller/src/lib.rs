@@ -63,12 +63,17 @@
 //! meanwhile frames keep flowing with the previous offset, and a Tare
 //! command during a tare restarts it. At power-up there is no previous
 //! offset: force is relative to the first unsaturated reading until the
-//! first tare is done (honest readings rather than invented zeros). The
-//! power-up program is held at 0 V until that first tare is done, so that
-//! the zero is measured with the strip unpowered; it then starts at its
-//! time 0 on the tick that completes the tare. A SetWave during the power-up tare starts at once. A Tare
-//! command while a wave runs measures the loaded strip: Stop first for a
-//! true zero.
+//! first tare is done (honest readings rather than invented zeros).
+//!
+//! # Power-up
+//!
+//! The controller starts stopped: outputs at 0 V while the first tare
+//! measures the zero with the strip unpowered, and still at 0 V after it,
+//! until the host sends a SetWave. Nothing drives the strip by itself after
+//! a reset, a watchdog's in a crash loop included. A SetWave sent during
+//! that first tare waits for it and starts at its time 0 on the tick that
+//! completes it (a Stop during the tare cancels it). A Tare command while
+//! a wave runs measures the loaded strip: Stop first for a true zero.
 //!
 //! # Commands
 //!
@@ -116,6 +121,11 @@
 //! };
 //! let mut controller = Controller::<3>::new(config).unwrap();
 //! let mut up = Channel(Vec::new());
+//! // Stopped until asked: the host's wave, which waits for the first tare.
+//! let (program, envelope) = finrs_drive::default_program();
+//! controller
+//!     .command(finrs_frames::Command::SetWave { program, envelope })
+//!     .unwrap();
 //! for tick in 0..2000u64 {
 //!     let input = TickInput {
 //!         tick,

@@ -115,13 +115,13 @@ fn config_errors_name_field_and_rule() {
     cfg.newtons_per_count = -1e-3;
     cfg.amps_per_count = -1e-3;
     assert!(Controller::<N>::new(cfg).is_ok());
-    // Every segment count builds the power-up program.
+    // Every segment count builds its idle program.
     assert!(Controller::<1>::new(config()).is_ok());
     assert!(Controller::<8>::new(config()).is_ok());
 }
 
 #[test]
-fn power_up_holds_zero_until_the_tare_then_starts_the_program_at_time_0() {
+fn power_up_tares_then_stays_stopped_until_a_wave() {
     let mut c = Controller::<N>::new(config()).unwrap();
     let mut ch = Channel::default();
     assert!(c.taring() && !c.running());
@@ -130,7 +130,11 @@ fn power_up_holds_zero_until_the_tare_then_starts_the_program_at_time_0() {
         let out = c.tick(&input(tick, 1000 + 2 * tick as u16, IDLE), &mut ch);
         assert_eq!(out.voltages_v, [0.0; N], "held during the tare");
     }
-    assert!(!c.taring() && c.running());
+    assert!(!c.taring());
+    assert!(
+        !c.running(),
+        "after any reset nothing drives until the host asks"
+    );
     assert_eq!(c.tare_offset_counts(), 1009.0);
     let s = samples(&ch.take_events());
     assert_eq!(s.len(), 10);
@@ -140,14 +144,33 @@ fn power_up_holds_zero_until_the_tare_then_starts_the_program_at_time_0() {
         let want = if k < 9 { (2 * k) as f32 * 1e-3 } else { 0.009 };
         assert!((s.force_n - want).abs() < 1e-6, "{k}: {}", s.force_n);
     }
+    for tick in 10..2000u64 {
+        let out = c.tick(&input(tick, 1009, IDLE), &mut ch);
+        assert_eq!(out.voltages_v, [0.0; N], "tick {tick}: stopped");
+    }
+    c.command(steps(0.5)).unwrap();
+    assert!(c.running());
+}
+
+#[test]
+fn a_wave_sent_during_the_power_up_tare_starts_at_its_time_0_when_the_tare_is_done() {
+    let (program, envelope) = finrs_drive::default_program();
+    let wave = Command::SetWave { program, envelope };
+    let mut c = Controller::<N>::new(config()).unwrap();
+    let mut ch = Channel::default();
+    for tick in 0..10u64 {
+        if tick == 3 {
+            c.command(wave).unwrap();
+            assert!(!c.running(), "held until the tare is done");
+        }
+        let out = c.tick(&input(tick, 1009, IDLE), &mut ch);
+        assert_eq!(out.voltages_v, [0.0; N], "held during the tare");
+    }
+    assert!(!c.taring() && c.running());
+    assert_eq!(c.tare_offset_counts(), 1009.0, "tared at rest");
     // The program started at its own time 0 on the tick that completed the
-    // tare (tick 9, where the power-up program asks for 0 V), through the
-    // limiter.
-    let generator = Generator::<N>::new(
-        finrs_drive::default_program().0,
-        finrs_drive::default_program().1,
-    )
-    .unwrap();
+    // tare (tick 9, where it asks for 0 V), through the limiter.
+    let generator = Generator::<N>::new(program, envelope).unwrap();
     let mut limiter = Limiter::<N>::new(config().limits);
     assert_eq!(
         limiter.apply(generator.voltages_at_tick_v(0, 1000), 1e-3),
@@ -159,6 +182,16 @@ fn power_up_holds_zero_until_the_tare_then_starts_the_program_at_time_0() {
         assert_eq!(out.voltages_v, want, "tick {k}");
     }
     assert!(c.outputs_v().iter().any(|v| v.abs() > 1.0));
+
+    // A Stop during the tare cancels the wave given before it.
+    let mut c = Controller::<N>::new(config()).unwrap();
+    c.command(wave).unwrap();
+    c.command(Command::Stop).unwrap();
+    for tick in 0..100u64 {
+        let out = c.tick(&input(tick, 1009, IDLE), &mut ch);
+        assert_eq!(out.voltages_v, [0.0; N], "tick {tick}");
+    }
+    assert!(!c.taring() && !c.running());
 }
 
 #[test]

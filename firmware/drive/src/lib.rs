@@ -35,7 +35,7 @@
 //!
 //! # Example
 //!
-//! One second of the power-up program at 1 kHz, through a limiter:
+//! One second of the default program at 1 kHz, through a limiter:
 //!
 //! ```
 //! use finrs_drive::{default_program, Generator, Limiter, Limits};

@@ -148,8 +148,10 @@ impl fmt::Display for WaveError {
     }
 }
 
-/// The power-up program: a travelling wave of 2.0 V at 1 Hz, 120° lag per
-/// segment, no offset, ramped in over 1 s and run for ever.
+/// The fin's everyday gait, and the wave the QEMU run asks for: a
+/// travelling wave of 2.0 V at 1 Hz, 120° lag per segment, no offset,
+/// ramped in over 1 s and run for ever. The firmware does not start it by
+/// itself: it boots stopped.
 pub fn default_program() -> (Program, Envelope) {
     (
         Program::Travelling {

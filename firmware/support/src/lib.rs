@@ -8,6 +8,7 @@
 //!   sensor scales both boards run with.
 //! - [`pins`]: the analogue inputs' pins, ADCs and channels, checked
 //!   against the datasheet.
+//! - [`reset`]: why the core last reset, from RCC_CSR's flags.
 //! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
 //!   load-cell offset and noise, the injected fault).
 //! - [`watermark`]: the stack high-water mark's paint pattern and scan.
@@ -16,5 +17,6 @@
 
 pub mod config;
 pub mod pins;
+pub mod reset;
 pub mod sim;
 pub mod watermark;

@@ -7,10 +7,11 @@
 //!
 //! - Lossless: every Sample arrives, numbered 0, 1, 2, … with no gap, no
 //!   Dropped report and no corrupt byte; it covers at least 10 s.
-//! - Commands: the down channel (a host file in QEMU) carries garbage, a
-//!   limit raise to 5 V (refused) and a limit of 1.5 V (taken): every
-//!   commanded voltage is within 1.5 V, the 2 V default program is clipped
-//!   at exactly 1.5 V, and successive voltages are within the slew limit.
+//! - Commands: the down channel (a host file in QEMU) carries garbage, the
+//!   2 V default program (the firmware boots stopped and drives only when
+//!   asked), a limit raise to 5 V (refused) and a limit of 1.5 V (taken):
+//!   every commanded voltage is within 1.5 V, the program is clipped at
+//!   exactly 1.5 V, and successive voltages are within the slew limit.
 //! - Force: the logged force matches a host simulation of the same plant
 //!   (`model_core::Strip<f32>`, seed parameters, blocked, 1 ms) driven by the
 //!   logged voltages. Tolerance, in load-cell counts times the scale: the
@@ -232,11 +233,14 @@ fn check_stack(log: &[String]) -> (usize, usize, usize) {
 /// The limit the down channel sets, V.
 const COMMANDED_LIMIT_V: f32 = 1.5;
 
-/// The down channel's bytes: garbage, a raise of the limit (refused: it
+/// The down channel's bytes: garbage, the default wave (the firmware boots
+/// stopped: nothing drives without it), a raise of the limit (refused: it
 /// must change nothing), then a lower limit (taken).
 fn commands() -> Vec<u8> {
     let mut bytes = vec![0x00, 0x13, 0x37, 0x5E, 0xF1];
+    let (program, envelope) = finrs_drive::default_program();
     for c in [
+        FinCommand::SetWave { program, envelope },
         FinCommand::SetLimit { max_abs_v: 5.0 },
         FinCommand::SetLimit {
             max_abs_v: COMMANDED_LIMIT_V,
@@ -276,6 +280,7 @@ fn check_run<const N: usize, const S: usize>() {
     let expected = [
         up.as_str(),
         "ERROR command refused: 5 bytes without a sync pair skipped",
+        "INFO command accepted: SetWave",
         "ERROR SetLimit refused: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         "INFO command accepted: SetLimit",
         "ERROR fault latched at tick 10500: overcurrent (segment Some(1))",
@@ -491,5 +496,38 @@ fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
                 s.voltages()
             );
         }
+    }
+}
+
+/// The firmware boots stopped: with nothing on its down channel it drives
+/// nothing for the whole 12 s run (the power-up tare, then waiting), while
+/// its Samples flow, gap-free.
+#[test]
+fn firmware_in_qemu_drives_nothing_until_a_wave_is_sent() {
+    let elf = build_elf(3);
+    let (bytes, _) = run_qemu(&elf, ICOUNT_SHIFT, &[]);
+    let mut decoder = Decoder::new();
+    let mut samples = Vec::new();
+    decoder.push(&bytes, &mut |e| {
+        if let Event::Sample(s) = e {
+            samples.push(s)
+        }
+    });
+    decoder.finish(&mut |_| {});
+    let stats = decoder.stats();
+    assert_eq!(
+        (stats.corrupt_bytes, stats.gaps_unreported),
+        (0, 0),
+        "{stats:?}"
+    );
+    let run_ticks = (sim::RUN_S * config::SAMPLE_HZ) as usize;
+    assert!(samples.len() >= run_ticks - 1, "{} samples", samples.len());
+    for s in &samples {
+        assert!(
+            s.voltages().iter().all(|&v| v == 0.0),
+            "sample {} commands {:?} with no wave sent",
+            s.seq,
+            s.voltages()
+        );
     }
 }

@@ -62,6 +62,7 @@ use crate::config::{
     BRIDGE_SUPPLY_V, DAC_GAIN, DAC_SEGMENTS, DAC_VREF_V, DAC_ZERO_CODE, N, SAMPLE_HZ,
 };
 use crate::{Mono, SYSCLK_HZ};
+use finrs_firmware_support::reset::ResetCause;
 
 /// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
 /// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
@@ -298,6 +299,17 @@ fn dac_channel<D: DacPin + DacOut<u16>>(mut d: D) -> D {
 /// Clocks, RTT, outputs, ADC trigger, watchdog.
 pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     let (frames, commands) = init_rtt();
+    // The reset flags, read and cleared before anything else touches RCC.
+    let cause = ResetCause::from_rcc_csr(dp.RCC.csr().read().bits());
+    dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
+    if cause.is_failure() {
+        defmt::warn!(
+            "reset cause: {} (the last run hung or failed)",
+            cause.name()
+        );
+    } else {
+        defmt::info!("reset cause: {}", cause.name());
+    }
     let mut rcc = dp.RCC.freeze(
         RccConfig::hse(8.MHz())
             .sysclk(SYSCLK_HZ.Hz())
