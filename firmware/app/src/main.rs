@@ -84,7 +84,7 @@ mod app {
             "fin driver up: {} segments at {} Hz, limit {} V",
             N,
             config::SAMPLE_HZ,
-            config::MAX_ABS_V
+            config::POWER_UP_LIMIT_V
         );
         if commands::spawn().is_err() || pace::spawn().is_err() || housekeeping::spawn().is_err() {
             defmt::panic!("a task was spawned twice");

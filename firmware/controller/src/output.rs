@@ -81,20 +81,6 @@ fn floor_clamped(x: f32, max: u16) -> u16 {
     }
 }
 
-/// `x` (finite) clamped to `0..=max` and rounded to the nearest integer.
-fn round_clamped(x: f32, max: u16) -> u16 {
-    let max_f = f32::from(max);
-    let x = if x > max_f {
-        max_f
-    } else if x > 0.0 {
-        x
-    } else {
-        0.0
-    };
-    // x + 0.5 ≤ 65535.5: the cast truncates a non-negative value.
-    ((x + 0.5) as u16).min(max)
-}
-
 /// An H-bridge of an IN1/IN2 driver (DRV8833 class: IN 1/0 drives OUT1
 /// high and OUT2 low, 0/1 the reverse, 1/1 both low, 0/0 both open) driven
 /// in slow decay: for positive volts leg A is held fully on and leg B
@@ -223,7 +209,8 @@ pub const DAC_MAX_CODE: u16 = 4095;
 
 /// A 12-bit DAC into a bipolar amplifier (for up to 2 segments on the
 /// STM32F407): code = `zero_code` + v / (`gain` · `vref_v` / 4095),
-/// rounded and clamped to 0..=4095. Off writes `zero_code`.
+/// rounded toward `zero_code` (never more than |v|) and clamped to
+/// 0..=4095. Off writes `zero_code`.
 #[derive(Debug)]
 pub struct DacOutput<D: DacWrite> {
     dac: D,
@@ -276,14 +263,14 @@ impl<D: DacWrite> SegmentOutput for DacOutput<D> {
         if v.is_nan() {
             return self.off();
         }
-        // ±inf lands on a rail through the clamp.
-        let code = f32::from(self.zero_code) + v / self.volts_per_code;
-        let code = if code.is_nan() {
-            self.zero_code
-        } else {
-            round_clamped(code, DAC_MAX_CODE)
-        };
-        self.dac.write_code(code);
+        // Toward the 0 V code, so that a code never asks more than |v|: the
+        // cast truncates, and saturates ±inf onto a rail through the clamp.
+        let offset = (v / self.volts_per_code) as i32;
+        let code = i32::from(self.zero_code)
+            .saturating_add(offset)
+            .clamp(0, i32::from(DAC_MAX_CODE));
+        // 0..=4095 after the clamp.
+        self.dac.write_code(code as u16);
     }
 
     fn off(&mut self) {

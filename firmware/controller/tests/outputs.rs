@@ -178,12 +178,15 @@ fn dac_after(gain: f32, vref_v: f32, zero_code: u16, v: f32) -> u16 {
 }
 
 #[test]
-fn dac_codes_round_and_clamp() {
+fn dac_codes_round_toward_zero_volts_and_clamp() {
     // Gain 2 on a 3.3 V reference: 6.6 V / 4095 codes.
     assert_eq!(dac_after(2.0, 3.3, 2048, 0.0), 2048);
     assert_eq!(dac_after(2.0, 3.3, 2048, 1.0), 2048 + 620); // 620.45
     assert_eq!(dac_after(2.0, 3.3, 2048, -1.0), 2048 - 620);
-    assert_eq!(dac_after(2.0, 3.3, 2048, 6.6 / 4095.0 * 0.6), 2049);
+    // Never more than asked: 0.6 of a code is none, 1.9 codes one.
+    assert_eq!(dac_after(2.0, 3.3, 2048, 6.6 / 4095.0 * 0.6), 2048);
+    assert_eq!(dac_after(2.0, 3.3, 2048, 6.6 / 4095.0 * 1.9), 2049);
+    assert_eq!(dac_after(2.0, 3.3, 2048, -6.6 / 4095.0 * 1.9), 2047);
     assert_eq!(dac_after(2.0, 3.3, 2048, 10.0), 4095);
     assert_eq!(dac_after(2.0, 3.3, 2048, -10.0), 0);
     assert_eq!(dac_after(2.0, 3.3, 2048, f32::INFINITY), 4095);

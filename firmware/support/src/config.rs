@@ -57,7 +57,8 @@ const fn dac_index(d: u8) -> usize {
 }
 
 /// DAC segments: the bipolar amplifier's output volts per DAC volt (3.0 V
-/// reference, mid-scale = 0 V: ±4.2 V at the rails, above the 4 V limit).
+/// reference, mid-scale = 0 V: ±4.2 V at the codes' ends, ±3.64 V within
+/// the buffer's swing, [`DAC_REACH_V`]).
 #[allow(dead_code)] // the QEMU board drives the plant, not DACs
 pub const DAC_GAIN: f32 = 2.8;
 
@@ -77,8 +78,54 @@ pub const SAMPLE_HZ: u32 = 1_000;
 #[allow(dead_code)] // the QEMU board drives the plant, not bridges
 pub const BRIDGE_SUPPLY_V: f32 = 5.0;
 
-/// Voltage limit at power-up, V (the Nafion strips' ±4 V; lower by command).
+/// The strips' voltage limit, V (the Nafion strips' ±4 V; lower by
+/// command). What the board starts with is [`POWER_UP_LIMIT_V`].
 pub const MAX_ABS_V: f32 = 4.0;
+
+/// The DAC output buffer's swing from either rail, V: with the buffer on,
+/// DAC_OUT reaches 0.2 V to VDDA − 0.2 V (STM32F407 datasheet, DS8626,
+/// DAC characteristics), not the whole reference.
+pub const DAC_BUFFER_MARGIN_V: f32 = 0.2;
+
+/// The DAC's output at its 0 V code, V.
+const DAC_ZERO_V: f32 = DAC_ZERO_CODE as f32 * DAC_VREF_V / 4095.0;
+
+/// Largest |V| a DAC segment reaches on both sides: the amplifier's gain
+/// times the buffer's swing either side of the 0 V code (±3.64 V for a
+/// gain of 2.8 on a 3.0 V reference, where the codes alone would say
+/// ±4.2 V).
+pub const DAC_REACH_V: f32 = {
+    let down = DAC_ZERO_V - DAC_BUFFER_MARGIN_V;
+    let up = DAC_VREF_V - DAC_BUFFER_MARGIN_V - DAC_ZERO_V;
+    let swing = if down < up { down } else { up };
+    let gain = if DAC_GAIN < 0.0 { -DAC_GAIN } else { DAC_GAIN };
+    gain * swing
+};
+
+/// The voltage limit the board starts with, V: [`MAX_ABS_V`], or less if a
+/// DAC segment cannot reach it ([`DAC_REACH_V`]). A wave above it is
+/// refused, not clipped by the output stage.
+pub const POWER_UP_LIMIT_V: f32 =
+    power_up_limit_v(DAC_SEGMENTS[0].is_some() || DAC_SEGMENTS[1].is_some());
+
+/// [`POWER_UP_LIMIT_V`] for a build with DAC segments (`dac`) or without.
+pub const fn power_up_limit_v(dac: bool) -> f32 {
+    if dac && DAC_REACH_V < MAX_ABS_V {
+        DAC_REACH_V
+    } else {
+        MAX_ABS_V
+    }
+}
+
+const _: () = {
+    assert!(POWER_UP_LIMIT_V > 0.0 && POWER_UP_LIMIT_V <= MAX_ABS_V);
+    // A bridge reaches the limit at a duty of at most 1.
+    assert!(
+        BRIDGE_SUPPLY_V >= MAX_ABS_V,
+        "the bridge supply must reach the limit"
+    );
+    assert!(DAC_ZERO_CODE <= 4095 && DAC_VREF_V > 2.0 * DAC_BUFFER_MARGIN_V);
+};
 
 /// Slew limit, V/s.
 pub const SLEW_V_PER_S: f32 = 200.0;
@@ -100,7 +147,7 @@ pub const OVERCURRENT_A: f32 = 0.4;
 pub fn controller_config() -> Result<Config, LimitError> {
     Ok(Config {
         sample_hz: SAMPLE_HZ,
-        limits: Limits::new(MAX_ABS_V, SLEW_V_PER_S)?,
+        limits: Limits::new(POWER_UP_LIMIT_V, SLEW_V_PER_S)?,
         newtons_per_count: NEWTONS_PER_COUNT,
         adc_full_scale: 4095,
         saturation_margin_counts: 8,
