@@ -104,11 +104,12 @@ mod app {
     /// One sample period: read the load cell and shunts, run the
     /// controller's tick, write the outputs, feed the watchdog. Bound to the
     /// ADC interrupt on both boards (QEMU's pacer pends it).
-    #[task(binds = ADC, priority = 3, shared = [controller], local = [io, frames, tick: u64 = 0, latched: bool = false])]
+    #[task(binds = ADC, priority = 3, shared = [controller], local = [io, frames, latched: bool = false])]
     fn sample(mut cx: sample::Context) {
         let io = cx.local.io;
         let frames = cx.local.frames;
-        let Some(input) = io.read(*cx.local.tick) else {
+        // Numbered by the board's period count, not by this task's runs.
+        let Some(input) = io.read() else {
             return;
         };
         let (out, faulted) = cx.shared.controller.lock(|c| {
@@ -119,7 +120,6 @@ mod app {
         // hold a bridge braked, not open.
         io.write_v((!faulted).then_some(&out.voltages_v));
         io.feed_watchdog();
-        *cx.local.tick += 1;
         // The next period's conversion already finished: this one overran.
         if io.deadline_missed() {
             cx.shared

@@ -15,8 +15,10 @@ use crate::config::{Config, ConfigError, ConfigRule};
 /// The readings of one sample tick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TickInput<const N: usize> {
-    /// Tick count since boot, one per `1/sample_hz` (the firmware's
-    /// monotonic count; it should rise by one each call).
+    /// Sample periods since boot, one per `1/sample_hz`, counted in
+    /// hardware: it rises by one each call, by more when the sample task
+    /// ran too late to see a period (the periods it did not see are
+    /// reported as dropped samples).
     pub tick: u64,
     /// Time since start, µs (carried into the frames as is).
     pub t_us: u32,
@@ -134,6 +136,9 @@ pub struct Controller<const N: usize> {
     /// Samples dropped and not yet reported.
     dropped: Option<Dropped>,
     last_t_us: u32,
+    /// The previous tick's count, to find periods no tick saw.
+    last_tick: Option<u64>,
+    unseen_periods: u64,
 }
 
 impl<const N: usize> Controller<N> {
@@ -167,6 +172,8 @@ impl<const N: usize> Controller<N> {
             next_seq: 0,
             dropped: None,
             last_t_us: 0,
+            last_tick: None,
+            unseen_periods: 0,
         })
     }
 
@@ -175,6 +182,14 @@ impl<const N: usize> Controller<N> {
     /// Returns the voltages to write now.
     pub fn tick(&mut self, input: &TickInput<N>, sink: &mut impl FrameSink) -> TickOutput<N> {
         self.last_t_us = input.t_us;
+        // Periods between the last tick and this one were never sampled:
+        // their numbers are taken and reported as dropped, so the host sees
+        // the hole and the clock stays the hardware's.
+        if let Some(last) = self.last_tick {
+            let unseen = input.tick.saturating_sub(last).saturating_sub(1);
+            self.skip(unseen);
+        }
+        self.last_tick = Some(input.tick);
         let currents_a = input.current_counts.map(|c| self.config.current_a(c));
         let counts = input.load_cell_counts;
         let saturated = self.config.load_cell_saturated(counts);
@@ -451,6 +466,34 @@ impl<const N: usize> Controller<N> {
 
     /// Sends `s` after any pending Fault and Dropped frames, or counts it
     /// dropped; either way it consumes its sequence number.
+    /// Takes `count` sequence numbers for samples never taken and adds them
+    /// to the pending Dropped report.
+    fn skip(&mut self, count: u64) {
+        if count == 0 {
+            return;
+        }
+        // A Dropped frame's count is a u32; numbers wrap at 2³² anyway.
+        let count = u32::try_from(count).unwrap_or(u32::MAX);
+        match &mut self.dropped {
+            // Consecutive: the pending report ends at the sample before.
+            Some(d) => d.count = d.count.saturating_add(count),
+            None => {
+                self.dropped = Some(Dropped {
+                    first_seq: self.next_seq,
+                    count,
+                })
+            }
+        }
+        self.next_seq = self.next_seq.wrapping_add(count);
+        self.unseen_periods = self.unseen_periods.saturating_add(u64::from(count));
+    }
+
+    /// Sample periods no tick saw so far (the sample task ran more than a
+    /// period late), each reported as a dropped sample.
+    pub fn unseen_periods(&self) -> u64 {
+        self.unseen_periods
+    }
+
     fn send_sample(&mut self, s: &Sample<N>, sink: &mut impl FrameSink) {
         self.next_seq = self.next_seq.wrapping_add(1);
         let mut buf = [0u8; MAX_FRAME_LEN];

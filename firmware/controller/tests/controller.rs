@@ -666,3 +666,33 @@ fn a_wave_above_the_limit_is_refused_not_clipped() {
         })
     );
 }
+
+/// A sample task that ran too late to see a period: the hardware's period
+/// count jumps, the periods it did not see take their sequence numbers and
+/// are reported as dropped before the next Sample, whose time is the
+/// hardware's.
+#[test]
+fn periods_no_tick_saw_are_reported_as_dropped_samples() {
+    let (mut c, mut ch, t0) = tared();
+    c.tick(&input(t0, 1000, IDLE), &mut ch);
+    c.tick(&input(t0 + 3, 1000, IDLE), &mut ch); // t0 + 1 and t0 + 2 unseen
+    c.tick(&input(t0 + 4, 1000, IDLE), &mut ch);
+    assert_eq!(c.unseen_periods(), 2);
+    let events = ch.take_events();
+    let seqs: Vec<String> = events
+        .iter()
+        .map(|e| match e {
+            Event::Sample(s) => format!("S{}@{}", s.seq, s.t_us),
+            Event::Dropped(d) => format!("D{}+{}", d.first_seq, d.count),
+            other => format!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(seqs, ["S10@10000", "D11+2", "S13@13000", "S14@14000"]);
+    // A jump beyond what a Dropped frame counts saturates, never panics.
+    let (mut c, mut ch, t0) = tared();
+    c.tick(&input(t0 + (1 << 40), 1000, IDLE), &mut ch);
+    assert_eq!(c.unseen_periods(), u64::from(u32::MAX));
+    // A tick that does not advance (a caller's bug) skips nothing.
+    c.tick(&input(t0 + (1 << 40), 1000, IDLE), &mut ch);
+    assert_eq!(c.unseen_periods(), u64::from(u32::MAX));
+}

@@ -156,7 +156,8 @@ fn any_op() -> BoxedStrategy<Op> {
     ];
     prop_oneof![
         30 => (
-            prop_oneof![20 => Just(1u64), 1 => 0u64..5, 1 => any::<u64>()],
+            // Late sample tasks skip periods: each one a dropped sample.
+            prop_oneof![20 => Just(1u64), 1 => 0u64..5, 1 => 5u64..300],
             any_counts(),
             prop::array::uniform4(any_current()),
             any_sink(),
@@ -219,8 +220,10 @@ proptest! {
         let dt_s = 1.0 / config.sample_hz as f32;
         let mut tick = 0u64;
         let mut prev = [0.0f32; N];
-        // Outputs by sequence number of the Sample that carried them.
-        let mut outputs = Vec::new();
+        // Outputs by sequence number of the Sample that carried them (None:
+        // a period no tick saw).
+        let mut outputs: Vec<Option<[f32; N]>> = Vec::new();
+        let mut ticked = false;
         let mut latches = 0usize;
         for op in &ops {
             let was_latched = c.fault_state().is_some();
@@ -236,6 +239,10 @@ proptest! {
                         current_counts: *current_counts,
                     };
                     let out = c.tick(&input, &mut ch).voltages_v;
+                    let unseen = if ticked { advance.saturating_sub(1) } else { 0 };
+                    ticked = true;
+                    let seq = seq.wrapping_add(unseen as u32);
+                    outputs.extend((0..unseen).map(|_| None));
                     let limits = c.limits();
                     prop_assert!(limits.max_abs_v() <= HARD_LIMIT_V);
                     let step = limits.slew_v_per_s() * dt_s;
@@ -255,7 +262,7 @@ proptest! {
                     prop_assert_eq!(out, c.outputs_v());
                     if c.next_seq() != seq {
                         prop_assert_eq!(c.next_seq(), seq.wrapping_add(1));
-                        outputs.push(out);
+                        outputs.push(Some(out));
                     } else {
                         prop_assert!(latched && !was_latched, "only the faulting tick takes no number");
                     }
@@ -306,7 +313,7 @@ proptest! {
         };
         let out = c.tick(&input, &mut ch).voltages_v;
         prop_assert_eq!(c.next_seq(), seq.wrapping_add(1));
-        outputs.push(out);
+        outputs.push(Some(out));
         prop_assert!(!c.fault_report_pending());
         prop_assert_eq!(c.pending_dropped(), None);
         // What the host sees.
@@ -319,7 +326,9 @@ proptest! {
         prop_assert_eq!(stats.faults as usize + pending_fault, latches);
         for e in &events {
             if let Event::Sample(s) = e {
-                prop_assert_eq!(s.voltages(), &outputs[s.seq as usize][..]);
+                let out = outputs[s.seq as usize];
+                prop_assert!(out.is_some(), "sample {} sent for a period no tick saw", s.seq);
+                prop_assert_eq!(s.voltages(), &out.unwrap()[..]);
             }
         }
     }

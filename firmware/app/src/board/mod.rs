@@ -3,8 +3,9 @@
 //!
 //! - `init(core, device) -> Parts`: clocks, pins, peripherals, the SysTick
 //!   monotonic and the log channel;
-//! - `Io`: `read(tick) -> Option<TickInput<N>>` (the sample period's ADC
-//!   counts; `None` when the run is over), `write_v(Option<&[f32; N]>)`
+//! - `Io`: `read() -> Option<TickInput<N>>` (the sample period's ADC
+//!   counts, numbered by the board's count of periods; `None` when the run
+//!   is over), `write_v(Option<&[f32; N]>)`
 //!   through the `SegmentOutput`s (`None`: every output off, where 0 V
 //!   would hold the strip), `off()`, `feed_watchdog()`, `deadline_missed()`;
 //! - `FrameOut`: the controller's non-blocking `FrameSink`;

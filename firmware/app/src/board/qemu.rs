@@ -84,6 +84,9 @@ pub struct Io {
     segments: [PlantSegment; N],
     currents_a: [f32; N],
     noise: u32,
+    /// Sample periods so far: the pacer pends one sample task per period,
+    /// so here the count is the tasks'.
+    tick: u64,
 }
 
 /// Frames into the queue that housekeeping flushes.
@@ -175,6 +178,7 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
             segments: [PlantSegment::default(); N],
             currents_a: [0.0; N],
             noise: sim::NOISE_SEED,
+            tick: 0,
         },
         frames: FrameOut { queue: producer },
         commands: CommandIn {
@@ -189,12 +193,15 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
 }
 
 impl Io {
-    /// The ADC counts of sample `tick`, `None` once the run is over.
-    pub fn read(&mut self, tick: u64) -> Option<TickInput<N>> {
+    /// The ADC counts of the next sample period, `None` once the run is
+    /// over.
+    pub fn read(&mut self) -> Option<TickInput<N>> {
+        let tick = self.tick;
         if tick >= RUN_TICKS {
             DONE.store(true, Ordering::Release);
             return None;
         }
+        self.tick += 1;
         let noise = self.next_noise();
         let force_counts = self.plant.blocking_force_n(&self.x) / NEWTONS_PER_COUNT;
         let load_cell_counts =

@@ -247,6 +247,9 @@ pub struct Io {
     adc1: pac::ADC1,
     adc2: pac::ADC2,
     adc3: pac::ADC3,
+    /// TIM3, the sample period counter.
+    counter: pac::TIM3,
+    periods: Periods,
     segments: [Segment; N],
     /// ADC2/ADC3's group was not done when ADC1's was.
     secondary_late: bool,
@@ -456,7 +459,7 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
         let _ = c.pc2.into_analog();
     }
     init_adcs(&dp.ADC1, &dp.ADC2, &dp.ADC3, &dp.ADC_COMMON, &mut rcc);
-    init_trigger(dp.TIM5, &mut rcc);
+    init_trigger(dp.TIM5, &dp.TIM3, &mut rcc);
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.stop_on_debug(&dp.DBGMCU, true);
@@ -467,6 +470,11 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             adc1: dp.ADC1,
             adc2: dp.ADC2,
             adc3: dp.ADC3,
+            counter: dp.TIM3,
+            periods: Periods {
+                last_count: 0,
+                total: 0,
+            },
             segments,
             secondary_late: false,
             watchdog,
@@ -579,24 +587,59 @@ fn init_group(adc: &pac::adc1::RegisterBlock, channels: &[u8], interrupt: bool) 
 }
 
 /// TIM5 counts at 1 MHz (84 MHz / 84) and updates at the sample rate; its
-/// update event is TRGO.
-fn init_trigger(tim: pac::TIM5, rcc: &mut pac::RCC) {
+/// update event is TRGO, which starts the ADCs' groups and clocks TIM3, the
+/// sample period counter ([`Periods`]). TIM3 is set up before TIM5 runs so
+/// that it sees every update from the first.
+fn init_trigger(tim: pac::TIM5, counter: &pac::TIM3, rcc: &mut pac::RCC) {
     pac::TIM5::enable(rcc);
     pac::TIM5::reset(rcc);
     tim.psc().write(|w| w.psc().set(84 - 1));
     tim.arr().write(|w| w.arr().set(1_000_000 / SAMPLE_HZ - 1));
     tim.egr().write(|w| w.ug().set_bit());
     tim.cr2().write(|w| w.mms().update());
+    // TIM3 in external clock mode 1 on its internal trigger ITR2, which is
+    // TIM5's TRGO (RM0090, TIM2 to TIM5, "TIMx internal trigger
+    // connection": TIM3's ITR0..3 are TIM1, TIM2, TIM5, TIM4): each TIM5
+    // update counts one, up to 0xFFFF and round.
+    pac::TIM3::enable(rcc);
+    pac::TIM3::reset(rcc);
+    counter.arr().write(|w| w.arr().set(0xFFFF));
+    counter
+        .smcr()
+        .write(|w| w.ts().itr2().sms().ext_clock_mode());
+    counter.cr1().write(|w| w.cen().set_bit());
     tim.cr1().write(|w| w.cen().set_bit());
 }
 
+/// Sample periods since boot, counted in hardware: TIM3's 16-bit count of
+/// TIM5's updates, widened to 64 bits at each reading. A sample task that
+/// starts more than a period late reads a count that has moved by more
+/// than one (the ADCs' results are the last period's), so no period goes
+/// unnumbered and time does not drift. The widening needs a reading at
+/// least every 65 535 periods (65 s), which the watchdog guarantees.
+struct Periods {
+    last_count: u16,
+    total: u64,
+}
+
+impl Periods {
+    /// The periods counted so far.
+    fn read(&mut self, counter: &pac::TIM3) -> u64 {
+        let count = counter.cnt().read().cnt().bits();
+        self.total += u64::from(count.wrapping_sub(self.last_count));
+        self.last_count = count;
+        self.total
+    }
+}
+
 impl Io {
-    /// The groups that just ended, as sample `tick`; `None` if ADC1's group
-    /// did not end (a spurious interrupt).
-    pub fn read(&mut self, tick: u64) -> Option<TickInput<N>> {
+    /// The groups that just ended, numbered by the hardware's period count;
+    /// `None` if ADC1's group did not end (a spurious interrupt).
+    pub fn read(&mut self) -> Option<TickInput<N>> {
         if self.adc1.sr().read().jeoc().bit_is_clear() {
             return None;
         }
+        let tick = self.periods.read(&self.counter);
         self.adc1
             .sr()
             .modify(|_, w| w.jeoc().clear_bit().jstrt().clear_bit());
