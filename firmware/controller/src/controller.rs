@@ -70,10 +70,13 @@ impl fmt::Display for CommandRefused {
         match self {
             Self::Wave(e) => write!(f, "SetWave refused: {e}"),
             Self::Limit(e) => write!(f, "SetLimit refused: {e}"),
-            Self::AboveLimit { peak_v, limit_v } => write!(
-                f,
-                "SetWave refused: the program peaks at {peak_v} V, above the {limit_v} V limit"
-            ),
+            Self::AboveLimit { peak_v, limit_v } => {
+                f.write_str("SetWave refused: the program peaks at ")?;
+                write_volts(f, *peak_v)?;
+                f.write_str(", above the ")?;
+                write_volts(f, *limit_v)?;
+                f.write_str(" limit")
+            }
             Self::Faulted => f.write_str("SetWave refused: a fault is latched (ClearFault first)"),
             Self::FaultNotReported => {
                 f.write_str("ClearFault refused: the fault has not been reported yet")
@@ -83,6 +86,16 @@ impl fmt::Display for CommandRefused {
 }
 
 impl core::error::Error for CommandRefused {}
+
+/// `v` (finite, at least 0) as volts to the hundredth, e.g. `2.50 V`, in
+/// integer arithmetic: an f32 `Display` would link core's float formatting
+/// into the firmware (about 14 KB of flash, measured), for one message.
+fn write_volts(f: &mut fmt::Formatter<'_>, v: f32) -> fmt::Result {
+    // Below 2³² hundredths; the cast saturates beyond (a program's peak is
+    // at most 1000 V, its limit 4 V).
+    let hundredths = (v * 100.0 + 0.5) as u32;
+    write!(f, "{}.{:02} V", hundredths / 100, hundredths % 100)
+}
 
 /// The program a controller holds before any SetWave: 0 V on every
 /// segment (it never runs: the controller starts stopped).

@@ -612,7 +612,7 @@ fn a_wave_above_the_limit_is_refused_not_clipped() {
     );
     assert_eq!(
         refused.unwrap_err().to_string(),
-        "SetWave refused: the program peaks at 2.5 V, above the 2 V limit"
+        "SetWave refused: the program peaks at 2.50 V, above the 2.00 V limit"
     );
     assert_eq!(c.generator().program(), before, "refused: nothing changed");
     // A sine's peak is its amplitude plus the offset's magnitude.
