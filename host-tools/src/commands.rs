@@ -315,9 +315,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Connects through the probe, sends `start` (a wave) if given, then
-/// records until Ctrl-C or the duration, with a live status line. Returns
-/// the report.
+/// Connects through the probe, asks the firmware for its Info frame (so
+/// that the recording's notes say which firmware and set-up made it), sends
+/// `start` (a wave) if given, then records until Ctrl-C or the duration,
+/// with a live status line. Returns the report.
 fn record(
     probe: &finrs::link::probe::ProbeOptions,
     firmware: &Firmware,
@@ -326,7 +327,8 @@ fn record(
 ) -> anyhow::Result<String> {
     let status = StatusLine::new();
     let mut connected = capture::connect(probe, firmware, &status).map_err(capture_flags)?;
-    if let Some(command) = start {
+    let commands = std::iter::once(&finrs_frames::Command::RequestInfo).chain(start);
+    for command in commands {
         let bytes = finrs::link::command::encode(command);
         finrs::link::probe::write_all(
             &mut connected.link,
@@ -335,6 +337,8 @@ fn record(
             probe.timeout,
         )
         .map_err(probe_flags)?;
+    }
+    if let Some(command) = start {
         eprintln!("sent {command:?}");
     }
     // Armed only now: until here Ctrl-C ends the process as usual.

@@ -24,6 +24,7 @@ compile_error!("no board chosen: use the default feature `board` or `--features 
 
 mod board;
 use finrs_firmware_support::config;
+use finrs_firmware_support::identity;
 #[cfg(feature = "qemu")]
 use finrs_firmware_support::sim;
 mod stack;
@@ -50,7 +51,7 @@ mod app {
     use super::*;
     use crate::board::{self, CommandIn, FrameOut, Housekeeping, Io};
     use crate::config::{self, N};
-    use finrs_controller::{Controller, FaultCode};
+    use finrs_controller::{Controller, FaultCode, Identity};
     use finrs_frames::{Command, CommandDecoder, CommandEvent};
 
     #[shared]
@@ -71,7 +72,7 @@ mod app {
         // First thing: init's stack use is measured from here.
         stack::paint_init();
         let parts = board::init(cx.core, cx.device);
-        let controller = match config::controller_config()
+        let mut controller = match config::controller_config()
             .map_err(|_| "limits")
             .and_then(|c| Controller::<N>::new(c).map_err(|_| "controller"))
         {
@@ -80,6 +81,14 @@ mod app {
             // only a run can show. The panic handler zeroes the outputs.
             Err(what) => defmt::panic!("invalid compiled-in configuration: {}", what),
         };
+        // The Info frame goes before the first Sample.
+        controller.set_identity(Identity {
+            version: identity::version(env!("CARGO_PKG_VERSION")),
+            git_hash: identity::git_hash(option_env!("FINRS_GIT_HASH")),
+            dac_segments: config::DAC_SEGMENT_IDS,
+            bridge_supply_v: config::BRIDGE_SUPPLY_V,
+            reset_cause: parts.reset_cause,
+        });
         defmt::info!(
             "fin driver up: {} segments at {} Hz, limit {} V",
             N,
@@ -195,6 +204,7 @@ mod app {
             Command::Stop => "Stop",
             Command::SetLimit { .. } => "SetLimit",
             Command::ClearFault => "ClearFault",
+            Command::RequestInfo => "RequestInfo",
         }
     }
 

@@ -6,8 +6,8 @@ use core::fmt;
 
 use finrs_drive::{Envelope, Generator, LimitError, Limiter, Limits, Program, WaveError};
 use finrs_frames::{
-    encode_dropped, encode_fault, encode_sample, Command, Dropped, Fault, FaultCode, Sample,
-    DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
+    encode_dropped, encode_fault, encode_info, encode_sample, Command, Dropped, Fault, FaultCode,
+    Info, ResetCause, Sample, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 use crate::config::{Config, ConfigError, ConfigRule};
@@ -152,6 +152,27 @@ pub struct Controller<const N: usize> {
     /// The previous tick's count, to find periods no tick saw.
     last_tick: Option<u64>,
     unseen_periods: u64,
+    /// What the board said of itself, for the Info frame.
+    identity: Option<Identity>,
+    /// An Info frame is due (after [`Controller::set_identity`] and on
+    /// RequestInfo), until the sink takes one.
+    info_pending: bool,
+}
+
+/// What only the board knows of itself, for the Info frame (the rest comes
+/// from the controller's configuration).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Identity {
+    /// Firmware version: major, minor, patch.
+    pub version: [u8; 3],
+    /// The first 32 bits of the git commit, 0 if unknown.
+    pub git_hash: u32,
+    /// The segments driven by DAC1 and DAC2, if any.
+    pub dac_segments: [Option<u8>; 2],
+    /// The H-bridges' supply, V.
+    pub bridge_supply_v: f32,
+    /// Why the core last reset.
+    pub reset_cause: ResetCause,
 }
 
 impl<const N: usize> Controller<N> {
@@ -187,6 +208,8 @@ impl<const N: usize> Controller<N> {
             last_t_us: 0,
             last_tick: None,
             unseen_periods: 0,
+            identity: None,
+            info_pending: false,
         })
     }
 
@@ -195,6 +218,7 @@ impl<const N: usize> Controller<N> {
     /// Returns the voltages to write now.
     pub fn tick(&mut self, input: &TickInput<N>, sink: &mut impl FrameSink) -> TickOutput<N> {
         self.last_t_us = input.t_us;
+        self.send_pending_info(sink);
         // Periods between the last tick and this one were never sampled:
         // their numbers are taken and reported as dropped, so the host sees
         // the hole and the clock stays the hardware's.
@@ -257,6 +281,8 @@ impl<const N: usize> Controller<N> {
     /// - ClearFault: clears the latch once its Fault frame has been sent
     ///   (refused before); outputs stay at 0 V until a SetWave. Without a
     ///   latched fault it does nothing.
+    /// - RequestInfo: an Info frame goes out at the next tick (once the
+    ///   board has given its [`Identity`]).
     pub fn command(&mut self, command: Command) -> Result<(), CommandRefused> {
         match command {
             Command::SetWave { program, envelope } => {
@@ -297,6 +323,7 @@ impl<const N: usize> Controller<N> {
                 }
                 self.fault = None;
             }
+            Command::RequestInfo => self.info_pending = self.identity.is_some(),
         }
         Ok(())
     }
@@ -479,6 +506,52 @@ impl<const N: usize> Controller<N> {
 
     /// Sends `s` after any pending Fault and Dropped frames, or counts it
     /// dropped; either way it consumes its sequence number.
+    /// The board's [`Identity`]: an Info frame goes out at the next tick,
+    /// before its Sample, and again on each RequestInfo.
+    pub fn set_identity(&mut self, identity: Identity) {
+        self.identity = Some(identity);
+        self.info_pending = true;
+    }
+
+    /// What the Info frame says now, once the board has given its
+    /// [`Identity`].
+    pub fn info(&self) -> Option<Info> {
+        let id = self.identity?;
+        let c = &self.config;
+        Some(Info {
+            version: id.version,
+            git_hash: id.git_hash,
+            segments: N as u8,
+            dac_segments: id.dac_segments,
+            sample_hz: c.sample_hz,
+            newtons_per_count: c.newtons_per_count,
+            amps_per_count: c.amps_per_count,
+            current_zero_counts: c.current_zero_counts,
+            max_abs_v: self.limiter.limits().max_abs_v(),
+            slew_v_per_s: self.limiter.limits().slew_v_per_s(),
+            bridge_supply_v: id.bridge_supply_v,
+            overcurrent_a: c.overcurrent_a,
+            reset_cause: id.reset_cause,
+        })
+    }
+
+    /// Sends the Info frame if one is due; if the sink refuses it, it stays
+    /// due (it holds back nothing: it carries no sequence number).
+    fn send_pending_info(&mut self, sink: &mut impl FrameSink) {
+        if !self.info_pending {
+            return;
+        }
+        let Some(info) = self.info() else { return };
+        let mut buf = [0u8; INFO_FRAME_LEN];
+        // The identity's DAC segments are the board's own: an encoding
+        // error is a bug there, and the frame is dropped, not retried.
+        let sent = match encode_info(&info, &mut buf) {
+            Ok(n) => sink.try_write(&buf[..n]),
+            Err(_) => true,
+        };
+        self.info_pending = !sent;
+    }
+
     /// Takes `count` sequence numbers for samples never taken and adds them
     /// to the pending Dropped report.
     fn skip(&mut self, count: u64) {

@@ -149,6 +149,6 @@ mod controller;
 mod output;
 
 pub use config::{Config, ConfigError, ConfigRule};
-pub use controller::{CommandRefused, Controller, FrameSink, TickInput, TickOutput};
+pub use controller::{CommandRefused, Controller, FrameSink, Identity, TickInput, TickOutput};
 pub use finrs_frames::FaultCode;
 pub use output::{DacOutput, DacWrite, HBridge, OutputError, SegmentOutput, DAC_MAX_CODE};

@@ -696,3 +696,64 @@ fn periods_no_tick_saw_are_reported_as_dropped_samples() {
     c.tick(&input(t0 + (1 << 40), 1000, IDLE), &mut ch);
     assert_eq!(c.unseen_periods(), u64::from(u32::MAX));
 }
+
+/// The Info frame: once the board gives its identity, at the next tick
+/// before the Sample, with the limit in force; a refused one waits without
+/// holding back Samples; RequestInfo sends it again.
+#[test]
+fn the_info_frame_goes_first_and_again_on_request() {
+    use finrs_controller::Identity;
+    use finrs_frames::ResetCause;
+    let (mut c, mut ch, t0) = tared();
+    c.command(Command::RequestInfo).unwrap();
+    c.tick(&input(t0, 1000, IDLE), &mut ch);
+    let kinds = |events: &[Event]| -> Vec<&'static str> {
+        events
+            .iter()
+            .map(|e| match e {
+                Event::Info(_) => "I",
+                Event::Sample(_) => "S",
+                _ => "?",
+            })
+            .collect()
+    };
+    assert_eq!(kinds(&ch.take_events()), ["S"], "no identity: no Info");
+    let id = Identity {
+        version: [0, 1, 0],
+        git_hash: 0xdead_beef,
+        dac_segments: [None, Some(1)],
+        bridge_supply_v: 5.0,
+        reset_cause: ResetCause::Watchdog,
+    };
+    c.set_identity(id);
+    // Refused once: the Sample still goes, the Info waits.
+    ch.refuse_next = 1;
+    c.tick(&input(t0 + 1, 1000, IDLE), &mut ch);
+    assert_eq!(kinds(&ch.take_events()), ["S"]);
+    c.tick(&input(t0 + 2, 1000, IDLE), &mut ch);
+    let events = ch.take_events();
+    assert_eq!(kinds(&events), ["I", "S"]);
+    let Event::Info(info) = events[0] else {
+        unreachable!()
+    };
+    assert_eq!(
+        (info.segments, info.dac_segments, info.git_hash),
+        (N as u8, [None, Some(1)], 0xdead_beef)
+    );
+    assert_eq!(
+        (info.sample_hz, info.max_abs_v, info.reset_cause),
+        (1000, 2.0, ResetCause::Watchdog)
+    );
+    c.tick(&input(t0 + 3, 1000, IDLE), &mut ch);
+    assert_eq!(kinds(&ch.take_events()), ["S"], "once");
+    c.command(Command::SetLimit { max_abs_v: 1.5 }).unwrap();
+    c.command(Command::RequestInfo).unwrap();
+    c.tick(&input(t0 + 4, 1000, IDLE), &mut ch);
+    let events = ch.take_events();
+    assert_eq!(kinds(&events), ["I", "S"]);
+    let Event::Info(again) = events[0] else {
+        unreachable!()
+    };
+    assert_eq!(again.max_abs_v, 1.5, "the limit in force");
+    assert_ne!(again.config_crc(), info.config_crc());
+}

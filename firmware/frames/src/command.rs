@@ -35,6 +35,7 @@ const KIND_TARE: u8 = 0x82;
 const KIND_STOP: u8 = 0x83;
 const KIND_SET_LIMIT: u8 = 0x84;
 const KIND_CLEAR_FAULT: u8 = 0x85;
+const KIND_REQUEST_INFO: u8 = 0x86;
 
 const PROGRAM_TRAVELLING: u8 = 1;
 const PROGRAM_STANDING: u8 = 2;
@@ -79,7 +80,7 @@ const fn command_len_ok(kind: u8, len: usize) -> bool {
                 || len == set_wave_payload_len(4)
                 || len == set_wave_payload_len(8)
         }
-        KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT => len == 0,
+        KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT | KIND_REQUEST_INFO => len == 0,
         KIND_SET_LIMIT => len == SET_LIMIT_PAYLOAD_LEN,
         _ => false,
     }
@@ -107,6 +108,8 @@ pub enum Command {
     },
     /// Clear a latched fault; outputs stay at 0 V until the next SetWave.
     ClearFault,
+    /// Send an Info frame ([`Info`](crate::Info)) again.
+    RequestInfo,
 }
 
 /// Why bytes on the down channel were not a command.
@@ -117,7 +120,7 @@ pub enum CommandError {
         /// How many.
         skipped_bytes: usize,
     },
-    /// The header's kind is not a command kind (0x81..=0x85).
+    /// The header's kind is not a command kind (0x81..=0x86).
     UnknownKind(u8),
     /// The payload length does not fit the kind (or, for a SetWave, its
     /// program kind).
@@ -147,7 +150,7 @@ impl fmt::Display for CommandError {
             Self::NoSync { skipped_bytes } => {
                 write!(f, "{skipped_bytes} bytes without a sync pair skipped")
             }
-            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x85)"),
+            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x86)"),
             Self::BadLength { kind, len } => {
                 write!(f, "length {len} does not fit command kind {kind:#04x}")
             }
@@ -193,6 +196,7 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
             Ok(w.finish())
         }
         Command::ClearFault => Ok(Writer::start(out, KIND_CLEAR_FAULT, 0)?.finish()),
+        Command::RequestInfo => Ok(Writer::start(out, KIND_REQUEST_INFO, 0)?.finish()),
     }
 }
 
@@ -374,7 +378,7 @@ impl CommandDecoder {
             return Step::NeedMore;
         }
         let (kind, len) = (b[2], b[3]);
-        if !(KIND_SET_WAVE..=KIND_CLEAR_FAULT).contains(&kind) {
+        if !(KIND_SET_WAVE..=KIND_REQUEST_INFO).contains(&kind) {
             return Step::Refuse(1, CommandError::UnknownKind(kind));
         }
         if !command_len_ok(kind, usize::from(len)) {
@@ -466,6 +470,7 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
             max_abs_v: f32_at(0),
         }),
         KIND_CLEAR_FAULT => Ok(Command::ClearFault),
+        KIND_REQUEST_INFO => Ok(Command::RequestInfo),
         _ => Err(CommandError::UnknownKind(kind)),
     }
 }

@@ -1,8 +1,10 @@
 //! The streaming decoder: bytes in, in any chunks; events out.
 
+use crate::info::parse_info;
 use crate::{
-    crc16, payload_len_ok, Dropped, Fault, FaultCode, Sample, CRC_LEN, HEADER_LEN, KIND_DROPPED,
-    KIND_FAULT, KIND_SAMPLE, MAX_FRAME_LEN, MAX_SEGMENTS, NO_SEGMENT, SAMPLE_FIXED_LEN, SYNC,
+    crc16, payload_len_ok, Dropped, Fault, FaultCode, Info, Sample, CRC_LEN, HEADER_LEN,
+    KIND_DROPPED, KIND_FAULT, KIND_INFO, KIND_SAMPLE, MAX_FRAME_LEN, MAX_SEGMENTS, NO_SEGMENT,
+    SAMPLE_FIXED_LEN, SYNC,
 };
 
 /// A decoded Sample; its segment count is known only at run time.
@@ -61,6 +63,8 @@ pub enum Event {
     Dropped(Dropped),
     /// The firmware reports a fault.
     Fault(Fault),
+    /// The firmware says what it is and how it is set up.
+    Info(Info),
     /// Sequence numbers jumped from `expected_seq` to `got_seq` without a
     /// Dropped report covering them; reported before the Sample or Dropped
     /// frame that carries `got_seq`. A `got_seq` behind `expected_seq` (in
@@ -92,6 +96,8 @@ pub struct Stats {
     pub corrupt_bytes: u64,
     /// Fault events.
     pub faults: u64,
+    /// Info events.
+    pub infos: u64,
 }
 
 /// Streaming decoder: [`push`](Self::push) bytes as they arrive, in chunks
@@ -139,6 +145,7 @@ impl Decoder {
                 gaps_unreported: 0,
                 corrupt_bytes: 0,
                 faults: 0,
+                infos: 0,
             },
         }
     }
@@ -261,6 +268,7 @@ impl Decoder {
                     .saturating_add(u64::from(d.count));
             }
             Event::Fault(_) => self.stats.faults = self.stats.faults.saturating_add(1),
+            Event::Info(_) => self.stats.infos = self.stats.infos.saturating_add(1),
             Event::Gap { .. } | Event::Corrupt { .. } => {}
         }
         out(event);
@@ -326,6 +334,7 @@ fn parse(kind: u8, p: &[u8]) -> Option<Event> {
                 _ => return None,
             },
         })),
+        KIND_INFO => parse_info(p).map(Event::Info),
         _ => None,
     }
 }

@@ -18,6 +18,9 @@ pub enum EncodeError {
     },
     /// A Fault's segment index is not below [`MAX_SEGMENTS`].
     BadSegment(u8),
+    /// An Info's segment count is not 1..=[`MAX_SEGMENTS`], or a DAC
+    /// segment not below [`MAX_SEGMENTS`].
+    BadInfo,
 }
 
 impl fmt::Display for EncodeError {
@@ -27,6 +30,10 @@ impl fmt::Display for EncodeError {
                 write!(f, "buffer too small, frame needs {needed} bytes")
             }
             Self::BadSegment(s) => write!(f, "segment index {s} not below {MAX_SEGMENTS}"),
+            Self::BadInfo => write!(
+                f,
+                "Info: segments must be 1..={MAX_SEGMENTS}, DAC segments below {MAX_SEGMENTS}"
+            ),
         }
     }
 }

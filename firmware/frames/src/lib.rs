@@ -12,7 +12,7 @@
 //! | offset    | bytes | field |
 //! |-----------|-------|-------|
 //! | 0         | 2     | sync: `0xF1 0x5E` |
-//! | 2         | 1     | kind: 1 Sample, 2 Dropped, 3 Fault |
+//! | 2         | 1     | kind: 1 Sample, 2 Dropped, 3 Fault, 4 Info |
 //! | 3         | 1     | `len`: payload length in bytes |
 //! | 4         | `len` | payload |
 //! | 4 + `len` | 2     | CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection, no final xor) over kind, `len` and payload |
@@ -28,6 +28,15 @@
 //! - **Fault**, `len` = 10: `seq` u32, `t_us` u32, `code` u8 (1 overcurrent,
 //!   2 ADC saturation, 3 missed deadline, 4 watchdog or other), `segment` u8
 //!   (0-based segment index, below 8; 0xFF if no segment is concerned).
+//! - **Info**, `len` = 44 ([`Info`]): layout version u8 (1), firmware
+//!   version u8 × 3, git hash u32 (its first eight hex digits), segments u8,
+//!   DAC1's and DAC2's segment u8 (0xFF none), `sample_hz` u32,
+//!   `newtons_per_count` f32, `amps_per_count` f32, `current_zero_counts`
+//!   u16, `max_abs_v` f32 (the limit in force), `slew_v_per_s` f32,
+//!   `bridge_supply_v` f32, `overcurrent_a` f32, reset cause u8
+//!   ([`ResetCause`]), then a CRC-16 of the configuration (segments to
+//!   `overcurrent_a`) u16. Sent before the first Sample and on request; it
+//!   takes no sequence number.
 //!
 //! # Commands (down channel)
 //!
@@ -42,6 +51,7 @@
 //! | 0x83 | Stop | 0 | |
 //! | 0x84 | SetLimit | 4 | `max_abs_v` f32 (may only lower the limit) |
 //! | 0x85 | ClearFault | 0 | |
+//! | 0x86 | RequestInfo | 0 | |
 //!
 //! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,
 //! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
@@ -102,6 +112,7 @@ mod command;
 mod crc;
 mod decode;
 mod encode;
+mod info;
 
 pub use command::{
     encode_command, Command, CommandDecoder, CommandError, CommandEvent, MAX_COMMAND_LEN,
@@ -109,6 +120,7 @@ pub use command::{
 pub use crc::crc16;
 pub use decode::{DecodedSample, Decoder, Event, Stats};
 pub use encode::{encode_dropped, encode_fault, encode_sample, EncodeError};
+pub use info::{encode_info, Info, ResetCause};
 
 /// The two bytes that start every frame.
 pub const SYNC: [u8; 2] = [0xF1, 0x5E];
@@ -138,9 +150,13 @@ pub const DROPPED_FRAME_LEN: usize = HEADER_LEN + DROPPED_PAYLOAD_LEN + CRC_LEN;
 /// Length of a whole Fault frame.
 pub const FAULT_FRAME_LEN: usize = HEADER_LEN + FAULT_PAYLOAD_LEN + CRC_LEN;
 
+/// Length of a whole Info frame.
+pub const INFO_FRAME_LEN: usize = HEADER_LEN + info::INFO_PAYLOAD_LEN + CRC_LEN;
+
 const KIND_SAMPLE: u8 = 1;
 const KIND_DROPPED: u8 = 2;
 const KIND_FAULT: u8 = 3;
+const KIND_INFO: u8 = 4;
 
 const SAMPLE_FIXED_LEN: usize = 12;
 const DROPPED_PAYLOAD_LEN: usize = 8;
@@ -162,6 +178,7 @@ const fn payload_len_ok(kind: u8, len: usize) -> bool {
         }
         KIND_DROPPED => len == DROPPED_PAYLOAD_LEN,
         KIND_FAULT => len == FAULT_PAYLOAD_LEN,
+        KIND_INFO => len == info::INFO_PAYLOAD_LEN,
         _ => false,
     }
 }

@@ -94,6 +94,7 @@ fn layout_is_as_documented() {
     assert_eq!(frame(&Command::Tare), framed(0x82, &[]));
     assert_eq!(frame(&Command::Stop), framed(0x83, &[]));
     assert_eq!(frame(&Command::ClearFault), framed(0x85, &[]));
+    assert_eq!(frame(&Command::RequestInfo), framed(0x86, &[]));
     assert_eq!(
         frame(&Command::SetLimit { max_abs_v: 1.25 }),
         framed(0x84, &1.25f32.to_le_bytes())
@@ -216,8 +217,8 @@ fn refusals_name_their_reason() {
     );
     assert!(events.iter().all(|e| matches!(e, CommandEvent::Refused(_))));
 
-    assert_eq!(f(0x86, &[]), {
-        let mut v = r(CommandError::UnknownKind(0x86));
+    assert_eq!(f(0x87, &[]), {
+        let mut v = r(CommandError::UnknownKind(0x87));
         v.push(CommandEvent::Refused(CommandError::NoSync {
             skipped_bytes: 5,
         }));
@@ -371,6 +372,7 @@ fn any_command() -> BoxedStrategy<Command> {
         1 => Just(Command::Stop),
         1 => any_f32().prop_map(|max_abs_v| Command::SetLimit { max_abs_v }),
         1 => Just(Command::ClearFault),
+        1 => Just(Command::RequestInfo),
     ]
     .boxed()
 }
@@ -442,6 +444,7 @@ fn bits(c: &Command) -> Vec<u32> {
         Command::Stop => vec![11],
         Command::SetLimit { max_abs_v } => vec![12, max_abs_v.to_bits()],
         Command::ClearFault => vec![13],
+        Command::RequestInfo => vec![14],
     }
 }
 

@@ -292,3 +292,102 @@ fn decoder_refuses_invalid_content_despite_good_crc() {
         })]
     );
 }
+
+fn info() -> finrs_frames::Info {
+    finrs_frames::Info {
+        version: [0, 1, 2],
+        git_hash: 0x1a2b_3c4d,
+        segments: 3,
+        dac_segments: [Some(2), None],
+        sample_hz: 1000,
+        newtons_per_count: 2.5e-5,
+        amps_per_count: 2.5e-4,
+        current_zero_counts: 2048,
+        max_abs_v: 3.64,
+        slew_v_per_s: 200.0,
+        bridge_supply_v: 5.0,
+        overcurrent_a: 0.4,
+        reset_cause: finrs_frames::ResetCause::Watchdog,
+    }
+}
+
+#[test]
+fn info_layout_is_as_documented_and_round_trips() {
+    use finrs_frames::{encode_info, Decoder, Event, INFO_FRAME_LEN};
+    let i = info();
+    let mut buf = [0u8; INFO_FRAME_LEN];
+    assert_eq!(encode_info(&i, &mut buf), Ok(4 + 44 + 2));
+    assert_eq!(&buf[..4], &[0xF1, 0x5E, 4, 44]);
+    let p = &buf[4..48];
+    assert_eq!(p[0], 1, "layout version");
+    assert_eq!(&p[1..4], &[0, 1, 2]);
+    assert_eq!(&p[4..8], &0x1a2b_3c4du32.to_le_bytes());
+    assert_eq!(&p[8..11], &[3, 2, 0xFF]);
+    assert_eq!(&p[11..15], &1000u32.to_le_bytes());
+    assert_eq!(&p[15..19], &2.5e-5f32.to_le_bytes());
+    assert_eq!(&p[23..25], &2048u16.to_le_bytes());
+    assert_eq!(&p[25..29], &3.64f32.to_le_bytes());
+    assert_eq!(&p[37..41], &0.4f32.to_le_bytes());
+    assert_eq!(p[41], 5, "watchdog");
+    assert_eq!(&p[42..44], &crc16(&p[8..41]).to_le_bytes());
+    assert_eq!(i.config_crc(), Some(crc16(&p[8..41])));
+    assert_eq!(&buf[48..], &crc16(&buf[2..48]).to_le_bytes());
+    let mut d = Decoder::new();
+    let mut got = Vec::new();
+    d.push(&buf, &mut |e| got.push(e));
+    assert_eq!(got, [Event::Info(i)]);
+    assert_eq!(d.stats().infos, 1);
+    // The reset cause is not configuration: another cause, same CRC.
+    let other = finrs_frames::Info {
+        reset_cause: finrs_frames::ResetCause::PowerOn,
+        ..i
+    };
+    assert_eq!(other.config_crc(), i.config_crc());
+    let lower = finrs_frames::Info {
+        max_abs_v: 1.5,
+        ..i
+    };
+    assert_ne!(lower.config_crc(), i.config_crc());
+}
+
+#[test]
+fn a_bad_info_is_refused_by_the_encoder_and_the_decoder() {
+    use finrs_frames::{encode_info, Decoder, Event, INFO_FRAME_LEN};
+    let mut buf = [0u8; INFO_FRAME_LEN];
+    for bad in [
+        finrs_frames::Info {
+            segments: 0,
+            ..info()
+        },
+        finrs_frames::Info {
+            segments: 9,
+            ..info()
+        },
+        finrs_frames::Info {
+            dac_segments: [Some(8), None],
+            ..info()
+        },
+    ] {
+        assert_eq!(encode_info(&bad, &mut buf), Err(EncodeError::BadInfo));
+    }
+    // A config CRC that does not match, an unknown reset cause, another
+    // layout version: each a frame whose CRC checks but whose content is
+    // refused as corrupt.
+    for (at, value) in [(4 + 42, 0u8), (4 + 41, 99), (4, 2)] {
+        encode_info(&info(), &mut buf).unwrap();
+        buf[at] = value;
+        let crc = crc16(&buf[2..48]);
+        buf[48..].copy_from_slice(&crc.to_le_bytes());
+        let mut events = Vec::new();
+        let mut d = Decoder::new();
+        d.push(&buf, &mut |e| events.push(e));
+        d.finish(&mut |e| events.push(e));
+        assert_eq!(
+            events,
+            [Event::Corrupt {
+                skipped_bytes: INFO_FRAME_LEN
+            }],
+            "byte {at} = {value}"
+        );
+    }
+}

@@ -22,6 +22,18 @@ pub const DAC_SEGMENTS: [Option<usize>; 2] = match option_env!("FINRS_DAC_SEGMEN
     Some(text) => dac_segments(text.as_bytes()),
 };
 
+/// [`DAC_SEGMENTS`] as the Info frame carries them.
+pub const DAC_SEGMENT_IDS: [Option<u8>; 2] = [
+    match DAC_SEGMENTS[0] {
+        Some(s) => Some(s as u8),
+        None => None,
+    },
+    match DAC_SEGMENTS[1] {
+        Some(s) => Some(s as u8),
+        None => None,
+    },
+];
+
 /// `FINRS_SEGMENTS`'s value (a build-time check: panics stop the build).
 const fn segment_count(text: &[u8]) -> usize {
     match text {

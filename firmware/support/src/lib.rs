@@ -6,6 +6,8 @@
 //! - [`config`]: the segment count and DAC segments chosen at build time
 //!   (`FINRS_SEGMENTS`, `FINRS_DAC_SEGMENTS`), the sample rate, limits and
 //!   sensor scales both boards run with.
+//! - [`identity`]: the firmware's version and git commit for its Info
+//!   frame.
 //! - [`pins`]: the analogue inputs' pins, ADCs and channels, checked
 //!   against the datasheet.
 //! - [`reset`]: why the core last reset, from RCC_CSR's flags.
@@ -16,6 +18,7 @@
 #![deny(unsafe_code, missing_docs)]
 
 pub mod config;
+pub mod identity;
 pub mod pins;
 pub mod reset;
 pub mod sim;

@@ -5,33 +5,14 @@
 //! once at boot and clears them.
 //!
 //! ```
-//! use finrs_firmware_support::reset::ResetCause;
+//! use finrs_firmware_support::reset::{from_rcc_csr, ResetCause};
 //!
 //! // A watchdog reset also pulls NRST low, so PINRSTF comes with it.
 //! let csr = (1 << 29) | (1 << 26);
-//! assert_eq!(ResetCause::from_rcc_csr(csr), ResetCause::IndependentWatchdog);
+//! assert_eq!(from_rcc_csr(csr), ResetCause::Watchdog);
 //! ```
 
-/// The cause of the last reset.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ResetCause {
-    /// Power-on or power-down (PORRSTF; BORRSTF comes with it).
-    PowerOn,
-    /// Brown-out: the supply fell below the BOR threshold (BORRSTF alone).
-    BrownOut,
-    /// The NRST pin alone: the reset button or a debug probe's reset line.
-    Pin,
-    /// Software (SYSRESETREQ: a probe's or the firmware's own reset).
-    Software,
-    /// The independent watchdog: the firmware hung.
-    IndependentWatchdog,
-    /// The window watchdog (this firmware does not use it).
-    WindowWatchdog,
-    /// An illegal entry into Stop or Standby (low-power management reset).
-    LowPower,
-    /// No flag set (flags cleared and no reset since, or an emulator).
-    Unknown,
-}
+pub use finrs_frames::ResetCause;
 
 const LPWRRSTF: u32 = 1 << 31;
 const WWDGRSTF: u32 = 1 << 30;
@@ -41,52 +22,27 @@ const PORRSTF: u32 = 1 << 27;
 const PINRSTF: u32 = 1 << 26;
 const BORRSTF: u32 = 1 << 25;
 
-impl ResetCause {
-    /// The cause from RCC_CSR's value. Every internal reset also drives
-    /// NRST low, setting PINRSTF, and a power-on sets BORRSTF too: so the
-    /// internal causes are read first, then power-on, brown-out, and the
-    /// pin only when it is the one flag.
-    pub const fn from_rcc_csr(csr: u32) -> Self {
-        if csr & LPWRRSTF != 0 {
-            Self::LowPower
-        } else if csr & WWDGRSTF != 0 {
-            Self::WindowWatchdog
-        } else if csr & IWDGRSTF != 0 {
-            Self::IndependentWatchdog
-        } else if csr & SFTRSTF != 0 {
-            Self::Software
-        } else if csr & PORRSTF != 0 {
-            Self::PowerOn
-        } else if csr & BORRSTF != 0 {
-            Self::BrownOut
-        } else if csr & PINRSTF != 0 {
-            Self::Pin
-        } else {
-            Self::Unknown
-        }
-    }
-
-    /// The cause in words, for the log.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::PowerOn => "power-on",
-            Self::BrownOut => "brown-out",
-            Self::Pin => "reset pin",
-            Self::Software => "software",
-            Self::IndependentWatchdog => "watchdog",
-            Self::WindowWatchdog => "window watchdog",
-            Self::LowPower => "low-power management",
-            Self::Unknown => "unknown",
-        }
-    }
-
-    /// Whether the firmware itself failed (a watchdog or low-power reset):
-    /// worth a warning, as the last run ended in a hang or a fault.
-    pub const fn is_failure(self) -> bool {
-        matches!(
-            self,
-            Self::IndependentWatchdog | Self::WindowWatchdog | Self::LowPower
-        )
+/// The cause from RCC_CSR's value. Every internal reset also drives NRST
+/// low, setting PINRSTF, and a power-on sets BORRSTF too: so the internal
+/// causes are read first, then power-on, brown-out, and the pin only when
+/// it is the one flag.
+pub const fn from_rcc_csr(csr: u32) -> ResetCause {
+    if csr & LPWRRSTF != 0 {
+        ResetCause::LowPower
+    } else if csr & WWDGRSTF != 0 {
+        ResetCause::WindowWatchdog
+    } else if csr & IWDGRSTF != 0 {
+        ResetCause::Watchdog
+    } else if csr & SFTRSTF != 0 {
+        ResetCause::Software
+    } else if csr & PORRSTF != 0 {
+        ResetCause::PowerOn
+    } else if csr & BORRSTF != 0 {
+        ResetCause::BrownOut
+    } else if csr & PINRSTF != 0 {
+        ResetCause::Pin
+    } else {
+        ResetCause::Unknown
     }
 }
 
@@ -101,23 +57,20 @@ mod tests {
             (BORRSTF | PINRSTF, ResetCause::BrownOut),
             (PINRSTF, ResetCause::Pin),
             (SFTRSTF | PINRSTF, ResetCause::Software),
-            (IWDGRSTF | PINRSTF, ResetCause::IndependentWatchdog),
+            (IWDGRSTF | PINRSTF, ResetCause::Watchdog),
             (WWDGRSTF | PINRSTF, ResetCause::WindowWatchdog),
             (LPWRRSTF | PINRSTF, ResetCause::LowPower),
             (0, ResetCause::Unknown),
             // Flags not cleared since a power-on: the latest internal reset
             // still shows.
-            (
-                PORRSTF | BORRSTF | PINRSTF | IWDGRSTF,
-                ResetCause::IndependentWatchdog,
-            ),
+            (PORRSTF | BORRSTF | PINRSTF | IWDGRSTF, ResetCause::Watchdog),
             // Other bits of the register (LSION, LSIRDY, RMVF) are ignored.
             (PINRSTF | 0b11 | (1 << 24), ResetCause::Pin),
         ];
         for (csr, cause) in cases {
-            assert_eq!(ResetCause::from_rcc_csr(csr), cause, "{csr:#010x}");
+            assert_eq!(from_rcc_csr(csr), cause, "{csr:#010x}");
         }
-        assert!(ResetCause::IndependentWatchdog.is_failure());
+        assert!(ResetCause::Watchdog.is_failure());
         assert!(!ResetCause::PowerOn.is_failure() && !ResetCause::Pin.is_failure());
     }
 }

@@ -305,13 +305,58 @@ fn check_run<const N: usize, const S: usize>() {
 
     let mut samples = Vec::new();
     let mut faults = Vec::new();
-    for e in events {
-        match e {
+    let mut infos = Vec::new();
+    for e in &events {
+        match *e {
             Event::Sample(s) => samples.push(s),
             Event::Fault(f) => faults.push(f),
+            Event::Info(i) => infos.push(i),
             other => panic!("unexpected event {other:?}"),
         }
     }
+    // The Info frame, first in the stream: this build's set-up.
+    assert!(matches!(events[0], Event::Info(_)), "{:?}", events[0]);
+    assert_eq!(infos.len(), 1, "{infos:?}");
+    let info = infos[0];
+    let cfg = config::controller_config().unwrap();
+    assert_eq!(
+        (info.segments, info.dac_segments, info.sample_hz),
+        (N as u8, [None, None], config::SAMPLE_HZ)
+    );
+    assert_eq!(
+        (
+            info.newtons_per_count,
+            info.amps_per_count,
+            info.overcurrent_a
+        ),
+        (cfg.newtons_per_count, cfg.amps_per_count, cfg.overcurrent_a)
+    );
+    // The limit in force at the first tick: the power-up one, or the
+    // commanded one if the command task read the down channel first (it
+    // does for N = 3, whose shorter set-up leaves it time; not for N = 8).
+    assert!(
+        [config::POWER_UP_LIMIT_V, COMMANDED_LIMIT_V].contains(&info.max_abs_v),
+        "{}",
+        info.max_abs_v
+    );
+    assert_eq!(
+        info.reset_cause,
+        finrs_frames::ResetCause::Unknown,
+        "QEMU has no reset flags"
+    );
+    assert_eq!(info.version, [0, 1, 0]);
+    // The commit it was built from, where git can tell (the build script's
+    // `git rev-parse HEAD`).
+    let head = Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok());
+    if let Some(head) = head {
+        assert_eq!(format!("{:08x}", info.git_hash), head[..8], "git hash");
+    }
+    eprintln!("Info: {info:?}");
     // The injected overcurrent, and nothing before it. The faulting tick
     // sends the Fault frame instead of a Sample and consumes no number.
     assert_eq!(faults.len(), 1, "exactly one fault: {faults:?}");

@@ -34,4 +34,6 @@ pub struct Parts {
     pub commands: CommandIn,
     /// State of the low-priority chores.
     pub housekeeping: Housekeeping,
+    /// Why the core last reset (the board's flags; unknown in QEMU).
+    pub reset_cause: finrs_frames::ResetCause,
 }

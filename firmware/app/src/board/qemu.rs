@@ -189,6 +189,8 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
             fd,
             batch: [0; 1024],
         },
+        // QEMU's netduinoplus2 has no reset flags to read.
+        reset_cause: finrs_frames::ResetCause::Unknown,
     }
 }
 

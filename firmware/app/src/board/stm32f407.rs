@@ -62,7 +62,7 @@ use crate::config::{
     BRIDGE_SUPPLY_V, DAC_GAIN, DAC_SEGMENTS, DAC_VREF_V, DAC_ZERO_CODE, N, SAMPLE_HZ,
 };
 use crate::{Mono, SYSCLK_HZ};
-use finrs_firmware_support::reset::ResetCause;
+use finrs_firmware_support::reset;
 
 /// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
 /// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
@@ -303,7 +303,7 @@ fn dac_channel<D: DacPin + DacOut<u16>>(mut d: D) -> D {
 pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     let (frames, commands) = init_rtt();
     // The reset flags, read and cleared before anything else touches RCC.
-    let cause = ResetCause::from_rcc_csr(dp.RCC.csr().read().bits());
+    let cause = reset::from_rcc_csr(dp.RCC.csr().read().bits());
     dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
     if cause.is_failure() {
         defmt::warn!(
@@ -482,6 +482,7 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
         frames,
         commands,
         housekeeping: Housekeeping,
+        reset_cause: cause,
     }
 }
 

@@ -4,7 +4,7 @@
 //! decoded or as corrupt), so that no sample is invented or lost unseen.
 #![no_main]
 
-use finrs_frames::{frame_len, Decoder, Event, DROPPED_FRAME_LEN, FAULT_FRAME_LEN};
+use finrs_frames::{frame_len, Decoder, Event, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN};
 use libfuzzer_sys::fuzz_target;
 
 fn decode(chunks: &[&[u8]]) -> Vec<Event> {
@@ -29,6 +29,7 @@ fuzz_target!(|data: &[u8]| {
             Event::Sample(s) => frame_len(s.voltages().len()),
             Event::Dropped(_) => DROPPED_FRAME_LEN,
             Event::Fault(_) => FAULT_FRAME_LEN,
+            Event::Info(_) => INFO_FRAME_LEN,
             Event::Gap { .. } => 0,
             Event::Corrupt { skipped_bytes } => *skipped_bytes,
         })

@@ -65,6 +65,7 @@ pub fn frame_bytes(k: &Key) -> usize {
         Key::Sample { n, .. } => frame_len(*n),
         Key::Dropped(_) => DROPPED_FRAME_LEN,
         Key::Fault(_) => FAULT_FRAME_LEN,
+        Key::Info(_) => finrs_frames::INFO_FRAME_LEN,
         Key::Gap { .. } | Key::Corrupt { .. } => 0,
     }
 }
@@ -94,6 +95,8 @@ pub enum Key {
     },
     Dropped(Dropped),
     Fault(Fault),
+    /// The Info frame's bytes, as encoded.
+    Info([u8; finrs_frames::INFO_FRAME_LEN]),
     Gap {
         expected_seq: u32,
         got_seq: u32,
@@ -115,6 +118,11 @@ pub fn key(e: &Event) -> Key {
         },
         Event::Dropped(d) => Key::Dropped(d),
         Event::Fault(f) => Key::Fault(f),
+        Event::Info(i) => {
+            let mut frame = [0u8; finrs_frames::INFO_FRAME_LEN];
+            finrs_frames::encode_info(&i, &mut frame).unwrap();
+            Key::Info(frame)
+        }
         Event::Gap {
             expected_seq,
             got_seq,
@@ -167,6 +175,7 @@ pub fn stats_of(keys: &[Key]) -> Stats {
             Key::Sample { .. } => s.samples += 1,
             Key::Dropped(d) => s.dropped_reported += u64::from(d.count),
             Key::Fault(_) => s.faults += 1,
+            Key::Info(_) => s.infos += 1,
             Key::Gap {
                 expected_seq,
                 got_seq,

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode};
+use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode, Info};
 
 use super::clock::{Clock, ClockError};
 use super::refusal::Refusal;
@@ -111,6 +111,9 @@ pub struct Recorder {
     restart: Option<Restart>,
     stopped_early: Option<String>,
     summary: Summary,
+    /// The firmware's first Info frame, and any later one whose
+    /// configuration differs from it.
+    infos: Vec<Info>,
 }
 
 impl Recorder {
@@ -131,6 +134,7 @@ impl Recorder {
             restart: None,
             stopped_early: None,
             summary: Summary::default(),
+            infos: Vec::new(),
         }
     }
 
@@ -196,7 +200,22 @@ impl Recorder {
                 self.summary.corrupt_runs += 1;
                 self.summary.corrupt_bytes += skipped_bytes as u64;
             }
+            Event::Info(info) => {
+                let seen = self
+                    .infos
+                    .iter()
+                    .any(|i| i.config_crc() == info.config_crc() && i.version == info.version);
+                if !seen {
+                    self.infos.push(info);
+                }
+            }
         }
+    }
+
+    /// The firmware's Info frames: the first, then any whose configuration
+    /// or version differs.
+    pub fn infos(&self) -> &[Info] {
+        &self.infos
     }
 
     fn gap(&mut self, gap: Gap) {
@@ -320,6 +339,15 @@ impl Recorder {
             "recorded by finrs from {}: {} samples",
             self.setup.source, s.rows
         );
+        match self.infos.split_first() {
+            None => out.push_str("; no Info frame from the firmware"),
+            Some((first, later)) => {
+                let _ = write!(out, "; {}", describe(first));
+                for i in later {
+                    let _ = write!(out, "; then {}", describe(i));
+                }
+            }
+        }
         if self.gaps.is_empty() {
             out.push_str("; no gaps");
         } else {
@@ -428,4 +456,38 @@ impl Recorder {
         rec.validate(name)?;
         Ok(rec)
     }
+}
+
+/// An Info frame in words, for the notes.
+fn describe(i: &Info) -> String {
+    let [major, minor, patch] = i.version;
+    let dac: Vec<String> = i
+        .dac_segments
+        .iter()
+        .flatten()
+        .map(|s| (s + 1).to_string())
+        .collect();
+    format!(
+        "firmware {major}.{minor}.{patch} (git {:08x}), {} segments ({}), {} Hz, \
+         limit {} V, slew {} V/s, bridge supply {} V, overcurrent {} A, \
+         load cell {:e} N/count, shunts {:e} A/count from {} counts, \
+         reset cause {}, configuration CRC {:04x}",
+        i.git_hash,
+        i.segments,
+        if dac.is_empty() {
+            "all H-bridges".to_string()
+        } else {
+            format!("DAC on segment {}", dac.join(" and "))
+        },
+        i.sample_hz,
+        i.max_abs_v,
+        i.slew_v_per_s,
+        i.bridge_supply_v,
+        i.overcurrent_a,
+        i.newtons_per_count,
+        i.amps_per_count,
+        i.current_zero_counts,
+        i.reset_cause.name(),
+        i.config_crc().unwrap_or(0),
+    )
 }

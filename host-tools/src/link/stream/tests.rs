@@ -99,7 +99,9 @@ fn a_clean_stream_becomes_a_blocked_recording_with_every_value() {
     assert!(r.gaps().is_empty());
     let notes = rec.meta.notes.unwrap();
     assert!(
-        notes.contains("10 samples; no gaps; no faults; no corrupt bytes"),
+        notes.contains(
+            "10 samples; no Info frame from the firmware; no gaps; no faults; no corrupt bytes"
+        ),
         "{notes}"
     );
 }
@@ -518,4 +520,50 @@ proptest! {
             prop_assert_eq!(s.corrupt_bytes, 0);
         }
     }
+}
+
+fn info_bytes(max_abs_v: f32) -> Vec<u8> {
+    let info = finrs_frames::Info {
+        version: [0, 1, 0],
+        git_hash: 0xdead_beef,
+        segments: 3,
+        dac_segments: [None, Some(2)],
+        sample_hz: 1000,
+        newtons_per_count: 2.5e-5,
+        amps_per_count: 2.5e-4,
+        current_zero_counts: 2048,
+        max_abs_v,
+        slew_v_per_s: 200.0,
+        bridge_supply_v: 5.0,
+        overcurrent_a: 0.4,
+        reset_cause: finrs_frames::ResetCause::Watchdog,
+    };
+    let mut buf = [0u8; finrs_frames::INFO_FRAME_LEN];
+    let n = finrs_frames::encode_info(&info, &mut buf).unwrap();
+    buf[..n].to_vec()
+}
+
+#[test]
+fn the_firmwares_info_goes_into_the_notes_once_per_configuration() {
+    let mut bytes = info_bytes(4.0);
+    bytes.extend(stream(0..5));
+    // Sent again on request: the same set-up is not repeated.
+    bytes.extend(info_bytes(4.0));
+    bytes.extend(stream(5..8));
+    // The limit lowered mid-recording: a new configuration, noted.
+    bytes.extend(info_bytes(1.5));
+    bytes.extend(stream(8..10));
+    let r = record(&bytes);
+    assert_eq!(r.infos().len(), 2);
+    let rec = r.recording("info.csv").unwrap();
+    assert_eq!(rec.t_s.len(), 10, "an Info takes no row");
+    assert!(r.gaps().is_empty(), "nor a sequence number");
+    let notes = rec.meta.notes.unwrap();
+    assert!(
+        notes.contains(
+            "10 samples; firmware 0.1.0 (git deadbeef), 3 segments (DAC on segment 3), 1000 Hz, limit 4 V, slew 200 V/s, bridge supply 5 V, overcurrent 0.4 A, load cell 2.5e-5 N/count, shunts 2.5e-4 A/count from 2048 counts, reset cause watchdog, configuration CRC "
+        ),
+        "{notes}"
+    );
+    assert!(notes.contains("; then firmware 0.1.0 (git deadbeef), 3 segments (DAC on segment 3), 1000 Hz, limit 1.5 V"), "{notes}");
 }
