@@ -770,6 +770,7 @@ fn byte_dump(seed: u64, frames: usize, damage: Damage) -> Vec<u8> {
                     seq,
                     t_us,
                     force_n: f(&mut rng),
+                    flags: finrs_frames::SampleFlags::default(),
                     voltages_v: [f(&mut rng)],
                     currents_a: [f(&mut rng)],
                 };
@@ -780,6 +781,7 @@ fn byte_dump(seed: u64, frames: usize, damage: Damage) -> Vec<u8> {
                     seq,
                     t_us,
                     force_n: f(&mut rng),
+                    flags: finrs_frames::SampleFlags::default(),
                     voltages_v: [f(&mut rng), f(&mut rng), f(&mut rng)],
                     currents_a: [f(&mut rng), f(&mut rng), f(&mut rng)],
                 };

@@ -126,6 +126,7 @@ fn log_from_bytes_records_a_dump_and_reports_its_gaps() {
             seq,
             t_us: 500 * seq,
             force_n: 0.002 * seq as f32,
+            flags: finrs_frames::SampleFlags::default(),
             voltages_v: [1.5, -1.5],
             currents_a: [0.01, -0.01],
         };
@@ -316,6 +317,7 @@ fn log_from_bytes_reads_the_standard_input() {
             seq,
             t_us: 1000 * seq,
             force_n: 0.0,
+            flags: finrs_frames::SampleFlags::default(),
             voltages_v: [0.0; 3],
             currents_a: [0.0; 3],
         };

@@ -7,7 +7,8 @@ use core::fmt;
 use finrs_drive::{Envelope, Generator, LimitError, Limiter, Limits, Program, WaveError};
 use finrs_frames::{
     encode_dropped, encode_fault, encode_info, encode_sample, Command, Dropped, Fault, FaultCode,
-    Info, ResetCause, Sample, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
+    Info, ResetCause, Sample, SampleFlags, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN,
+    MAX_FRAME_LEN,
 };
 
 use crate::config::{Config, ConfigError, ConfigRule};
@@ -250,13 +251,14 @@ impl<const N: usize> Controller<N> {
                 };
             }
         }
-        let voltages_v = self.next_voltages(input.tick);
+        let (voltages_v, limiter_flags) = self.next_voltages(input.tick);
         let force_n = (f32::from(counts) - self.tare_offset_counts) * self.config.newtons_per_count;
         self.send_sample(
             &Sample {
                 seq: self.next_seq,
                 t_us: input.t_us,
                 force_n,
+                flags: SampleFlags(limiter_flags | self.state_flags()),
                 voltages_v,
                 currents_a,
             },
@@ -461,9 +463,11 @@ impl<const N: usize> Controller<N> {
         });
     }
 
-    fn next_voltages(&mut self, tick: u64) -> [f32; N] {
+    /// The tick's voltages, and the limiter's part in them
+    /// ([`SampleFlags::LIMITED`], [`SampleFlags::SLEWED`]).
+    fn next_voltages(&mut self, tick: u64) -> ([f32; N], u8) {
         if self.fault.is_some() {
-            return self.limiter.stop();
+            return (self.limiter.stop(), 0);
         }
         let wanted = match &mut self.mode {
             Mode::PowerUpTare { .. } | Mode::Stopped => [0.0; N],
@@ -474,7 +478,40 @@ impl<const N: usize> Controller<N> {
                     .voltages_at_tick_v(tick.saturating_sub(start), self.config.sample_hz)
             }
         };
-        self.limiter.apply(wanted, self.dt_s)
+        let out = self.limiter.apply(wanted, self.dt_s);
+        let max = self.limiter.limits().max_abs_v();
+        let mut flags = 0;
+        for (&w, &o) in wanted.iter().zip(&out) {
+            // What the limit alone would give: anything else is the slew.
+            let clamped = if w > max {
+                flags |= SampleFlags::LIMITED;
+                max
+            } else if w < -max {
+                flags |= SampleFlags::LIMITED;
+                -max
+            } else {
+                w
+            };
+            if o != clamped {
+                flags |= SampleFlags::SLEWED;
+            }
+        }
+        (out, flags)
+    }
+
+    /// The state bits of a Sample frame, beside the limiter's.
+    fn state_flags(&self) -> u8 {
+        let mut flags = 0;
+        if self.tare.is_some() {
+            flags |= SampleFlags::TARING;
+        }
+        if self.fault.is_some() {
+            flags |= SampleFlags::FAULT;
+        }
+        if self.running() {
+            flags |= SampleFlags::RUNNING;
+        }
+        flags
     }
 
     /// Sends the pending Fault frame; true if none is pending afterwards.

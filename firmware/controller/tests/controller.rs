@@ -757,3 +757,57 @@ fn the_info_frame_goes_first_and_again_on_request() {
     assert_eq!(again.max_abs_v, 1.5, "the limit in force");
     assert_ne!(again.config_crc(), info.config_crc());
 }
+
+/// Every Sample says what the firmware was doing: taring, running, the
+/// limiter clamping or slewing, a fault latched.
+#[test]
+fn sample_flags_tell_taring_running_limiting_slewing_and_faults() {
+    use finrs_frames::SampleFlags as F;
+    let flags = |ch: &mut Channel| -> Vec<u8> {
+        samples(&ch.take_events())
+            .iter()
+            .map(|s| s.flags.0)
+            .collect()
+    };
+    let mut c = Controller::<N>::new(config()).unwrap();
+    let mut ch = Channel::default();
+    for tick in 0..10 {
+        c.tick(&input(tick, 1000, IDLE), &mut ch);
+    }
+    let power_up = flags(&mut ch);
+    assert!(
+        power_up[..9].iter().all(|&f| f == F::TARING),
+        "{power_up:?}"
+    );
+    assert_eq!(power_up[9], 0, "tared, stopped");
+    // A step to 1.5 V at 100 V/s (0.1 V a tick): slewed for 15 ticks, then
+    // held; running throughout.
+    c.command(steps(1.5)).unwrap();
+    for t in 10..30 {
+        c.tick(&input(t, 1000, IDLE), &mut ch);
+    }
+    let step = flags(&mut ch);
+    let slewed = step
+        .iter()
+        .filter(|&&f| f == F::RUNNING | F::SLEWED)
+        .count();
+    assert!((14..=15).contains(&slewed), "{step:?}");
+    assert_eq!(*step.last().unwrap(), F::RUNNING);
+    // The limit lowered under the running wave: clamped from then on.
+    c.command(Command::SetLimit { max_abs_v: 1.0 }).unwrap();
+    c.tick(&input(30, 1000, IDLE), &mut ch);
+    assert_eq!(flags(&mut ch), [F::RUNNING | F::LIMITED]);
+    // A Tare while running.
+    c.command(Command::Tare).unwrap();
+    c.tick(&input(31, 1000, IDLE), &mut ch);
+    assert_eq!(flags(&mut ch), [F::RUNNING | F::LIMITED | F::TARING]);
+    // A fault latched: the faulting tick sends the Fault frame, the next
+    // Samples say so.
+    c.fault(FaultCode::Other, None, &mut ch);
+    c.tick(&input(32, 1000, IDLE), &mut ch);
+    let f = flags(&mut ch);
+    assert!(
+        f.iter().all(|&x| x & F::FAULT != 0 && x & F::RUNNING == 0),
+        "{f:?}"
+    );
+}

@@ -2,9 +2,9 @@
 
 use crate::info::parse_info;
 use crate::{
-    crc16, payload_len_ok, Dropped, Fault, FaultCode, Info, Sample, CRC_LEN, HEADER_LEN,
-    KIND_DROPPED, KIND_FAULT, KIND_INFO, KIND_SAMPLE, MAX_FRAME_LEN, MAX_SEGMENTS, NO_SEGMENT,
-    SAMPLE_FIXED_LEN, SYNC,
+    crc16, payload_len_ok, Dropped, Fault, FaultCode, Info, Sample, SampleFlags, CRC_LEN,
+    HEADER_LEN, KIND_DROPPED, KIND_FAULT, KIND_INFO, KIND_SAMPLE, MAX_FRAME_LEN, MAX_SEGMENTS,
+    NO_SEGMENT, SAMPLE_FIXED_LEN, SYNC,
 };
 
 /// A decoded Sample; its segment count is known only at run time.
@@ -16,6 +16,8 @@ pub struct DecodedSample {
     pub t_us: u32,
     /// Blocking force on the load cell, N.
     pub force_n: f32,
+    /// What the firmware was doing.
+    pub flags: SampleFlags,
     /// Segment count, 1..=8.
     pub n: usize,
     /// Segment voltages as commanded, V; entries from `n` on are zero.
@@ -44,6 +46,7 @@ impl<const N: usize> From<&Sample<N>> for DecodedSample {
             seq: s.seq,
             t_us: s.t_us,
             force_n: s.force_n,
+            flags: s.flags,
             n: N,
             voltages_v: [0.0; MAX_SEGMENTS],
             currents_a: [0.0; MAX_SEGMENTS],
@@ -310,6 +313,7 @@ fn parse(kind: u8, p: &[u8]) -> Option<Event> {
                 seq: u32_at(0),
                 t_us: u32_at(4),
                 force_n: f32_at(8),
+                flags: SampleFlags(p[12]),
                 n,
                 voltages_v: [0.0; MAX_SEGMENTS],
                 currents_a: [0.0; MAX_SEGMENTS],

@@ -48,6 +48,7 @@ pub fn encode_sample<const N: usize>(s: &Sample<N>, out: &mut [u8]) -> Result<us
     w.put(&s.seq.to_le_bytes());
     w.put(&s.t_us.to_le_bytes());
     w.put(&s.force_n.to_le_bytes());
+    w.put(&[s.flags.0]);
     for v in s.voltages_v.iter().chain(&s.currents_a) {
         w.put(&v.to_le_bytes());
     }

@@ -19,9 +19,11 @@
 //!
 //! Payloads:
 //!
-//! - **Sample**, `len` = 12 + 8 N for N = 1..=8 segments ([`frame_len`]):
+//! - **Sample**, `len` = 13 + 8 N for N = 1..=8 segments ([`frame_len`]):
 //!   `seq` u32, `t_us` u32 (µs since start), `force_n` f32 (blocking force,
-//!   N), then N segment voltages f32 (V, as commanded), then N segment
+//!   N), `flags` u8 ([`SampleFlags`]: the limiter clamped or slewed a
+//!   voltage, a tare is under way, a fault is latched, a program runs),
+//!   then N segment voltages f32 (V, as commanded), then N segment
 //!   currents f32 (A).
 //! - **Dropped**, `len` = 8: `first_seq` u32, `count` u32. The firmware
 //!   could not send the Samples numbered `first_seq .. first_seq + count`.
@@ -82,12 +84,13 @@
 //! on how the stream was split into chunks.
 //!
 //! ```
-//! use finrs_frames::{encode_sample, Decoder, Event, Sample, MAX_FRAME_LEN};
+//! use finrs_frames::{encode_sample, Decoder, Event, Sample, SampleFlags, MAX_FRAME_LEN};
 //!
 //! let s = Sample::<3> {
 //!     seq: 7,
 //!     t_us: 7_000,
 //!     force_n: 0.029,
+//!     flags: SampleFlags(SampleFlags::RUNNING),
 //!     voltages_v: [2.0, 1.0, -2.0],
 //!     currents_a: [0.019, 0.010, -0.019],
 //! };
@@ -103,6 +106,7 @@
 //! });
 //! let d = got.unwrap();
 //! assert_eq!((d.seq, d.n, d.voltages()), (7, 3, &[2.0, 1.0, -2.0][..]));
+//! assert!(d.flags.has(SampleFlags::RUNNING));
 //! assert_eq!(decoder.stats().samples, 1);
 //! ```
 #![no_std]
@@ -158,7 +162,7 @@ const KIND_DROPPED: u8 = 2;
 const KIND_FAULT: u8 = 3;
 const KIND_INFO: u8 = 4;
 
-const SAMPLE_FIXED_LEN: usize = 12;
+const SAMPLE_FIXED_LEN: usize = 13;
 const DROPPED_PAYLOAD_LEN: usize = 8;
 const FAULT_PAYLOAD_LEN: usize = 10;
 const NO_SEGMENT: u8 = 0xFF;
@@ -183,6 +187,31 @@ const fn payload_len_ok(kind: u8, len: usize) -> bool {
     }
 }
 
+/// What the firmware was doing in a sample period, one bit each.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct SampleFlags(pub u8);
+
+impl SampleFlags {
+    /// The program asked for more than the voltage limit on a segment, and
+    /// the limiter clamped it.
+    pub const LIMITED: u8 = 1 << 0;
+    /// The limiter held a segment's step to the slew limit.
+    pub const SLEWED: u8 = 1 << 1;
+    /// A tare is under way: the force is relative to the previous zero
+    /// (or, before the first tare, to the first reading).
+    pub const TARING: u8 = 1 << 2;
+    /// A fault is latched: every output is 0 V.
+    pub const FAULT: u8 = 1 << 3;
+    /// A program drives the outputs (not stopped, not waiting for the
+    /// power-up tare, no fault).
+    pub const RUNNING: u8 = 1 << 4;
+
+    /// Whether every bit of `bits` is set.
+    pub const fn has(self, bits: u8) -> bool {
+        self.0 & bits == bits
+    }
+}
+
 /// One sample period of the blocking-force experiment, `N` = 1..=8 segments.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample<const N: usize> {
@@ -192,6 +221,8 @@ pub struct Sample<const N: usize> {
     pub t_us: u32,
     /// Blocking force on the load cell, N.
     pub force_n: f32,
+    /// What the firmware was doing.
+    pub flags: SampleFlags,
     /// Segment voltages as commanded, V.
     pub voltages_v: [f32; N],
     /// Segment currents, A.

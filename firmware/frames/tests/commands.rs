@@ -204,6 +204,7 @@ fn refusals_name_their_reason() {
             seq: 1,
             t_us: 2,
             force_n: 0.0,
+            flags: finrs_frames::SampleFlags::default(),
             voltages_v: [0.0],
             currents_a: [0.0],
         },

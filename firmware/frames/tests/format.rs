@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use finrs_frames::{
     crc16, encode_dropped, encode_fault, encode_sample, frame_len, Dropped, EncodeError, Fault,
-    FaultCode, Sample, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
+    FaultCode, Sample, SampleFlags, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 #[test]
@@ -17,9 +17,9 @@ fn crc_is_ccitt_false() {
 
 #[test]
 fn frame_lengths() {
-    assert_eq!(frame_len(1), 4 + 20 + 2);
-    assert_eq!(frame_len(3), 4 + 36 + 2);
-    assert_eq!(frame_len(8), 4 + 76 + 2);
+    assert_eq!(frame_len(1), 4 + 21 + 2);
+    assert_eq!(frame_len(3), 4 + 37 + 2);
+    assert_eq!(frame_len(8), 4 + 77 + 2);
     assert_eq!(MAX_FRAME_LEN, frame_len(8));
     assert_eq!(DROPPED_FRAME_LEN, 4 + 8 + 2);
     assert_eq!(FAULT_FRAME_LEN, 4 + 10 + 2);
@@ -32,22 +32,24 @@ fn sample_layout_is_as_documented() {
         seq: 0x0403_0201,
         t_us: 0x0807_0605,
         force_n: 1.0,
+        flags: SampleFlags(SampleFlags::TARING | SampleFlags::RUNNING),
         voltages_v: [-2.0],
         currents_a: [0.5],
     };
     let f = sample_frame(&s);
     let body = [
-        0x01, 0x14, // kind, len = 20
+        0x01, 0x15, // kind, len = 21
         0x01, 0x02, 0x03, 0x04, // seq
         0x05, 0x06, 0x07, 0x08, // t_us
         0x00, 0x00, 0x80, 0x3F, // 1.0
+        0x14, // flags: taring, running
         0x00, 0x00, 0x00, 0xC0, // -2.0
         0x00, 0x00, 0x00, 0x3F, // 0.5
     ];
     assert_eq!(f.len(), frame_len(1));
     assert_eq!(f[..2], [0xF1, 0x5E]);
-    assert_eq!(f[2..24], body);
-    assert_eq!(f[24..], crc16(&body).to_le_bytes());
+    assert_eq!(f[2..25], body);
+    assert_eq!(f[25..], crc16(&body).to_le_bytes());
 }
 
 #[test]
@@ -90,6 +92,7 @@ fn sample_round_trip<const N: usize>() {
         seq: u32::MAX,
         t_us: 0xDEAD_BEEF,
         force_n: f32::from_bits(0x7F80_0001),
+        flags: SampleFlags(0xFF),
         voltages_v: core::array::from_fn(|k| AWKWARD[k]),
         currents_a: core::array::from_fn(|k| AWKWARD[7 - k]),
     };
@@ -254,13 +257,17 @@ fn decoder_refuses_invalid_content_despite_good_crc() {
         fault(5, 0xFF),
         fault(1, 8),
         fault(1, 0xFE),
-        framed(&[4, 8, 0, 0, 0, 0, 0, 0, 0, 0]), // unknown kind
+        framed(&[5, 8, 0, 0, 0, 0, 0, 0, 0, 0]), // unknown kind
         framed(&[0, 8, 0, 0, 0, 0, 0, 0, 0, 0]),
         framed(&[2, 9, 0, 0, 0, 0, 0, 0, 0, 0, 0]), // Dropped, wrong length
-        framed(&[1, 12, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]), // Sample, N = 0
+        framed(&[4, 8, 0, 0, 0, 0, 0, 0, 0, 0]),    // Info, wrong length
+        framed(&[1, 13, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]), // Sample, N = 0
         framed(&[
-            1, 21, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
-        ]),
+            1, 22, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        ]), // Sample, 13 + 9 bytes
+        framed(&[
+            1, 20, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        ]), // the old layout's N = 1
     ];
     let good = sample::<1>(3);
     for b in bad {

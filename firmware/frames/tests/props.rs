@@ -22,22 +22,26 @@ fn any_sample() -> impl Strategy<Value = DecodedSample> {
         any::<u32>(),
         any::<u32>(),
         any_f32(),
+        any::<u8>(),
         prop::array::uniform8(any_f32()),
         prop::array::uniform8(any_f32()),
     )
-        .prop_map(|(n, seq, t_us, force_n, mut voltages_v, mut currents_a)| {
-            // The decoder zeroes the unused entries.
-            voltages_v[n..].fill(0.0);
-            currents_a[n..].fill(0.0);
-            DecodedSample {
-                seq,
-                t_us,
-                force_n,
-                n,
-                voltages_v,
-                currents_a,
-            }
-        })
+        .prop_map(
+            |(n, seq, t_us, force_n, flags, mut voltages_v, mut currents_a)| {
+                // The decoder zeroes the unused entries.
+                voltages_v[n..].fill(0.0);
+                currents_a[n..].fill(0.0);
+                DecodedSample {
+                    seq,
+                    t_us,
+                    force_n,
+                    flags: finrs_frames::SampleFlags(flags),
+                    n,
+                    voltages_v,
+                    currents_a,
+                }
+            },
+        )
 }
 
 fn any_item() -> impl Strategy<Value = Event> {

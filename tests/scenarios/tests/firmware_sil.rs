@@ -375,6 +375,24 @@ fn check_run<const N: usize, const S: usize>() {
         "no Sample lost before it"
     );
     let fault_at = fault.seq as usize;
+    // The Samples' flags: the power-up tare, the 2 V program clamped to the
+    // 1.5 V limit, the latched fault to the end.
+    use finrs_frames::SampleFlags as F;
+    let tare_ticks = usize::from(config::controller_config().unwrap().tare_samples);
+    assert!(samples[..tare_ticks - 1]
+        .iter()
+        .all(|s| s.flags.has(F::TARING)));
+    assert!(samples[tare_ticks..fault_at]
+        .iter()
+        .all(|s| !s.flags.has(F::TARING)));
+    let limited = samples[..fault_at]
+        .iter()
+        .filter(|s| s.flags.has(F::LIMITED))
+        .count();
+    assert!(limited > 1000, "{limited} samples clamped to the limit");
+    assert!(samples[fault_at..]
+        .iter()
+        .all(|s| s.flags.has(F::FAULT) && !s.flags.has(F::RUNNING)));
 
     // Lossless and complete: 0, 1, 2, … one Sample per tick of the run but
     // the faulting one.
@@ -573,6 +591,11 @@ fn firmware_in_qemu_drives_nothing_until_a_wave_is_sent() {
             "sample {} commands {:?} with no wave sent",
             s.seq,
             s.voltages()
+        );
+        assert!(
+            !s.flags.has(finrs_frames::SampleFlags::RUNNING),
+            "sample {}",
+            s.seq
         );
     }
 }

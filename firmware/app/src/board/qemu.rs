@@ -48,9 +48,9 @@ pub const COMMANDS_FILE: &str = "finrs-commands.bin\0";
 /// Interval between flushes of the frame queue, ms.
 pub const FLUSH_MS: u32 = 20;
 
-/// Frame queue, bytes: 42-byte frames (N = 3) at 1 kHz fill 840 bytes per
+/// Frame queue, bytes: 43-byte frames (N = 3) at 1 kHz fill 860 bytes per
 /// flush interval; 4096 leaves a margin of almost five intervals (of about
-/// two and a half with N = 8's 82-byte frames, which the SIL test also runs).
+/// two and a half with N = 8's 83-byte frames, which the SIL test also runs).
 const QUEUE_LEN: usize = 4096;
 
 const S: usize = state_len(N, 1);

@@ -73,9 +73,9 @@ pub const PWM_HZ: u32 = 25_000;
 /// short enough that a hung firmware stops driving within a blink.
 pub const WATCHDOG_MS: u32 = 20;
 
-/// Frame up channel, bytes. A Sample is 18 + 8 N bytes: 42 at N = 3 (42
-/// kB/s at 1 kHz), 82 at N = 8. probe-rs polls RTT every few ms but a busy
-/// host or USB can stall it for 100 ms: 4.2 kB at N = 3, 8.2 kB at N = 8;
+/// Frame up channel, bytes. A Sample is 19 + 8 N bytes: 43 at N = 3 (43
+/// kB/s at 1 kHz), 83 at N = 8. probe-rs polls RTT every few ms but a busy
+/// host or USB can stall it for 100 ms: 4.3 kB at N = 3, 8.3 kB at N = 8;
 /// about twice that for margin.
 pub const FRAME_RTT_BYTES: usize = if N <= 3 { 8192 } else { 16384 };
 

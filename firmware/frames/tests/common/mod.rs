@@ -4,7 +4,7 @@
 
 use finrs_frames::{
     encode_dropped, encode_fault, encode_sample, frame_len, DecodedSample, Decoder, Dropped, Event,
-    Fault, Sample, Stats, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
+    Fault, Sample, SampleFlags, Stats, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 pub fn sample_frame<const N: usize>(s: &Sample<N>) -> Vec<u8> {
@@ -32,6 +32,7 @@ pub fn decoded_sample_frame(d: &DecodedSample) -> Vec<u8> {
             seq: d.seq,
             t_us: d.t_us,
             force_n: d.force_n,
+            flags: d.flags,
             voltages_v: d.voltages_v[..N].try_into().unwrap(),
             currents_a: d.currents_a[..N].try_into().unwrap(),
         })
@@ -77,6 +78,7 @@ pub fn sample<const N: usize>(seq: u32) -> Sample<N> {
         seq,
         t_us: seq.wrapping_mul(1_000).wrapping_add(17),
         force_n: 0.001 * x + 0.5,
+        flags: SampleFlags((seq % 32) as u8),
         voltages_v: core::array::from_fn(|k| k as f32 - 0.25 * x),
         currents_a: core::array::from_fn(|k| -0.001 * (k as f32 + 1.0) + x),
     }
@@ -89,6 +91,7 @@ pub enum Key {
         seq: u32,
         t_us: u32,
         force: u32,
+        flags: u8,
         n: usize,
         voltages: [u32; 8],
         currents: [u32; 8],
@@ -112,6 +115,7 @@ pub fn key(e: &Event) -> Key {
             seq: s.seq,
             t_us: s.t_us,
             force: s.force_n.to_bits(),
+            flags: s.flags.0,
             n: s.n,
             voltages: s.voltages_v.map(f32::to_bits),
             currents: s.currents_a.map(f32::to_bits),

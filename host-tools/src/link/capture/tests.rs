@@ -77,6 +77,7 @@ fn chunks() -> VecDeque<Vec<u8>> {
             seq,
             t_us: 1000 * seq,
             force_n: 0.01,
+            flags: finrs_frames::SampleFlags::default(),
             voltages_v: [1.0],
             currents_a: [0.02],
         };

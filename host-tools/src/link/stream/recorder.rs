@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode, Info};
+use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode, Info, SampleFlags};
 
 use super::clock::{Clock, ClockError};
 use super::refusal::Refusal;
@@ -83,6 +83,14 @@ pub struct Summary {
     pub rejected: u64,
     /// Samples after a restart, not recorded.
     pub after_restart: u64,
+    /// Samples whose voltages the firmware's limiter clamped to the limit.
+    pub limited: u64,
+    /// Samples whose voltages the limiter held to the slew limit.
+    pub slewed: u64,
+    /// Samples taken during a tare (force against the previous zero).
+    pub taring: u64,
+    /// Samples taken with a fault latched.
+    pub faulted: u64,
 }
 
 /// Builds a blocked-fixture recording from the firmware's frame stream.
@@ -225,6 +233,11 @@ impl Recorder {
     }
 
     fn sample(&mut self, s: &DecodedSample) {
+        let count = |bit: u8| u64::from(s.flags.has(bit));
+        self.summary.limited += count(SampleFlags::LIMITED);
+        self.summary.slewed += count(SampleFlags::SLEWED);
+        self.summary.taring += count(SampleFlags::TARING);
+        self.summary.faulted += count(SampleFlags::FAULT);
         match self.check(s) {
             Ok(t_us) => {
                 self.segments.get_or_insert(s.n);
@@ -383,6 +396,19 @@ impl Recorder {
                 out.push(',');
             }
             out.pop();
+        }
+        if s.limited + s.slewed > 0 {
+            let _ = write!(
+                out,
+                "; the firmware's limiter clamped {} samples to the voltage limit and slew-limited {}",
+                s.limited, s.slewed
+            );
+        }
+        if s.taring > 0 {
+            let _ = write!(out, "; {} samples during a tare", s.taring);
+        }
+        if s.faulted > 0 {
+            let _ = write!(out, "; {} samples with a fault latched", s.faulted);
         }
         if s.corrupt_bytes == 0 {
             out.push_str("; no corrupt bytes");

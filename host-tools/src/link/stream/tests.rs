@@ -26,6 +26,7 @@ fn sample3(seq: u32, t_us: u32) -> Sample<3> {
         seq,
         t_us,
         force_n: 0.001 * x,
+        flags: finrs_frames::SampleFlags::default(),
         voltages_v: [0.001 * x, -0.002 * x, 3.5],
         currents_a: [1e-5 * x, -2e-5 * x, 0.03],
     }
@@ -308,6 +309,7 @@ fn samples_that_cannot_be_rows_are_refused_by_field_and_rule() {
         seq: 4,
         t_us: 4000,
         force_n: 0.0,
+        flags: finrs_frames::SampleFlags::default(),
         voltages_v: [0.0],
         currents_a: [0.0],
     };
@@ -566,4 +568,29 @@ fn the_firmwares_info_goes_into_the_notes_once_per_configuration() {
         "{notes}"
     );
     assert!(notes.contains("; then firmware 0.1.0 (git deadbeef), 3 segments (DAC on segment 3), 1000 Hz, limit 1.5 V"), "{notes}");
+}
+
+#[test]
+fn the_samples_flags_are_counted_in_the_notes() {
+    use finrs_frames::SampleFlags as F;
+    let bytes: Vec<u8> = (0..6u32)
+        .flat_map(|seq| {
+            let mut s = sample3(seq, seq * 1000);
+            s.flags = F(match seq {
+                0 | 1 => F::TARING,
+                2 => F::RUNNING | F::SLEWED,
+                3 | 4 => F::RUNNING | F::LIMITED,
+                _ => F::FAULT,
+            });
+            sample_bytes(&s)
+        })
+        .collect();
+    let r = record(&bytes);
+    let s = r.summary();
+    assert_eq!((s.taring, s.slewed, s.limited, s.faulted), (2, 1, 2, 1));
+    let notes = r.recording("flags.csv").unwrap().meta.notes.unwrap();
+    assert!(
+        notes.contains("; the firmware's limiter clamped 2 samples to the voltage limit and slew-limited 1; 2 samples during a tare; 1 samples with a fault latched"),
+        "{notes}"
+    );
 }
