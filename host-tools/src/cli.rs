@@ -165,6 +165,10 @@ pub struct ProbeArgs {
     /// Longest wait for the probe search, the attach and each later probe call (reset, RTT read or write), s.
     #[arg(long, default_value_t = 5.0)]
     pub probe_timeout_s: f64,
+    /// SWD clock to ask the probe for, kHz (default: the probe's own);
+    /// RTT's throughput follows it.
+    #[arg(long)]
+    pub speed_khz: Option<u32>,
 }
 
 impl ProbeArgs {
@@ -180,6 +184,10 @@ impl ProbeArgs {
             probe: self.probe.clone(),
             timeout: timeout("--probe-timeout-s", self.probe_timeout_s)?,
             flash_timeout: finrs::link::probe::DEFAULT_FLASH_TIMEOUT,
+            speed_khz: match self.speed_khz {
+                Some(0) => anyhow::bail!("--speed-khz must be above 0"),
+                other => other,
+            },
         })
     }
 }

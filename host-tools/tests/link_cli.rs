@@ -255,6 +255,7 @@ fn invalid_commands_are_refused_on_the_host_before_any_probe() {
             ],
             "peak 4.5 V (amplitude plus offset) exceeds the hard limit of ±4 V",
         ),
+        (&["tare", "--speed-khz", "0"], "--speed-khz must be above 0"),
         (
             &["run", "fw.elf", "--out", "x.csv", "--ramp-in-s", "2"],
             "--ramp-in-s shapes a wave: give it with --wave",

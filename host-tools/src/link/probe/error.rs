@@ -99,6 +99,14 @@ pub enum ProbeError {
         /// probe-rs's reason (said on the probe's thread, as text).
         reason: String,
     },
+    /// The probe refused the SWD clock asked for.
+    #[error("the debug probe refused an SWD clock of {speed_khz} kHz: {reason}")]
+    Speed {
+        /// The clock asked for, kHz.
+        speed_khz: u32,
+        /// probe-rs's reason.
+        reason: String,
+    },
     /// The ELF file could not be read.
     #[error("reading {}", path.display())]
     ReadElf {

@@ -69,6 +69,10 @@ pub struct ProbeOptions {
     pub timeout: Duration,
     /// Longest wait for flashing an ELF image.
     pub flash_timeout: Duration,
+    /// The SWD clock to ask the probe for, kHz (`None`: the probe's
+    /// default). RTT is read through it: a faster clock carries more
+    /// frames per second, a slower one suits long wires.
+    pub speed_khz: Option<u32>,
 }
 
 /// The default bound on flashing: generous, since it only has to catch a
@@ -175,7 +179,15 @@ pub fn open_probe(opts: &ProbeOptions) -> Result<Probe, ProbeError> {
 
 /// Opens the probe and attaches to the chip.
 pub fn attach(opts: &ProbeOptions) -> Result<Session, ProbeError> {
-    let probe = open_probe(opts)?;
+    let mut probe = open_probe(opts)?;
+    if let Some(speed_khz) = opts.speed_khz {
+        // The probe may round to a clock it has; what it took is logged.
+        let took = probe.set_speed(speed_khz).map_err(|e| ProbeError::Speed {
+            speed_khz,
+            reason: e.to_string(),
+        })?;
+        eprintln!("SWD clock: {took} kHz (asked {speed_khz} kHz)");
+    }
     let chip = opts.chip.clone();
     bounded("attaching to the chip", opts.timeout, move || {
         probe
