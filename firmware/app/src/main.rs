@@ -86,9 +86,15 @@ mod app {
             version: identity::version(env!("CARGO_PKG_VERSION")),
             git_hash: identity::git_hash(option_env!("FINRS_GIT_HASH")),
             dac_segments: config::DAC_SEGMENT_IDS,
-            bridge_supply_v: config::BRIDGE_SUPPLY_V,
+            bridge_supply_v: parts.supply.map_or(config::BRIDGE_SUPPLY_V, |s| s.bridge_v),
             reset_cause: parts.reset_cause,
         });
+        let mut parts = parts;
+        if parts.supply.is_err() {
+            // Reported, and latched; the board also never drives (its
+            // `write_v` holds every output off), whatever ClearFault does.
+            controller.fault(FaultCode::Supply, None, &mut parts.frames);
+        }
         defmt::info!(
             "fin driver up: {} segments at {} Hz, limit {} V",
             N,
@@ -214,6 +220,7 @@ mod app {
             FaultCode::AdcSaturation => "ADC saturation",
             FaultCode::MissedDeadline => "missed deadline",
             FaultCode::Other => "other",
+            FaultCode::Supply => "supply out of range",
         }
     }
 }

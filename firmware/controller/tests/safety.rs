@@ -153,6 +153,7 @@ fn any_op() -> BoxedStrategy<Op> {
         Just(FaultCode::AdcSaturation),
         Just(FaultCode::MissedDeadline),
         Just(FaultCode::Other),
+        Just(FaultCode::Supply),
     ];
     prop_oneof![
         30 => (

@@ -28,7 +28,8 @@
 //! - **Dropped**, `len` = 8: `first_seq` u32, `count` u32. The firmware
 //!   could not send the Samples numbered `first_seq .. first_seq + count`.
 //! - **Fault**, `len` = 10: `seq` u32, `t_us` u32, `code` u8 (1 overcurrent,
-//!   2 ADC saturation, 3 missed deadline, 4 watchdog or other), `segment` u8
+//!   2 ADC saturation, 3 missed deadline, 4 watchdog or other, 5 a supply
+//!   out of range at boot), `segment` u8
 //!   (0-based segment index, below 8; 0xFF if no segment is concerned).
 //! - **Info**, `len` = 44 ([`Info`]): layout version u8 (1), firmware
 //!   version u8 × 3, git hash u32 (its first eight hex digits), segments u8,
@@ -263,6 +264,9 @@ pub enum FaultCode {
     MissedDeadline = 3,
     /// The watchdog fired, or another fault.
     Other = 4,
+    /// A supply (VDDA, the bridges') was out of range at boot: the board
+    /// does not drive until it restarts with good supplies.
+    Supply = 5,
 }
 
 impl FaultCode {
@@ -273,6 +277,7 @@ impl FaultCode {
             2 => Some(Self::AdcSaturation),
             3 => Some(Self::MissedDeadline),
             4 => Some(Self::Other),
+            5 => Some(Self::Supply),
             _ => None,
         }
     }

@@ -158,6 +158,7 @@ fn faults_round_trip() {
         FaultCode::AdcSaturation,
         FaultCode::MissedDeadline,
         FaultCode::Other,
+        FaultCode::Supply,
     ];
     for (i, code) in codes.into_iter().enumerate() {
         assert_eq!(FaultCode::from_u8(code as u8), Some(code));
@@ -177,7 +178,7 @@ fn faults_round_trip() {
         }
     }
     assert_eq!(FaultCode::from_u8(0), None);
-    assert_eq!(FaultCode::from_u8(5), None);
+    assert_eq!(FaultCode::from_u8(6), None);
 }
 
 #[test]
@@ -254,7 +255,7 @@ fn decoder_refuses_invalid_content_despite_good_crc() {
     let fault = |code: u8, segment: u8| framed(&[3, 10, 1, 0, 0, 0, 2, 0, 0, 0, code, segment]);
     let bad = [
         fault(0, 0xFF),
-        fault(5, 0xFF),
+        fault(6, 0xFF),
         fault(1, 8),
         fault(1, 0xFE),
         framed(&[5, 8, 0, 0, 0, 0, 0, 0, 0, 0]), // unknown kind

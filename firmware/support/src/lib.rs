@@ -11,6 +11,8 @@
 //! - [`pins`]: the analogue inputs' pins, ADCs and channels, checked
 //!   against the datasheet.
 //! - [`reset`]: why the core last reset, from RCC_CSR's flags.
+//! - [`supply`]: VDDA and the bridge supply, measured at boot and
+//!   checked before anything drives.
 //! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
 //!   load-cell offset and noise, the injected fault).
 //! - [`watermark`]: the stack high-water mark's paint pattern and scan.
@@ -22,4 +24,5 @@ pub mod identity;
 pub mod pins;
 pub mod reset;
 pub mod sim;
+pub mod supply;
 pub mod watermark;

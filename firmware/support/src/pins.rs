@@ -123,6 +123,15 @@ pub const SHUNTS: [Input; 8] = [
     },
 ];
 
+/// The bridge supply's divider ([`supply`](crate::supply)): PC3, ADC1 IN13,
+/// read once at boot by ADC1's regular group. On the Discovery PC3 is the
+/// MEMS microphone's output: lift it (as PA4/PA5 for DAC segments).
+pub const BRIDGE_SUPPLY_SENSE: Input = Input {
+    pin: Pin::new(b'C', 3),
+    adc: 1,
+    channel: 13,
+};
+
 /// The ADC whose injected group reads segment `i`'s shunt: at most four
 /// conversions a group, the load cell first in ADC1's.
 pub const fn adc_of_segment(i: usize) -> u8 {
@@ -181,9 +190,25 @@ const MAP: [Input; 9] = {
     map
 };
 
-/// The board's map ([`LOAD_CELL`], [`SHUNTS`]) passes [`is_wired`]; a build
+/// The board's map ([`LOAD_CELL`], [`SHUNTS`]) passes [`is_wired`], and the
+/// supply's sense pin is on the datasheet and on no other input; a build
 /// fails otherwise.
-pub const MAP_IS_WIRED: bool = is_wired(&MAP);
+pub const MAP_IS_WIRED: bool = is_wired(&MAP) && sense_is_wired(BRIDGE_SUPPLY_SENSE, &MAP);
+
+/// Whether `sense` is on the datasheet and shares no pin with `map`.
+pub const fn sense_is_wired(sense: Input, map: &[Input]) -> bool {
+    if !on_datasheet(sense) {
+        return false;
+    }
+    let mut i = 0;
+    while i < map.len() {
+        if map[i].pin.is(sense.pin.port, sense.pin.number) {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
 
 const _: () = assert!(
     MAP_IS_WIRED,
@@ -222,6 +247,23 @@ mod tests {
         let mut map = MAP;
         map[4].adc = 1;
         assert!(!is_wired(&map), "segment 3 belongs to ADC2's group");
+        // The supply's sense pin on a shunt's, or off its channel.
+        assert!(!sense_is_wired(
+            Input {
+                pin: Pin::new(b'C', 2),
+                adc: 1,
+                channel: 12
+            },
+            &MAP
+        ));
+        assert!(!sense_is_wired(
+            Input {
+                channel: 12,
+                ..BRIDGE_SUPPLY_SENSE
+            },
+            &MAP
+        ));
+        assert!(sense_is_wired(BRIDGE_SUPPLY_SENSE, &MAP));
         // Port F is not on the LQFP100: ADC3_IN9 on PF3 is not there.
         assert!(!on_datasheet(Input {
             pin: Pin::new(b'F', 3),

@@ -36,4 +36,10 @@ pub struct Parts {
     pub housekeeping: Housekeeping,
     /// Why the core last reset (the board's flags; unknown in QEMU).
     pub reset_cause: finrs_frames::ResetCause,
+    /// The supplies as measured at boot, or which was out of range (the
+    /// board then never drives). QEMU has none to measure: nominal.
+    pub supply: Result<
+        finrs_firmware_support::supply::Supplies,
+        finrs_firmware_support::supply::SupplyError,
+    >,
 }

@@ -189,8 +189,12 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
             fd,
             batch: [0; 1024],
         },
-        // QEMU's netduinoplus2 has no reset flags to read.
+        // QEMU's netduinoplus2 has no reset flags to read, and no supplies.
         reset_cause: finrs_frames::ResetCause::Unknown,
+        supply: finrs_firmware_support::supply::check(
+            finrs_firmware_support::config::DAC_VREF_V,
+            finrs_firmware_support::config::BRIDGE_SUPPLY_V,
+        ),
     }
 }
 

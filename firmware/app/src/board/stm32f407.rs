@@ -63,6 +63,7 @@ use crate::config::{
 };
 use crate::{Mono, SYSCLK_HZ};
 use finrs_firmware_support::reset;
+use finrs_firmware_support::supply::{self, Supplies, SupplyError};
 
 /// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
 /// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
@@ -253,6 +254,8 @@ pub struct Io {
     segments: [Segment; N],
     /// ADC2/ADC3's group was not done when ADC1's was.
     secondary_late: bool,
+    /// The supplies were in range at boot; if not, nothing is ever driven.
+    supply_ok: bool,
     watchdog: IndependentWatchdog,
 }
 
@@ -339,6 +342,25 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     let d = dp.GPIOD.split(&mut rcc);
     let e = dp.GPIOE.split(&mut rcc);
 
+    // The supplies, before anything that drives is set up: the bridges'
+    // duties are worked out from the supply measured here.
+    const {
+        assert!(finrs_firmware_support::pins::BRIDGE_SUPPLY_SENSE
+            .pin
+            .is(b'C', 3))
+    };
+    let _ = c.pc3.into_analog();
+    let supply = measure_supplies(&dp.ADC1, &dp.ADC_COMMON, &mut rcc);
+    let bridge_v = supply.map_or(BRIDGE_SUPPLY_V, |s| s.bridge_v);
+    match &supply {
+        Ok(s) => defmt::info!(
+            "supplies: VDDA {=u32} mV, bridges {=u32} mV",
+            (s.vdda_v * 1000.0) as u32,
+            (s.bridge_v * 1000.0) as u32
+        ),
+        Err(e) => defmt::error!("{}", defmt::Display2Format(e)),
+    }
+
     // H-bridges: only the timers and pins of bridge segments (the pins are
     // `pins::BRIDGE_LEGS`).
     let mut bridge_legs: [Option<(Leg, Leg)>; 8] = Default::default();
@@ -413,9 +435,9 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             None => Err("a DAC segment's channel is not wired"),
         },
         None => match bridge_legs[i].take() {
-            Some((la, lb)) => HBridge::new(la, lb, BRIDGE_SUPPLY_V)
+            Some((la, lb)) => HBridge::new(la, lb, bridge_v)
                 .map(Segment::Bridge)
-                .map_err(|_| "BRIDGE_SUPPLY_V is not a valid supply voltage"),
+                .map_err(|_| "the bridge supply is not a valid supply voltage"),
             None => Err("a bridge segment's legs are not wired"),
         },
     });
@@ -477,13 +499,71 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             },
             segments,
             secondary_late: false,
+            supply_ok: supply.is_ok(),
             watchdog,
         },
         frames,
         commands,
         housekeeping: Housekeeping,
         reset_cause: cause,
+        supply,
     }
+}
+
+/// VDDA against the internal reference and the bridge supply through its
+/// divider, by ADC1's regular group, once (`init_adcs` then resets the
+/// ADCs and sets up the injected groups).
+fn measure_supplies(
+    adc: &pac::ADC1,
+    common: &pac::ADC_COMMON,
+    rcc: &mut pac::RCC,
+) -> Result<Supplies, SupplyError> {
+    pac::ADC1::enable(rcc);
+    pac::ADC1::reset(rcc);
+    common
+        .ccr()
+        .modify(|_, w| w.adcpre().div4().tsvrefe().set_bit());
+    adc.cr2().write(|w| w.adon().set_bit());
+    // The ADC's stabilisation (3 µs) and VREFINT's start-up (10 µs, the
+    // datasheet's maxima), with margin: 20 µs at 168 MHz.
+    cortex_m::asm::delay(SYSCLK_HZ / 50_000);
+    let sense = finrs_firmware_support::pins::BRIDGE_SUPPLY_SENSE.channel;
+    #[allow(unsafe_code)]
+    // SAFETY: SMPR1 takes any bit pattern: 480 cycles (0b111, 23 µs at
+    // 21 MHz; VREFINT needs 10 µs) on channel 17 and the sense channel, both
+    // in 10..=18.
+    unsafe {
+        adc.smpr1()
+            .write(|w| w.bits(0b111 << (3 * (17 - 10)) | 0b111 << (3 * u32::from(sense - 10))));
+    }
+    let convert = |channel: u8| -> u16 {
+        #[allow(unsafe_code)]
+        // SAFETY: one conversion (L = 0) of a channel below 19.
+        unsafe {
+            adc.sqr1().write(|w| w.bits(0));
+            adc.sqr3().write(|w| w.bits(u32::from(channel)));
+        }
+        adc.sr().modify(|_, w| w.eoc().clear_bit());
+        adc.cr2().modify(|_, w| w.swstart().set_bit());
+        // About 25 µs; a conversion that never ends reads as 0, which
+        // fails the check below.
+        for _ in 0..100_000 {
+            if adc.sr().read().eoc().bit_is_set() {
+                return adc.dr().read().data().bits();
+            }
+        }
+        0
+    };
+    let vrefint = convert(17);
+    let sense_counts = convert(sense);
+    common.ccr().modify(|_, w| w.tsvrefe().clear_bit());
+    #[allow(unsafe_code)]
+    // SAFETY: VREFINT_CAL, the factory's reading of VREFINT at 3.3 V, a
+    // u16 in system memory at 0x1FFF_7A2A (STM32F405/407 datasheet,
+    // "Internal reference voltage calibration values").
+    let cal = unsafe { core::ptr::read_volatile(0x1FFF_7A2A as *const u16) };
+    let vdda_v = supply::vdda_v(cal, vrefint).unwrap_or(0.0);
+    supply::check(vdda_v, supply::bridge_supply_v(sense_counts, vdda_v))
 }
 
 #[allow(unsafe_code)] // rtt_init! writes the control block (a static) once
@@ -670,7 +750,7 @@ impl Io {
     /// Writes the controller's voltages to the segments, or turns them off
     /// (`None`: a bridge opened, where 0 V would brake it).
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        let Some(v) = v else {
+        let Some(v) = v.filter(|_| self.supply_ok) else {
             return self.off();
         };
         for (segment, &v) in self.segments.iter_mut().zip(v) {

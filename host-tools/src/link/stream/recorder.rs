@@ -388,6 +388,7 @@ impl Recorder {
                     FaultCode::AdcSaturation => "ADC saturation",
                     FaultCode::MissedDeadline => "missed deadline",
                     FaultCode::Other => "watchdog or other",
+                    FaultCode::Supply => "a supply out of range at boot",
                 };
                 let _ = write!(out, " seq {} t_us {} {what}", f.seq, f.t_us);
                 if let Some(k) = f.segment {
