@@ -12,7 +12,7 @@
 //! use finrs::recording::Geometry;
 //! use finrs::recording::Medium;
 //! use finrs::link::stream::{Recorder, Setup};
-//! use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, MAX_FRAME_LEN};
+//! use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, SampleFlags, MAX_FRAME_LEN};
 //!
 //! let mut bytes = Vec::new();
 //! let mut buf = [0u8; MAX_FRAME_LEN];
@@ -25,6 +25,7 @@
 //!         seq,
 //!         t_us: 1000 * seq,
 //!         force_n: 0.01,
+//!         flags: SampleFlags(SampleFlags::RUNNING),
 //!         voltages_v: [1.0],
 //!         currents_a: [0.01],
 //!     };
