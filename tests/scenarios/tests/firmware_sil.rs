@@ -71,19 +71,30 @@ const ICOUNT_SHIFT: u32 = 5;
 /// segment count: the builds share the target directory (only the firmware
 /// crate differs), so they take turns and each test runs its own copy.
 fn build_elf(segments: usize) -> PathBuf {
+    build_elf_with(segments, "qemu,inject-overcurrent")
+}
+
+/// The QEMU firmware for `segments` with `features`, built once per test
+/// run.
+fn build_elf_with(segments: usize, features: &'static str) -> PathBuf {
     static BUILD: Mutex<()> = Mutex::new(());
-    static ELFS: OnceLock<Mutex<Vec<(usize, PathBuf)>>> = OnceLock::new();
+    static ELFS: OnceLock<Mutex<Vec<(usize, &str, PathBuf)>>> = OnceLock::new();
     let _turn = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let elfs = ELFS.get_or_init(|| Mutex::new(Vec::new()));
-    if let Some((_, elf)) = elfs.lock().unwrap().iter().find(|(n, _)| *n == segments) {
+    if let Some((_, _, elf)) = elfs
+        .lock()
+        .unwrap()
+        .iter()
+        .find(|(n, f, _)| *n == segments && *f == features)
+    {
         return elf.clone();
     }
-    let elf = build_elf_once(segments);
-    elfs.lock().unwrap().push((segments, elf.clone()));
+    let elf = build_elf_once(segments, features);
+    elfs.lock().unwrap().push((segments, features, elf.clone()));
     elf
 }
 
-fn build_elf_once(segments: usize) -> PathBuf {
+fn build_elf_once(segments: usize, features: &str) -> PathBuf {
     let start = Instant::now();
     let release = common::build_release(
         &common::workspace().join("firmware/app"),
@@ -91,11 +102,7 @@ fn build_elf_once(segments: usize) -> PathBuf {
         |c| {
             c.env("FINRS_SEGMENTS", segments.to_string())
                 .env_remove("FINRS_DAC_SEGMENTS")
-                .args([
-                    "--no-default-features",
-                    "--features",
-                    "qemu,inject-overcurrent",
-                ]);
+                .args(["--no-default-features", "--features", features]);
         },
         "building the QEMU firmware failed (target, flip-link installed? run scripts/setup)",
     );
@@ -103,7 +110,10 @@ fn build_elf_once(segments: usize) -> PathBuf {
         "built the QEMU firmware, N = {segments}, in {:.1} s",
         start.elapsed().as_secs_f64()
     );
-    let copy = release.join(format!("finrs-firmware-n{segments}"));
+    let copy = release.join(format!(
+        "finrs-firmware-n{segments}-{}",
+        features.replace(',', "-")
+    ));
     std::fs::copy(release.join("finrs-firmware"), &copy).expect("the ELF copies");
     copy
 }
@@ -598,4 +608,51 @@ fn firmware_in_qemu_drives_nothing_until_a_wave_is_sent() {
             s.seq
         );
     }
+}
+
+/// A supply out of range at boot (QEMU's `inject-supply-fault`: the bridge
+/// supply at 4.3 V): the firmware says so, reports a Supply fault before
+/// its first Sample, refuses the wave it is then sent, and drives nothing.
+#[test]
+fn firmware_in_qemu_with_a_bad_supply_reports_it_and_never_drives() {
+    let elf = build_elf_with(3, "qemu,inject-supply-fault");
+    let (bytes, log) = run_qemu(&elf, ICOUNT_SHIFT, &commands());
+    let log = defmt_lines(&elf, &log);
+    assert!(
+        log.iter()
+            .any(|l| l == "ERROR bridge supply at 4300 mV, outside 4500..=5500 mV: not driving"),
+        "{log:?}"
+    );
+    assert!(
+        log.iter()
+            .any(|l| l == "ERROR SetWave refused: a fault is latched (ClearFault first)"),
+        "{log:?}"
+    );
+    let mut decoder = Decoder::new();
+    let mut events = Vec::new();
+    decoder.push(&bytes, &mut |e| events.push(e));
+    decoder.finish(&mut |e| events.push(e));
+    let first_fault = events.iter().position(|e| matches!(e, Event::Fault(_)));
+    let first_sample = events.iter().position(|e| matches!(e, Event::Sample(_)));
+    assert!(
+        first_fault < first_sample && first_fault.is_some(),
+        "{:?}",
+        &events[..3]
+    );
+    let Event::Fault(fault) = events[first_fault.unwrap()] else {
+        unreachable!()
+    };
+    assert_eq!(fault.code, FaultCode::Supply);
+    let samples: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Sample(s) => Some(*s),
+            _ => None,
+        })
+        .collect();
+    assert!(samples.len() > 10_000, "{} samples", samples.len());
+    assert!(samples
+        .iter()
+        .all(|s| s.voltages().iter().all(|&v| v == 0.0)
+            && s.currents().iter().all(|&i| i.abs() < 1e-3)));
 }

@@ -87,6 +87,9 @@ pub struct Io {
     /// Sample periods so far: the pacer pends one sample task per period,
     /// so here the count is the tasks'.
     tick: u64,
+    /// The supplies were in range at boot; if not, nothing is ever driven
+    /// (as on the board).
+    supply_ok: bool,
 }
 
 /// Frames into the queue that housekeeping flushes.
@@ -154,6 +157,10 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
         Fixture::Blocked,
         1.0 / f64::from(SAMPLE_HZ),
     );
+    let supply = supplies();
+    if let Err(e) = &supply {
+        defmt::error!("{}", defmt::Display2Format(e));
+    }
     let plant = match built {
         Ok(p) => cortex_m::singleton!(: Strip<f32, N, 1, S> = p),
         Err(_) => defmt::panic!("the example session's parameters do not make a plant"),
@@ -179,6 +186,7 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
             currents_a: [0.0; N],
             noise: sim::NOISE_SEED,
             tick: 0,
+            supply_ok: supply.is_ok(),
         },
         frames: FrameOut { queue: producer },
         commands: CommandIn {
@@ -191,11 +199,20 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
         },
         // QEMU's netduinoplus2 has no reset flags to read, and no supplies.
         reset_cause: finrs_frames::ResetCause::Unknown,
-        supply: finrs_firmware_support::supply::check(
-            finrs_firmware_support::config::DAC_VREF_V,
-            finrs_firmware_support::config::BRIDGE_SUPPLY_V,
-        ),
+        supply,
     }
+}
+
+/// The supplies QEMU "measures": nominal, or with `inject-supply-fault` a
+/// bridge supply of 4.3 V, below its range.
+fn supplies(
+) -> Result<finrs_firmware_support::supply::Supplies, finrs_firmware_support::supply::SupplyError> {
+    let bridge_v = if cfg!(feature = "inject-supply-fault") {
+        4.3
+    } else {
+        finrs_firmware_support::config::BRIDGE_SUPPLY_V
+    };
+    finrs_firmware_support::supply::check(finrs_firmware_support::config::DAC_VREF_V, bridge_v)
 }
 
 impl Io {
@@ -232,7 +249,7 @@ impl Io {
     /// Applies the commanded voltages (`None`: every output off) and steps
     /// the plant one sample.
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        match v {
+        match v.filter(|_| self.supply_ok) {
             Some(v) => {
                 for (s, &v) in self.segments.iter_mut().zip(v) {
                     s.set_v(v);
