@@ -74,11 +74,14 @@ fn build_elf(segments: usize) -> PathBuf {
     build_elf_with(segments, "qemu,inject-overcurrent")
 }
 
+/// A built ELF: its segment count, its features, its path.
+type Built = (usize, &'static str, PathBuf);
+
 /// The QEMU firmware for `segments` with `features`, built once per test
 /// run.
 fn build_elf_with(segments: usize, features: &'static str) -> PathBuf {
     static BUILD: Mutex<()> = Mutex::new(());
-    static ELFS: OnceLock<Mutex<Vec<(usize, &str, PathBuf)>>> = OnceLock::new();
+    static ELFS: OnceLock<Mutex<Vec<Built>>> = OnceLock::new();
     let _turn = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let elfs = ELFS.get_or_init(|| Mutex::new(Vec::new()));
     if let Some((_, _, elf)) = elfs
