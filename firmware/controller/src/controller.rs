@@ -478,24 +478,10 @@ impl<const N: usize> Controller<N> {
                     .voltages_at_tick_v(tick.saturating_sub(start), self.config.sample_hz)
             }
         };
-        let out = self.limiter.apply(wanted, self.dt_s);
-        let max = self.limiter.limits().max_abs_v();
-        let mut flags = 0;
-        for (&w, &o) in wanted.iter().zip(&out) {
-            // What the limit alone would give: anything else is the slew.
-            let clamped = if w > max {
-                flags |= SampleFlags::LIMITED;
-                max
-            } else if w < -max {
-                flags |= SampleFlags::LIMITED;
-                -max
-            } else {
-                w
-            };
-            if o != clamped {
-                flags |= SampleFlags::SLEWED;
-            }
-        }
+        let (out, applied) = self.limiter.apply_reporting(wanted, self.dt_s);
+        let flag = |set: bool, bit: u8| if set { bit } else { 0 };
+        let flags =
+            flag(applied.clamped, SampleFlags::LIMITED) | flag(applied.slewed, SampleFlags::SLEWED);
         (out, flags)
     }
 
@@ -541,8 +527,6 @@ impl<const N: usize> Controller<N> {
         self.dropped.is_none()
     }
 
-    /// Sends `s` after any pending Fault and Dropped frames, or counts it
-    /// dropped; either way it consumes its sequence number.
     /// The board's [`Identity`]: an Info frame goes out at the next tick,
     /// before its Sample, and again on each RequestInfo.
     pub fn set_identity(&mut self, identity: Identity) {
@@ -617,6 +601,8 @@ impl<const N: usize> Controller<N> {
         self.unseen_periods
     }
 
+    /// Sends `s` after any pending Fault and Dropped frames, or counts it
+    /// dropped; either way it consumes its sequence number.
     fn send_sample(&mut self, s: &Sample<N>, sink: &mut impl FrameSink) {
         self.next_seq = self.next_seq.wrapping_add(1);
         let mut buf = [0u8; MAX_FRAME_LEN];

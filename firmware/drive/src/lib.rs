@@ -64,7 +64,7 @@ mod limit;
 mod math;
 mod wave;
 
-pub use limit::{LimitError, Limiter, Limits, HARD_LIMIT_V};
+pub use limit::{Applied, LimitError, Limiter, Limits, HARD_LIMIT_V};
 pub use wave::{
     default_program, Envelope, Generator, Program, WaveError, WaveRule, MAX_FREQUENCY_HZ,
     MAX_PROGRAM_V, MIN_FREQUENCY_HZ,

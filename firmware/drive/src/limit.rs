@@ -102,6 +102,16 @@ fn check_max_abs_v(v: f32) -> Result<(), LimitError> {
     }
 }
 
+/// What [`Limiter::apply_reporting`] did to a step's requests, over all
+/// segments.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Applied {
+    /// A request beyond the voltage limit was clamped to it.
+    pub clamped: bool,
+    /// An output was held short of its target by the slew limit.
+    pub slewed: bool,
+}
+
 /// Enforces [`Limits`] on the voltages of `N` segments, step by step.
 ///
 /// Every voltage sent to the hardware must come out of [`Limiter::apply`]
@@ -148,6 +158,14 @@ impl<const N: usize> Limiter<N> {
     /// request becomes 0 V, and since no known time has passed the outputs
     /// do not move (call [`Limiter::stop`] to drop them at once).
     pub fn apply(&mut self, wanted_v: [f32; N], dt_s: f32) -> [f32; N] {
+        self.apply_reporting(wanted_v, dt_s).0
+    }
+
+    /// [`Limiter::apply`], saying also what the limits did to the step: a
+    /// finite request beyond ±`max_abs_v` was clamped, or an output stopped
+    /// short of its (clamped) target at the slew limit.
+    pub fn apply_reporting(&mut self, wanted_v: [f32; N], dt_s: f32) -> ([f32; N], Applied) {
+        let mut applied = Applied::default();
         let max = self.limits.max_abs_v;
         let timing_ok = dt_s.is_finite() && dt_s > 0.0;
         // Overflow to +inf for huge dt is fine: the step is then unbounded.
@@ -162,12 +180,14 @@ impl<const N: usize> Limiter<N> {
             } else {
                 0.0
             };
+            applied.clamped |= timing_ok && wanted.is_finite() && target != wanted;
             let moved = *last + clamp(target - *last, step);
             // Clamp again: a lowered limit applies at once, and the sum
             // above may round an ulp past the target.
             *last = clamp(moved, max);
+            applied.slewed |= *last != target;
         }
-        self.last_v
+        (self.last_v, applied)
     }
 
     /// Fault stop: every output to 0 V at once, bypassing the slew limit.

@@ -99,3 +99,54 @@ fn stop_drops_every_output_to_zero_at_once() {
     // And restarts from zero, slew-limited.
     assert_eq!(lim.apply([3.0; 8], 0.5), [0.5; 8]);
 }
+
+#[test]
+fn apply_reporting_says_what_the_limits_did() {
+    use finrs_drive::Applied;
+    let mut l = Limiter::<2>::new(Limits::new(1.0, 100.0).unwrap());
+    // 0.1 V a step at 1 ms: a step to 0.05 V is reached, to 0.5 V slewed.
+    let none = Applied::default();
+    assert_eq!(l.apply_reporting([0.05, 0.0], 1e-3).1, none);
+    let (out, a) = l.apply_reporting([0.5, 0.0], 1e-3);
+    assert_eq!(
+        (out[0], a),
+        (
+            0.15,
+            Applied {
+                clamped: false,
+                slewed: true
+            }
+        )
+    );
+    // Beyond the limit: clamped, and slewed on the way.
+    let (_, a) = l.apply_reporting([0.0, -3.0], 1e-3);
+    assert_eq!(
+        a,
+        Applied {
+            clamped: true,
+            slewed: true
+        }
+    );
+    for _ in 0..20 {
+        l.apply_reporting([0.0, -3.0], 1e-3);
+    }
+    assert_eq!(
+        l.apply_reporting([0.0, -3.0], 1e-3),
+        (
+            [0.0, -1.0],
+            Applied {
+                clamped: true,
+                slewed: false
+            }
+        )
+    );
+    // A non-finite request is a request for 0 V, not a clamp.
+    let (_, a) = l.apply_reporting([0.0, f32::NAN], 1e-3);
+    assert!(!a.clamped && a.slewed);
+    // apply is the same step without the report.
+    let mut m = l.clone();
+    assert_eq!(
+        l.apply([0.3, 0.3], 1e-3),
+        m.apply_reporting([0.3, 0.3], 1e-3).0
+    );
+}
