@@ -71,7 +71,7 @@ mod app {
     fn init(cx: init::Context) -> (Shared, Local) {
         // First thing: init's stack use is measured from here.
         stack::paint_init();
-        let parts = board::init(cx.core, cx.device);
+        let mut parts = board::init(cx.core, cx.device);
         let mut controller = match config::controller_config()
             .map_err(|_| "limits")
             .and_then(|c| Controller::<N>::new(c).map_err(|_| "controller"))
@@ -89,7 +89,6 @@ mod app {
             bridge_supply_v: parts.supply.map_or(config::BRIDGE_SUPPLY_V, |s| s.bridge_v),
             reset_cause: parts.reset_cause,
         });
-        let mut parts = parts;
         if parts.supply.is_err() {
             // Reported, and latched; the board also never drives (its
             // `write_v` holds every output off), whatever ClearFault does.
@@ -143,9 +142,11 @@ mod app {
         }
         let fault = cx.shared.controller.lock(|c| c.fault_state());
         if let Some((code, segment)) = fault {
-            // Off at once (a fault raised after this tick's write), and at
-            // every tick while it is latched.
-            io.off();
+            // A fault raised after this tick's write: off at once (while one
+            // is latched, `write_v` already keeps the outputs off).
+            if !faulted {
+                io.off();
+            }
             if !*cx.local.latched {
                 *cx.local.latched = true;
                 defmt::error!(
