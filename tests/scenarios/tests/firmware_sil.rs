@@ -50,7 +50,8 @@ use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use finrs_frames::{
-    encode_command, Command as FinCommand, Decoder, Event, FaultCode, MAX_COMMAND_LEN,
+    encode_command, Command as FinCommand, DecodedSample, Decoder, Event, FaultCode, Stats,
+    MAX_COMMAND_LEN,
 };
 use model_core::{Fixture, Params, Strip};
 
@@ -243,6 +244,26 @@ fn check_stack(log: &[String]) -> (usize, usize, usize) {
     found[0]
 }
 
+/// Every event in a frames stream, and the decoder's totals.
+fn decode(bytes: &[u8]) -> (Vec<Event>, Stats) {
+    let mut decoder = Decoder::new();
+    let mut events = Vec::new();
+    decoder.push(bytes, &mut |e| events.push(e));
+    decoder.finish(&mut |e| events.push(e));
+    (events, decoder.stats())
+}
+
+/// The Samples among `events`, in order.
+fn samples_of(events: &[Event]) -> Vec<DecodedSample> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Sample(s) => Some(*s),
+            _ => None,
+        })
+        .collect()
+}
+
 /// The limit the down channel sets, V.
 const COMMANDED_LIMIT_V: f32 = 1.5;
 
@@ -307,11 +328,7 @@ fn check_run<const N: usize, const S: usize>() {
     assert_eq!(got, expected, "the defmt log");
     check_stack(&log);
 
-    let mut decoder = Decoder::new();
-    let mut events = Vec::new();
-    decoder.push(&bytes, &mut |e| events.push(e));
-    decoder.finish(&mut |e| events.push(e));
-    let stats = decoder.stats();
+    let (events, stats) = decode(&bytes);
     assert_eq!(stats.corrupt_bytes, 0, "corrupt bytes in the stream");
     assert_eq!(stats.dropped_reported, 0, "the firmware dropped samples");
     assert_eq!(stats.gaps_unreported, 0, "gaps in the sequence numbers");
@@ -536,11 +553,7 @@ fn check_run<const N: usize, const S: usize>() {
 fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
     let elf = build_elf(3);
     let (bytes, _) = run_qemu(&elf, 9, &[]);
-    let mut decoder = Decoder::new();
-    let mut events = Vec::new();
-    decoder.push(&bytes, &mut |e| events.push(e));
-    decoder.finish(&mut |e| events.push(e));
-    let stats = decoder.stats();
+    let (events, stats) = decode(&bytes);
     assert_eq!(
         (stats.corrupt_bytes, stats.gaps_unreported),
         (0, 0),
@@ -555,13 +568,7 @@ fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
         .expect("a Fault frame");
     assert_eq!(first_fault.code, FaultCode::MissedDeadline);
     assert_eq!(first_fault.segment, None);
-    let samples: Vec<_> = events
-        .iter()
-        .filter_map(|e| match e {
-            Event::Sample(s) => Some(*s),
-            _ => None,
-        })
-        .collect();
+    let samples = samples_of(&events);
     assert!(samples.len() > 10, "samples after the fault keep flowing");
     for s in &samples {
         if s.seq >= first_fault.seq {
@@ -582,15 +589,8 @@ fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
 fn firmware_in_qemu_drives_nothing_until_a_wave_is_sent() {
     let elf = build_elf(3);
     let (bytes, _) = run_qemu(&elf, ICOUNT_SHIFT, &[]);
-    let mut decoder = Decoder::new();
-    let mut samples = Vec::new();
-    decoder.push(&bytes, &mut |e| {
-        if let Event::Sample(s) = e {
-            samples.push(s)
-        }
-    });
-    decoder.finish(&mut |_| {});
-    let stats = decoder.stats();
+    let (events, stats) = decode(&bytes);
+    let samples = samples_of(&events);
     assert_eq!(
         (stats.corrupt_bytes, stats.gaps_unreported),
         (0, 0),
@@ -631,10 +631,7 @@ fn firmware_in_qemu_with_a_bad_supply_reports_it_and_never_drives() {
             .any(|l| l == "ERROR SetWave refused: a fault is latched (ClearFault first)"),
         "{log:?}"
     );
-    let mut decoder = Decoder::new();
-    let mut events = Vec::new();
-    decoder.push(&bytes, &mut |e| events.push(e));
-    decoder.finish(&mut |e| events.push(e));
+    let (events, _) = decode(&bytes);
     let first_fault = events.iter().position(|e| matches!(e, Event::Fault(_)));
     let first_sample = events.iter().position(|e| matches!(e, Event::Sample(_)));
     assert!(
@@ -646,13 +643,7 @@ fn firmware_in_qemu_with_a_bad_supply_reports_it_and_never_drives() {
         unreachable!()
     };
     assert_eq!(fault.code, FaultCode::Supply);
-    let samples: Vec<_> = events
-        .iter()
-        .filter_map(|e| match e {
-            Event::Sample(s) => Some(*s),
-            _ => None,
-        })
-        .collect();
+    let samples = samples_of(&events);
     assert!(samples.len() > 10_000, "{} samples", samples.len());
     assert!(samples
         .iter()
