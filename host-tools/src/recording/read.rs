@@ -1,7 +1,7 @@
 //! Parsing a recording from text, rule by rule.
 
 use std::fs::File;
-use std::os::unix::fs::FileExt;
+use std::io::Read;
 use std::path::Path;
 
 use super::error::RecordingError;
@@ -177,9 +177,10 @@ impl<'f> Chunks<'f> {
             // A line longer than a chunk.
             self.buf.resize(self.filled + want, 0);
         }
-        let n = self
-            .file
-            .read_at(&mut self.buf[self.filled..self.filled + want], self.at)
+        // The one reader of a file just opened: its cursor is at `self.at`
+        // (a plain read, so that this builds off Unix too, as output.rs).
+        let n = (&mut &*self.file)
+            .read(&mut self.buf[self.filled..self.filled + want])
             .ok()?;
         if n == 0 {
             return None;
