@@ -1,5 +1,5 @@
 //! `finrs-firmware-support`: the fin driver firmware's pure pieces, in a
-//! crate of their own so that the firmware (`firmware/app`) and the host's
+//! crate of their own so that the firmware (`firmware`) and the host's
 //! tests (`tests/scenarios`) depend on the same code instead of including
 //! its files.
 //!

@@ -1,4 +1,4 @@
-//! The pure half of the stack measurement (`firmware/app/src/stack.rs`
+//! The pure half of the stack measurement (`firmware/src/stack.rs`
 //! holds the unsafe half): the paint pattern and the scan for the
 //! high-water mark. No pointers here, so the scan is unit-tested on the
 //! host.

@@ -32,7 +32,7 @@
 //! - Log: the defmt log (semihosting stdout, decoded with defmt-decoder)
 //!   names each refused command with its reason, the accepted one, and the
 //!   latched fault.
-//! - Stack: the log's stack line (`firmware/app/src/stack.rs`) gives init's and
+//! - Stack: the log's stack line (`firmware/src/stack.rs`) gives init's and
 //!   the tasks' high-water marks, both above 0 and at least
 //!   [`STACK_MARGIN_B`] below the stack's size.
 //!
@@ -66,7 +66,7 @@ const STACK_MARGIN_B: usize = 16 * 1024;
 const ICOUNT_SHIFT: u32 = 5;
 
 /// Builds the QEMU firmware for `segments` segments (`FINRS_SEGMENTS`)
-/// from `firmware/app/`, so that its own `.cargo/config.toml` (linker,
+/// from `firmware/`, so that its own `.cargo/config.toml` (linker,
 /// DEFMT_LOG) applies as for a user, into its own target directory (this
 /// `cargo test` holds the workspace's lock), and copies the ELF aside per
 /// segment count: the builds share the target directory (only the firmware
@@ -101,7 +101,7 @@ fn build_elf_with(segments: usize, features: &'static str) -> PathBuf {
 fn build_elf_once(segments: usize, features: &str) -> PathBuf {
     let start = Instant::now();
     let release = common::build_release(
-        &common::workspace().join("firmware/app"),
+        &common::workspace().join("firmware"),
         "finrs-firmware",
         |c| {
             c.env("FINRS_SEGMENTS", segments.to_string())

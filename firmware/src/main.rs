@@ -6,7 +6,7 @@
 //! - `board` (default): the STM32F407 fin driver. ADC1 is triggered by a
 //!   timer at the sample rate; its end-of-conversion interrupt runs
 //!   [`app::sample`]. Frames leave on RTT up channel 1, defmt on channel 0,
-//!   commands arrive on down channel 0. `cd firmware/app && cargo run --release`
+//!   commands arrive on down channel 0. `cd firmware && cargo run --release`
 //!   flashes it through probe-rs.
 //! - `qemu` (`--no-default-features --features qemu`): QEMU's netduinoplus2
 //!   with the model core as plant; SysTick paces the sample interrupt, frames
