@@ -89,6 +89,11 @@ mod app {
             bridge_supply_v: parts.supply.map_or(config::BRIDGE_SUPPLY_V, |s| s.bridge_v),
             reset_cause: parts.reset_cause,
         });
+        if let Some(stored) = parts.stored_calibration {
+            if controller.use_stored_calibration(stored).is_err() {
+                defmt::warn!("calibration: the stored record breaks a rule; build defaults");
+            }
+        }
         if parts.supply.is_err() {
             // Reported, and latched; the board also never drives (its
             // `write_v` holds every output off), whatever ClearFault does.
@@ -126,16 +131,28 @@ mod app {
         let Some(input) = io.read() else {
             return;
         };
-        let (out, faulted) = cx.shared.controller.lock(|c| {
+        let (out, faulted, to_store) = cx.shared.controller.lock(|c| {
             let out = c.tick(&input, frames);
-            (out, c.fault_state().is_some())
+            (
+                out,
+                c.fault_state().is_some(),
+                c.take_calibration_to_store(),
+            )
         });
         // A latched fault keeps the outputs off: the controller's 0 V would
         // hold a bridge braked, not open.
         io.write_v((!faulted).then_some(&out.voltages_v));
         io.feed_watchdog();
+        // Here, where the watchdog is, with the outputs at 0 V (the
+        // controller takes a calibration only then): the write overruns
+        // this tick on purpose, and the periods it hides go out as dropped
+        // samples, not as a missed deadline.
+        let stored = to_store.map(|calibration| {
+            let ok = io.store_calibration(&calibration);
+            cx.shared.controller.lock(|c| c.calibration_stored(ok));
+        });
         // The next period's conversion already finished: this one overran.
-        if io.deadline_missed() {
+        if io.deadline_missed() && stored.is_none() {
             cx.shared
                 .controller
                 .lock(|c| c.fault(FaultCode::MissedDeadline, None, frames));
@@ -212,6 +229,7 @@ mod app {
             Command::SetLimit { .. } => "SetLimit",
             Command::ClearFault => "ClearFault",
             Command::RequestInfo => "RequestInfo",
+            Command::SetCalibration(_) => "SetCalibration",
         }
     }
 

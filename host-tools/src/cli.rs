@@ -62,6 +62,103 @@ pub enum Command {
     },
     /// Clear a latched fault (outputs stay at 0 V until the next wave).
     ClearFault(SendArgs),
+    /// Measure the board's sensors (shunt zeros, load-cell scale) and store
+    /// the calibration in its flash; or show or set it.
+    Calibrate {
+        /// What to calibrate.
+        #[command(subcommand)]
+        what: CalibrateWhat,
+    },
+}
+
+/// `finrs calibrate`'s steps.
+#[derive(Subcommand)]
+pub enum CalibrateWhat {
+    /// Print the calibration in force and where it came from.
+    Show(SendArgs),
+    /// Stop the outputs, wait at 0 V and measure each shunt's zero.
+    Shunts {
+        #[command(flatten)]
+        window: CalibrateWindowArgs,
+        #[command(flatten)]
+        send: SendArgs,
+    },
+    /// Measure the load cell's scale with a reference mass (asks, on the
+    /// terminal, to unload and then to load the cell).
+    LoadCell {
+        /// The reference mass, g.
+        #[arg(long)]
+        mass_g: f64,
+        /// Local gravity, m/s² (standard gravity by default).
+        #[arg(long, default_value_t = finrs::link::calibrate::STANDARD_GRAVITY_M_PER_S2)]
+        g_m_per_s2: f64,
+        /// The way the mass pushes, in the board's force convention.
+        #[arg(long, value_enum, default_value = "positive")]
+        direction: LoadDirection,
+        #[command(flatten)]
+        window: CalibrateWindowArgs,
+        #[command(flatten)]
+        send: SendArgs,
+    },
+    /// Set values directly (the others are kept).
+    Set {
+        /// Load-cell scale, N per ADC count.
+        #[arg(long, allow_negative_numbers = true)]
+        newtons_per_count: Option<f64>,
+        /// Each segment's shunt zero, counts, comma-separated from segment 1.
+        #[arg(long, value_delimiter = ',')]
+        zero_counts: Option<Vec<u16>>,
+        /// Wait this long for the board's answer, s.
+        #[arg(long, default_value_t = 10.0)]
+        timeout_s: f64,
+        #[command(flatten)]
+        send: SendArgs,
+    },
+}
+
+/// How `finrs calibrate` averages.
+#[derive(Args)]
+pub struct CalibrateWindowArgs {
+    /// Averaging window, s (of the board's clock).
+    #[arg(long, default_value_t = 2.0)]
+    pub average_s: f64,
+    /// Time at 0 V before the shunts are averaged, s.
+    #[arg(long, default_value_t = 1.0)]
+    pub settle_s: f64,
+    /// Wait this long for the board's answers, s.
+    #[arg(long, default_value_t = 30.0)]
+    pub timeout_s: f64,
+    /// Measure and print, but store nothing.
+    #[arg(long)]
+    pub dry_run: bool,
+}
+
+impl CalibrateWindowArgs {
+    /// The library's options, or the flag that is wrong.
+    pub fn options(&self) -> anyhow::Result<finrs::link::calibrate::CalibrateOptions> {
+        for (flag, v) in [
+            ("--average-s", self.average_s),
+            ("--settle-s", self.settle_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{flag} {v}: must be a positive number of seconds");
+            }
+        }
+        Ok(finrs::link::calibrate::CalibrateOptions {
+            timeout: timeout("--timeout-s", self.timeout_s)?,
+            settle_s: self.settle_s,
+            average_s: self.average_s,
+        })
+    }
+}
+
+/// Which way a reference load pushes.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum LoadDirection {
+    /// The way the board reads as positive force.
+    Positive,
+    /// The other way.
+    Negative,
 }
 
 /// How a wave is shaped beyond its text: `finrs wave` and

@@ -354,7 +354,7 @@ fn record(
 }
 
 /// A refused capture, told with the flags that set it.
-fn capture_flags(e: CaptureError) -> anyhow::Error {
+pub(crate) fn capture_flags(e: CaptureError) -> anyhow::Error {
     match e {
         CaptureError::Probe(e) => probe_flags(e),
         other => other.into(),
@@ -362,7 +362,7 @@ fn capture_flags(e: CaptureError) -> anyhow::Error {
 }
 
 /// A probe that cannot be chosen, told with the flag that chooses it.
-fn probe_flags(e: ProbeError) -> anyhow::Error {
+pub(crate) fn probe_flags(e: ProbeError) -> anyhow::Error {
     match e {
         ProbeError::ManyProbes { count, found } => {
             anyhow!("{count} debug probes found: {found}; choose one with --probe VID:PID[:SERIAL]")
@@ -396,10 +396,10 @@ fn interrupted() -> anyhow::Result<Arc<AtomicBool>> {
 }
 
 /// The recording's status on one terminal line, log lines above it.
-struct StatusLine(ProgressBar);
+pub(crate) struct StatusLine(ProgressBar);
 
 impl StatusLine {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         let bar = ProgressBar::new_spinner();
         bar.set_style(ProgressStyle::with_template("{spinner} {msg}").expect("static template"));
         StatusLine(bar)

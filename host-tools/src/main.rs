@@ -1,9 +1,10 @@
 //! The `finrs` command line: a thin layer over the `finrs` library.
 //!
 //! [`cli`] declares the commands and options, [`commands`] runs each one
-//! (progress bars, Ctrl-C and the files it writes); this file only parses
-//! and dispatches.
+//! (progress bars, Ctrl-C and the files it writes), [`calibrate`] the
+//! board's calibration; this file only parses and dispatches.
 
+mod calibrate;
 mod cli;
 mod commands;
 
@@ -39,5 +40,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Stop(args) => commands::send(&args, &finrs_frames::Command::Stop),
         Command::ClearFault(args) => commands::send(&args, &finrs_frames::Command::ClearFault),
         Command::Limit { max_abs_v, send } => commands::limit(max_abs_v, &send),
+        Command::Calibrate { what } => calibrate::run(what),
     }
 }

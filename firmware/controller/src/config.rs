@@ -3,6 +3,7 @@
 use core::fmt;
 
 use finrs_drive::Limits;
+use finrs_frames::Calibration;
 
 /// Everything the controller needs to know about the board, in SI units.
 /// Checked by [`Controller::new`](crate::Controller::new); a refusal names
@@ -15,19 +16,20 @@ pub struct Config {
     /// Voltage and slew limits at start (the host may lower the voltage
     /// limit, never raise it).
     pub limits: Limits,
-    /// Load-cell scale, N per ADC count (finite, not zero; either sign).
-    pub newtons_per_count: f32,
+    /// The load cell's scale (N per ADC count: finite, not zero, either
+    /// sign) and each shunt's reading at 0 A (counts, at most
+    /// `adc_full_scale`): the board's build defaults, its stored
+    /// calibration, or the host's (`Command::SetCalibration`).
+    pub calibration: Calibration,
     /// ADC full-scale reading, counts (4095 for 12 bits).
     pub adc_full_scale: u16,
     /// A reading within this many counts of 0 or of full scale is saturated
     /// (twice it must stay below `adc_full_scale`).
     pub saturation_margin_counts: u16,
-    /// Shunt amplifier scale: i = (counts − `current_zero_counts`) ·
-    /// `amps_per_count`, A per count (finite, not zero; either sign).
+    /// Shunt amplifier scale: i = (counts − the segment's zero in
+    /// `calibration`) · `amps_per_count`, A per count (finite, not zero;
+    /// either sign).
     pub amps_per_count: f32,
-    /// The current channels' reading at 0 A, counts (at most
-    /// `adc_full_scale`).
-    pub current_zero_counts: u16,
     /// A segment current whose magnitude is above this is an overcurrent,
     /// A (finite, above 0).
     pub overcurrent_a: f32,
@@ -99,7 +101,10 @@ impl Config {
         if self.sample_hz == 0 {
             return err("sample_hz", ConfigRule::Positive);
         }
-        finite_nonzero("newtons_per_count", self.newtons_per_count)?;
+        finite_nonzero(
+            "calibration.newtons_per_count",
+            self.calibration.newtons_per_count,
+        )?;
         if self.adc_full_scale == 0 {
             return err("adc_full_scale", ConfigRule::Positive);
         }
@@ -107,8 +112,18 @@ impl Config {
             return err("saturation_margin_counts", ConfigRule::MarginTooWide);
         }
         finite_nonzero("amps_per_count", self.amps_per_count)?;
-        if self.current_zero_counts > self.adc_full_scale {
-            return err("current_zero_counts", ConfigRule::AboveFullScale);
+        // Every entry, the unused ones included: a stored calibration is
+        // valid for any segment count.
+        if self
+            .calibration
+            .current_zero_counts
+            .iter()
+            .any(|&z| z > self.adc_full_scale)
+        {
+            return err(
+                "calibration.current_zero_counts",
+                ConfigRule::AboveFullScale,
+            );
         }
         if !self.overcurrent_a.is_finite() {
             return err("overcurrent_a", ConfigRule::Finite);
@@ -137,21 +152,28 @@ impl Config {
                     .saturating_sub(self.saturation_margin_counts)
     }
 
-    /// Whether a current reading is saturated. An end of the ADC's range
-    /// counts only if 0 A is not itself within the margin of that end: a
-    /// unipolar shunt amplifier reads 0 counts at rest, which is no
-    /// saturation.
-    pub fn current_saturated(&self, counts: u16) -> bool {
+    /// Whether segment `k`'s current reading is saturated. An end of the
+    /// ADC's range counts only if 0 A is not itself within the margin of
+    /// that end: a unipolar shunt amplifier reads 0 counts at rest, which
+    /// is no saturation.
+    pub fn current_saturated(&self, k: usize, counts: u16) -> bool {
+        let zero = self.zero_counts(k);
         let low = self.saturation_margin_counts;
         let high = self
             .adc_full_scale
             .saturating_sub(self.saturation_margin_counts);
-        (counts <= low && self.current_zero_counts > low)
-            || (counts >= high && self.current_zero_counts < high)
+        (counts <= low && zero > low) || (counts >= high && zero < high)
     }
 
-    /// The current a reading stands for, A.
-    pub fn current_a(&self, counts: u16) -> f32 {
-        (f32::from(counts) - f32::from(self.current_zero_counts)) * self.amps_per_count
+    /// The current segment `k`'s reading stands for, A.
+    pub fn current_a(&self, k: usize, counts: u16) -> f32 {
+        (f32::from(counts) - f32::from(self.zero_counts(k))) * self.amps_per_count
+    }
+
+    /// Segment `k`'s shunt zero; a `k` beyond the calibration's eight
+    /// (never, for N ≤ 8) reads the last.
+    fn zero_counts(&self, k: usize) -> u16 {
+        let z = &self.calibration.current_zero_counts;
+        z[k.min(z.len() - 1)]
     }
 }

@@ -6,9 +6,9 @@ use core::fmt;
 
 use finrs_drive::{Envelope, Generator, LimitError, Limiter, Limits, Program, WaveError};
 use finrs_frames::{
-    encode_dropped, encode_fault, encode_info, encode_sample, Command, Dropped, Fault, FaultCode,
-    Info, ResetCause, Sample, SampleFlags, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN,
-    MAX_FRAME_LEN,
+    encode_dropped, encode_fault, encode_info, encode_sample, Calibration, CalibrationOrigin,
+    Command, Dropped, Fault, FaultCode, Info, ResetCause, Sample, SampleFlags, DROPPED_FRAME_LEN,
+    FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 use crate::config::{Config, ConfigError, ConfigRule};
@@ -64,6 +64,12 @@ pub enum CommandRefused {
     /// ClearFault while the fault's report has not been sent yet: a fault
     /// must be reported before it can be cleared.
     FaultNotReported,
+    /// SetCalibration while a program drives the outputs (or they have not
+    /// yet slewed to 0 V): Stop first, so that no recording mixes two
+    /// scales and the flash write stalls no drive.
+    CalibrationWhileDriving,
+    /// SetCalibration: a value breaks a rule (field and rule).
+    Calibration(ConfigError),
 }
 
 impl fmt::Display for CommandRefused {
@@ -82,6 +88,10 @@ impl fmt::Display for CommandRefused {
             Self::FaultNotReported => {
                 f.write_str("ClearFault refused: the fault has not been reported yet")
             }
+            Self::CalibrationWhileDriving => f.write_str(
+                "SetCalibration refused: the outputs are driven (Stop, and wait for 0 V, first)",
+            ),
+            Self::Calibration(e) => write!(f, "SetCalibration refused: {e}"),
         }
     }
 }
@@ -158,6 +168,10 @@ pub struct Controller<const N: usize> {
     /// An Info frame is due (after [`Controller::set_identity`] and on
     /// RequestInfo), until the sink takes one.
     info_pending: bool,
+    /// Where `config.calibration` came from.
+    calibration_origin: CalibrationOrigin,
+    /// A calibration the host set, for the board to store in flash.
+    calibration_to_store: Option<Calibration>,
 }
 
 /// What only the board knows of itself, for the Info frame (the rest comes
@@ -211,7 +225,46 @@ impl<const N: usize> Controller<N> {
             unseen_periods: 0,
             identity: None,
             info_pending: false,
+            calibration_origin: CalibrationOrigin::Defaults,
+            calibration_to_store: None,
         })
+    }
+
+    /// Uses `calibration`, read from the board's flash at boot, in place of
+    /// the configuration's; refused (the defaults kept) if a value breaks a
+    /// rule, as a damaged or foreign record might.
+    pub fn use_stored_calibration(&mut self, calibration: Calibration) -> Result<(), ConfigError> {
+        let config = Config {
+            calibration,
+            ..self.config
+        };
+        config.validate()?;
+        self.config = config;
+        self.calibration_origin = CalibrationOrigin::Stored;
+        Ok(())
+    }
+
+    /// The calibration a SetCalibration asked to store, if any (taken: the
+    /// board stores it once, then reports with
+    /// [`calibration_stored`](Self::calibration_stored)).
+    pub fn take_calibration_to_store(&mut self) -> Option<Calibration> {
+        self.calibration_to_store.take()
+    }
+
+    /// The board's report of a store: the origin becomes `Stored` or
+    /// `Unsaved`, and an Info frame tells the host.
+    pub fn calibration_stored(&mut self, stored: bool) {
+        self.calibration_origin = if stored {
+            CalibrationOrigin::Stored
+        } else {
+            CalibrationOrigin::Unsaved
+        };
+        self.info_pending = self.identity.is_some();
+    }
+
+    /// The calibration in force and where it came from.
+    pub fn calibration(&self) -> (Calibration, CalibrationOrigin) {
+        (self.config.calibration, self.calibration_origin)
     }
 
     /// One sample tick: checks the readings, updates the tare, computes the
@@ -228,7 +281,8 @@ impl<const N: usize> Controller<N> {
             self.skip(unseen);
         }
         self.last_tick = Some(input.tick);
-        let currents_a = input.current_counts.map(|c| self.config.current_a(c));
+        let currents_a: [f32; N] =
+            core::array::from_fn(|k| self.config.current_a(k, input.current_counts[k]));
         let counts = input.load_cell_counts;
         let saturated = self.config.load_cell_saturated(counts);
         if !saturated {
@@ -252,7 +306,8 @@ impl<const N: usize> Controller<N> {
             }
         }
         let (voltages_v, limiter_flags) = self.next_voltages(input.tick);
-        let force_n = (f32::from(counts) - self.tare_offset_counts) * self.config.newtons_per_count;
+        let force_n = (f32::from(counts) - self.tare_offset_counts)
+            * self.config.calibration.newtons_per_count;
         self.send_sample(
             &Sample {
                 seq: self.next_seq,
@@ -285,6 +340,11 @@ impl<const N: usize> Controller<N> {
     ///   latched fault it does nothing.
     /// - RequestInfo: an Info frame goes out at the next tick (once the
     ///   board has given its [`Identity`]).
+    /// - SetCalibration: refused while the outputs are driven or not yet
+    ///   at 0 V, or with the field and rule a value breaks; else used from
+    ///   the next tick and handed to the board to store
+    ///   ([`take_calibration_to_store`](Self::take_calibration_to_store)).
+    ///   The tare (in counts) is kept.
     pub fn command(&mut self, command: Command) -> Result<(), CommandRefused> {
         match command {
             Command::SetWave { program, envelope } => {
@@ -326,6 +386,23 @@ impl<const N: usize> Controller<N> {
                 self.fault = None;
             }
             Command::RequestInfo => self.info_pending = self.identity.is_some(),
+            Command::SetCalibration(calibration) => {
+                let driving = matches!(
+                    self.mode,
+                    Mode::Running { .. } | Mode::PowerUpTare { then_run: true }
+                ) || self.limiter.last_v().iter().any(|&v| v != 0.0);
+                if driving {
+                    return Err(CommandRefused::CalibrationWhileDriving);
+                }
+                let config = Config {
+                    calibration,
+                    ..self.config
+                };
+                config.validate().map_err(CommandRefused::Calibration)?;
+                self.config = config;
+                self.calibration_origin = CalibrationOrigin::Unsaved;
+                self.calibration_to_store = Some(calibration);
+            }
         }
         Ok(())
     }
@@ -443,7 +520,8 @@ impl<const N: usize> Controller<N> {
         if let Some(k) = input
             .current_counts
             .iter()
-            .position(|&c| self.config.current_saturated(c))
+            .enumerate()
+            .position(|(k, &c)| self.config.current_saturated(k, c))
         {
             return Some((FaultCode::AdcSaturation, Some(k as u8)));
         }
@@ -545,13 +623,13 @@ impl<const N: usize> Controller<N> {
             segments: N as u8,
             dac_segments: id.dac_segments,
             sample_hz: c.sample_hz,
-            newtons_per_count: c.newtons_per_count,
+            calibration: c.calibration,
             amps_per_count: c.amps_per_count,
-            current_zero_counts: c.current_zero_counts,
             max_abs_v: self.limiter.limits().max_abs_v(),
             slew_v_per_s: self.limiter.limits().slew_v_per_s(),
             bridge_supply_v: id.bridge_supply_v,
             overcurrent_a: c.overcurrent_a,
+            calibration_origin: self.calibration_origin,
             reset_cause: id.reset_cause,
         })
     }

@@ -97,7 +97,7 @@
 //! # Example
 //!
 //! ```
-//! use finrs_controller::{Config, Controller, FrameSink, TickInput};
+//! use finrs_controller::{Calibration, Config, Controller, FrameSink, TickInput};
 //! use finrs_drive::Limits;
 //!
 //! struct Channel(Vec<u8>);
@@ -111,11 +111,13 @@
 //! let config = Config {
 //!     sample_hz: 1000,
 //!     limits: Limits::new(2.0, 100.0).unwrap(),
-//!     newtons_per_count: 1e-4,
+//!     calibration: Calibration {
+//!         newtons_per_count: 1e-4,
+//!         current_zero_counts: [2048; 8],
+//!     },
 //!     adc_full_scale: 4095,
 //!     saturation_margin_counts: 2,
 //!     amps_per_count: 1e-3,
-//!     current_zero_counts: 2048,
 //!     overcurrent_a: 0.5,
 //!     tare_samples: 100,
 //! };
@@ -150,5 +152,5 @@ mod output;
 
 pub use config::{Config, ConfigError, ConfigRule};
 pub use controller::{CommandRefused, Controller, FrameSink, Identity, TickInput, TickOutput};
-pub use finrs_frames::FaultCode;
+pub use finrs_frames::{Calibration, CalibrationOrigin, FaultCode};
 pub use output::{DacOutput, DacWrite, HBridge, OutputError, SegmentOutput, DAC_MAX_CODE};

@@ -70,13 +70,13 @@ fn config_errors_name_field_and_rule() {
     };
     check(|c| c.sample_hz = 0, "sample_hz", ConfigRule::Positive);
     check(
-        |c| c.newtons_per_count = f32::NAN,
-        "newtons_per_count",
+        |c| c.calibration.newtons_per_count = f32::NAN,
+        "calibration.newtons_per_count",
         ConfigRule::Finite,
     );
     check(
-        |c| c.newtons_per_count = 0.0,
-        "newtons_per_count",
+        |c| c.calibration.newtons_per_count = 0.0,
+        "calibration.newtons_per_count",
         ConfigRule::NonZero,
     );
     check(
@@ -95,8 +95,8 @@ fn config_errors_name_field_and_rule() {
         ConfigRule::Finite,
     );
     check(
-        |c| c.current_zero_counts = 4096,
-        "current_zero_counts",
+        |c| c.calibration.current_zero_counts[7] = 4096,
+        "calibration.current_zero_counts",
         ConfigRule::AboveFullScale,
     );
     check(
@@ -112,7 +112,7 @@ fn config_errors_name_field_and_rule() {
     check(|c| c.tare_samples = 0, "tare_samples", ConfigRule::Positive);
     // A negative scale is a mounting direction, not an error.
     let mut cfg = config();
-    cfg.newtons_per_count = -1e-3;
+    cfg.calibration.newtons_per_count = -1e-3;
     cfg.amps_per_count = -1e-3;
     assert!(Controller::<N>::new(cfg).is_ok());
     // Every segment count builds its idle program.
@@ -372,7 +372,7 @@ fn saturation_of_each_channel() {
     assert_eq!(c.fault_state(), Some((FaultCode::AdcSaturation, Some(1))));
     // A unipolar shunt amplifier reads 0 at rest: no saturation there.
     let mut cfg = config();
-    cfg.current_zero_counts = 0;
+    cfg.calibration.current_zero_counts = [0; 8];
     let mut c = Controller::<N>::new(cfg).unwrap();
     for t in 0..20 {
         c.tick(&input(t, 1000, [0; N]), &mut ch);

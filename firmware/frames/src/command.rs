@@ -28,7 +28,7 @@ use core::fmt;
 use finrs_drive::{Envelope, Program};
 
 use crate::encode::Writer;
-use crate::{crc16, EncodeError, CRC_LEN, HEADER_LEN, SYNC};
+use crate::{crc16, Calibration, EncodeError, CALIBRATION_LEN, CRC_LEN, HEADER_LEN, SYNC};
 
 const KIND_SET_WAVE: u8 = 0x81;
 const KIND_TARE: u8 = 0x82;
@@ -36,6 +36,7 @@ const KIND_STOP: u8 = 0x83;
 const KIND_SET_LIMIT: u8 = 0x84;
 const KIND_CLEAR_FAULT: u8 = 0x85;
 const KIND_REQUEST_INFO: u8 = 0x86;
+const KIND_SET_CALIBRATION: u8 = 0x87;
 
 const PROGRAM_TRAVELLING: u8 = 1;
 const PROGRAM_STANDING: u8 = 2;
@@ -82,6 +83,7 @@ const fn command_len_ok(kind: u8, len: usize) -> bool {
         }
         KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT | KIND_REQUEST_INFO => len == 0,
         KIND_SET_LIMIT => len == SET_LIMIT_PAYLOAD_LEN,
+        KIND_SET_CALIBRATION => len == CALIBRATION_LEN,
         _ => false,
     }
 }
@@ -110,6 +112,9 @@ pub enum Command {
     ClearFault,
     /// Send an Info frame ([`Info`](crate::Info)) again.
     RequestInfo,
+    /// Use this calibration from now on and store it in the board's flash
+    /// (refused while a program drives the outputs).
+    SetCalibration(Calibration),
 }
 
 /// Why bytes on the down channel were not a command.
@@ -120,7 +125,7 @@ pub enum CommandError {
         /// How many.
         skipped_bytes: usize,
     },
-    /// The header's kind is not a command kind (0x81..=0x86).
+    /// The header's kind is not a command kind (0x81..=0x87).
     UnknownKind(u8),
     /// The payload length does not fit the kind (or, for a SetWave, its
     /// program kind).
@@ -150,7 +155,7 @@ impl fmt::Display for CommandError {
             Self::NoSync { skipped_bytes } => {
                 write!(f, "{skipped_bytes} bytes without a sync pair skipped")
             }
-            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x86)"),
+            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x87)"),
             Self::BadLength { kind, len } => {
                 write!(f, "length {len} does not fit command kind {kind:#04x}")
             }
@@ -197,6 +202,11 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
         }
         Command::ClearFault => Ok(Writer::start(out, KIND_CLEAR_FAULT, 0)?.finish()),
         Command::RequestInfo => Ok(Writer::start(out, KIND_REQUEST_INFO, 0)?.finish()),
+        Command::SetCalibration(c) => {
+            let mut w = Writer::start(out, KIND_SET_CALIBRATION, CALIBRATION_LEN)?;
+            w.put(&c.to_bytes());
+            Ok(w.finish())
+        }
     }
 }
 
@@ -378,7 +388,7 @@ impl CommandDecoder {
             return Step::NeedMore;
         }
         let (kind, len) = (b[2], b[3]);
-        if !(KIND_SET_WAVE..=KIND_REQUEST_INFO).contains(&kind) {
+        if !(KIND_SET_WAVE..=KIND_SET_CALIBRATION).contains(&kind) {
             return Step::Refuse(1, CommandError::UnknownKind(kind));
         }
         if !command_len_ok(kind, usize::from(len)) {
@@ -471,6 +481,13 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
         }),
         KIND_CLEAR_FAULT => Ok(Command::ClearFault),
         KIND_REQUEST_INFO => Ok(Command::RequestInfo),
+        KIND_SET_CALIBRATION => p
+            .try_into()
+            .map(|b| Command::SetCalibration(Calibration::from_bytes(b)))
+            .map_err(|_| CommandError::BadLength {
+                kind,
+                len: p.len() as u8,
+            }),
         _ => Err(CommandError::UnknownKind(kind)),
     }
 }

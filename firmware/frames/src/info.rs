@@ -1,11 +1,12 @@
 //! The Info frame: what the firmware is and how it is set up, so that a
 //! recording says which firmware, configuration and reset made it.
 
+use crate::calibration::{Calibration, CalibrationOrigin, CALIBRATION_LEN};
 use crate::encode::{EncodeError, Writer};
 use crate::{crc16, KIND_INFO, MAX_SEGMENTS, NO_SEGMENT};
 
 /// Payload length of an Info frame.
-pub(crate) const INFO_PAYLOAD_LEN: usize = 44;
+pub(crate) const INFO_PAYLOAD_LEN: usize = 59;
 
 /// Why the core last reset, as the firmware read it at boot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -84,12 +85,10 @@ pub struct Info {
     pub dac_segments: [Option<u8>; 2],
     /// Sample rate, Hz.
     pub sample_hz: u32,
-    /// Load-cell scale, N per count.
-    pub newtons_per_count: f32,
+    /// Load-cell scale and shunt zeros in force.
+    pub calibration: Calibration,
     /// Shunt scale, A per count.
     pub amps_per_count: f32,
-    /// Shunt reading at zero current, counts.
-    pub current_zero_counts: u16,
     /// The voltage limit in force when the frame was sent, V.
     pub max_abs_v: f32,
     /// The slew limit, V/s.
@@ -98,24 +97,26 @@ pub struct Info {
     pub bridge_supply_v: f32,
     /// A segment drawing more than this is a fault, A.
     pub overcurrent_a: f32,
+    /// Where the calibration came from.
+    pub calibration_origin: CalibrationOrigin,
     /// Why the core last reset.
     pub reset_cause: ResetCause,
 }
 
 impl Info {
     /// A CRC-16 of the configuration (every field from `segments` to
-    /// `overcurrent_a`, as encoded): two recordings with the same value
-    /// came from the same set-up. The frame carries it; the decoder checks
-    /// it.
+    /// `overcurrent_a`, as encoded, the calibration among them): two
+    /// recordings with the same value came from the same set-up. The frame
+    /// carries it; the decoder checks it.
     pub fn config_crc(&self) -> Option<u16> {
         let mut buf = [0u8; INFO_PAYLOAD_LEN];
-        let n = self.payload(&mut buf)?;
-        Some(crc16(&buf[CONFIG_AT..n - 3]))
+        self.payload(&mut buf)?;
+        Some(crc16(&buf[CONFIG_AT..CONFIG_END]))
     }
 
-    /// Writes the payload without its trailing config CRC; returns the full
-    /// payload length, `None` if a field cannot be encoded.
-    fn payload(&self, p: &mut [u8; INFO_PAYLOAD_LEN]) -> Option<usize> {
+    /// Writes the payload without its trailing config CRC, `None` if a
+    /// field cannot be encoded.
+    fn payload(&self, p: &mut [u8; INFO_PAYLOAD_LEN]) -> Option<()> {
         if self.segments == 0 || usize::from(self.segments) > MAX_SEGMENTS {
             return None;
         }
@@ -138,32 +139,34 @@ impl Info {
             dac(self.dac_segments[1])?,
         ]);
         put(&self.sample_hz.to_le_bytes());
-        put(&self.newtons_per_count.to_le_bytes());
+        put(&self.calibration.to_bytes());
         put(&self.amps_per_count.to_le_bytes());
-        put(&self.current_zero_counts.to_le_bytes());
         put(&self.max_abs_v.to_le_bytes());
         put(&self.slew_v_per_s.to_le_bytes());
         put(&self.bridge_supply_v.to_le_bytes());
         put(&self.overcurrent_a.to_le_bytes());
-        put(&[self.reset_cause as u8]);
-        Some(at + 2)
+        put(&[self.calibration_origin as u8, self.reset_cause as u8]);
+        debug_assert_eq!(at + 2, INFO_PAYLOAD_LEN);
+        Some(())
     }
 }
 
-/// The layout's version, first byte of the payload.
-const FORMAT_VERSION: u8 = 1;
+/// The layout's version, first byte of the payload (2: the calibration,
+/// with a zero per segment and its origin).
+const FORMAT_VERSION: u8 = 2;
 /// Where the configuration starts in the payload (after the format
 /// version, the firmware version and the git hash).
 const CONFIG_AT: usize = 8;
+/// Where it ends: the origin, the reset cause and the CRC follow.
+const CONFIG_END: usize = INFO_PAYLOAD_LEN - 4;
 
 /// Writes `info` as an Info frame at the start of `out`; returns the
 /// frame's length, [`INFO_FRAME_LEN`](crate::INFO_FRAME_LEN).
 pub fn encode_info(info: &Info, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut p = [0u8; INFO_PAYLOAD_LEN];
-    let n = info.payload(&mut p).ok_or(EncodeError::BadInfo)?;
-    // The configuration runs up to the reset cause, which is not part of it.
-    let crc = crc16(&p[CONFIG_AT..n - 3]);
-    p[n - 2..n].copy_from_slice(&crc.to_le_bytes());
+    info.payload(&mut p).ok_or(EncodeError::BadInfo)?;
+    let crc = crc16(&p[CONFIG_AT..CONFIG_END]);
+    p[INFO_PAYLOAD_LEN - 2..].copy_from_slice(&crc.to_le_bytes());
     let mut w = Writer::start(out, KIND_INFO, INFO_PAYLOAD_LEN)?;
     w.put(&p);
     Ok(w.finish())
@@ -190,14 +193,14 @@ pub(crate) fn parse_info(p: &[u8]) -> Option<Info> {
         segments: p[8],
         dac_segments: [dac(p[9])?, dac(p[10])?],
         sample_hz: u32_at(11),
-        newtons_per_count: f32_at(15),
-        amps_per_count: f32_at(19),
-        current_zero_counts: u16_at(23),
-        max_abs_v: f32_at(25),
-        slew_v_per_s: f32_at(29),
-        bridge_supply_v: f32_at(33),
-        overcurrent_a: f32_at(37),
-        reset_cause: ResetCause::from_u8(p[41])?,
+        calibration: Calibration::from_bytes(p[15..15 + CALIBRATION_LEN].try_into().ok()?),
+        amps_per_count: f32_at(35),
+        max_abs_v: f32_at(39),
+        slew_v_per_s: f32_at(43),
+        bridge_supply_v: f32_at(47),
+        overcurrent_a: f32_at(51),
+        calibration_origin: CalibrationOrigin::from_u8(p[55])?,
+        reset_cause: ResetCause::from_u8(p[56])?,
     };
-    (info.config_crc()? == u16_at(42)).then_some(info)
+    (info.config_crc()? == u16_at(57)).then_some(info)
 }

@@ -31,14 +31,16 @@
 //!   2 ADC saturation, 3 missed deadline, 4 watchdog or other, 5 a supply
 //!   out of range at boot), `segment` u8
 //!   (0-based segment index, below 8; 0xFF if no segment is concerned).
-//! - **Info**, `len` = 44 ([`Info`]): layout version u8 (1), firmware
+//! - **Info**, `len` = 59 ([`Info`]): layout version u8 (2), firmware
 //!   version u8 × 3, git hash u32 (its first eight hex digits), segments u8,
-//!   DAC1's and DAC2's segment u8 (0xFF none), `sample_hz` u32,
-//!   `newtons_per_count` f32, `amps_per_count` f32, `current_zero_counts`
-//!   u16, `max_abs_v` f32 (the limit in force), `slew_v_per_s` f32,
-//!   `bridge_supply_v` f32, `overcurrent_a` f32, reset cause u8
-//!   ([`ResetCause`]), then a CRC-16 of the configuration (segments to
-//!   `overcurrent_a`) u16. Sent before the first Sample and on request; it
+//!   DAC1's and DAC2's segment u8 (0xFF none), `sample_hz` u32, the
+//!   calibration (20 bytes, [`Calibration`]: `newtons_per_count` f32, then
+//!   8 shunt zeros u16, counts), `amps_per_count` f32, `max_abs_v` f32
+//!   (the limit in force), `slew_v_per_s` f32, `bridge_supply_v` f32,
+//!   `overcurrent_a` f32, the calibration's origin u8
+//!   ([`CalibrationOrigin`]), reset cause u8 ([`ResetCause`]), then a
+//!   CRC-16 of the configuration (segments to `overcurrent_a`) u16. Sent
+//!   before the first Sample, on request, and after a SetCalibration; it
 //!   takes no sequence number.
 //!
 //! # Commands (down channel)
@@ -55,6 +57,7 @@
 //! | 0x84 | SetLimit | 4 | `max_abs_v` f32 (may only lower the limit) |
 //! | 0x85 | ClearFault | 0 | |
 //! | 0x86 | RequestInfo | 0 | |
+//! | 0x87 | SetCalibration | 20 | [`Calibration`]: `newtons_per_count` f32, 8 shunt zeros u16 (counts); the board stores it in flash |
 //!
 //! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,
 //! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
@@ -113,12 +116,14 @@
 #![no_std]
 #![deny(missing_docs, unsafe_code)]
 
+mod calibration;
 mod command;
 mod crc;
 mod decode;
 mod encode;
 mod info;
 
+pub use calibration::{Calibration, CalibrationOrigin, CALIBRATION_LEN};
 pub use command::{
     encode_command, Command, CommandDecoder, CommandError, CommandEvent, MAX_COMMAND_LEN,
 };

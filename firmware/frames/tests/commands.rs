@@ -4,8 +4,8 @@
 
 use finrs_drive::{Envelope, Program};
 use finrs_frames::{
-    crc16, encode_command, encode_sample, Command, CommandDecoder, CommandError, CommandEvent,
-    EncodeError, Sample, MAX_COMMAND_LEN, MAX_FRAME_LEN,
+    crc16, encode_command, encode_sample, Calibration, Command, CommandDecoder, CommandError,
+    CommandEvent, EncodeError, Sample, MAX_COMMAND_LEN, MAX_FRAME_LEN,
 };
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -95,6 +95,17 @@ fn layout_is_as_documented() {
     assert_eq!(frame(&Command::Stop), framed(0x83, &[]));
     assert_eq!(frame(&Command::ClearFault), framed(0x85, &[]));
     assert_eq!(frame(&Command::RequestInfo), framed(0x86, &[]));
+    let mut calibration = 2.5e-5f32.to_le_bytes().to_vec();
+    for z in [2048u16, 2047, 2049, 2048, 2048, 2048, 2048, 1] {
+        calibration.extend(z.to_le_bytes());
+    }
+    assert_eq!(
+        frame(&Command::SetCalibration(Calibration {
+            newtons_per_count: 2.5e-5,
+            current_zero_counts: [2048, 2047, 2049, 2048, 2048, 2048, 2048, 1],
+        })),
+        framed(0x87, &calibration)
+    );
     assert_eq!(
         frame(&Command::SetLimit { max_abs_v: 1.25 }),
         framed(0x84, &1.25f32.to_le_bytes())
@@ -218,8 +229,8 @@ fn refusals_name_their_reason() {
     );
     assert!(events.iter().all(|e| matches!(e, CommandEvent::Refused(_))));
 
-    assert_eq!(f(0x87, &[]), {
-        let mut v = r(CommandError::UnknownKind(0x87));
+    assert_eq!(f(0x88, &[]), {
+        let mut v = r(CommandError::UnknownKind(0x88));
         v.push(CommandEvent::Refused(CommandError::NoSync {
             skipped_bytes: 5,
         }));
@@ -374,6 +385,12 @@ fn any_command() -> BoxedStrategy<Command> {
         1 => any_f32().prop_map(|max_abs_v| Command::SetLimit { max_abs_v }),
         1 => Just(Command::ClearFault),
         1 => Just(Command::RequestInfo),
+        1 => (any_f32(), any::<[u16; 8]>()).prop_map(|(newtons_per_count, current_zero_counts)| {
+            Command::SetCalibration(Calibration {
+                newtons_per_count,
+                current_zero_counts,
+            })
+        }),
     ]
     .boxed()
 }
@@ -446,6 +463,11 @@ fn bits(c: &Command) -> Vec<u32> {
         Command::SetLimit { max_abs_v } => vec![12, max_abs_v.to_bits()],
         Command::ClearFault => vec![13],
         Command::RequestInfo => vec![14],
+        Command::SetCalibration(c) => {
+            let mut v = vec![15, c.newtons_per_count.to_bits()];
+            v.extend(c.current_zero_counts.iter().map(|&z| u32::from(z)));
+            v
+        }
     }
 }
 
@@ -454,7 +476,7 @@ fn any_chunks() -> impl Strategy<Value = Vec<usize>> {
 }
 
 fn junk_byte() -> impl Strategy<Value = u8> {
-    prop_oneof![4 => any::<u8>(), 1 => Just(0xF1), 1 => Just(0x5E), 1 => 0x81u8..=0x85]
+    prop_oneof![4 => any::<u8>(), 1 => Just(0xF1), 1 => Just(0x5E), 1 => 0x81u8..=0x87]
 }
 
 #[derive(Clone, Debug)]

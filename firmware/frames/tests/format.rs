@@ -308,13 +308,16 @@ fn info() -> finrs_frames::Info {
         segments: 3,
         dac_segments: [Some(2), None],
         sample_hz: 1000,
-        newtons_per_count: 2.5e-5,
+        calibration: finrs_frames::Calibration {
+            newtons_per_count: 2.5e-5,
+            current_zero_counts: [2048, 2049, 2047, 2048, 2048, 2048, 2048, 2050],
+        },
         amps_per_count: 2.5e-4,
-        current_zero_counts: 2048,
         max_abs_v: 3.64,
         slew_v_per_s: 200.0,
         bridge_supply_v: 5.0,
         overcurrent_a: 0.4,
+        calibration_origin: finrs_frames::CalibrationOrigin::Stored,
         reset_cause: finrs_frames::ResetCause::Watchdog,
     }
 }
@@ -324,22 +327,26 @@ fn info_layout_is_as_documented_and_round_trips() {
     use finrs_frames::{encode_info, Decoder, Event, INFO_FRAME_LEN};
     let i = info();
     let mut buf = [0u8; INFO_FRAME_LEN];
-    assert_eq!(encode_info(&i, &mut buf), Ok(4 + 44 + 2));
-    assert_eq!(&buf[..4], &[0xF1, 0x5E, 4, 44]);
-    let p = &buf[4..48];
-    assert_eq!(p[0], 1, "layout version");
+    assert_eq!(encode_info(&i, &mut buf), Ok(4 + 59 + 2));
+    assert_eq!(&buf[..4], &[0xF1, 0x5E, 4, 59]);
+    let p = &buf[4..63];
+    assert_eq!(p[0], 2, "layout version");
     assert_eq!(&p[1..4], &[0, 1, 2]);
     assert_eq!(&p[4..8], &0x1a2b_3c4du32.to_le_bytes());
     assert_eq!(&p[8..11], &[3, 2, 0xFF]);
     assert_eq!(&p[11..15], &1000u32.to_le_bytes());
     assert_eq!(&p[15..19], &2.5e-5f32.to_le_bytes());
-    assert_eq!(&p[23..25], &2048u16.to_le_bytes());
-    assert_eq!(&p[25..29], &3.64f32.to_le_bytes());
-    assert_eq!(&p[37..41], &0.4f32.to_le_bytes());
-    assert_eq!(p[41], 5, "watchdog");
-    assert_eq!(&p[42..44], &crc16(&p[8..41]).to_le_bytes());
-    assert_eq!(i.config_crc(), Some(crc16(&p[8..41])));
-    assert_eq!(&buf[48..], &crc16(&buf[2..48]).to_le_bytes());
+    assert_eq!(&p[19..21], &2048u16.to_le_bytes());
+    assert_eq!(&p[21..23], &2049u16.to_le_bytes());
+    assert_eq!(&p[33..35], &2050u16.to_le_bytes(), "segment 8's zero");
+    assert_eq!(&p[35..39], &2.5e-4f32.to_le_bytes());
+    assert_eq!(&p[39..43], &3.64f32.to_le_bytes());
+    assert_eq!(&p[51..55], &0.4f32.to_le_bytes());
+    assert_eq!(p[55], 1, "stored calibration");
+    assert_eq!(p[56], 5, "watchdog");
+    assert_eq!(&p[57..59], &crc16(&p[8..55]).to_le_bytes());
+    assert_eq!(i.config_crc(), Some(crc16(&p[8..55])));
+    assert_eq!(&buf[63..], &crc16(&buf[2..63]).to_le_bytes());
     let mut d = Decoder::new();
     let mut got = Vec::new();
     d.push(&buf, &mut |e| got.push(e));
@@ -356,6 +363,15 @@ fn info_layout_is_as_documented_and_round_trips() {
         ..i
     };
     assert_ne!(lower.config_crc(), i.config_crc());
+    // The calibration is configuration, its origin is not.
+    let mut recalibrated = i;
+    recalibrated.calibration.current_zero_counts[7] = 2051;
+    assert_ne!(recalibrated.config_crc(), i.config_crc());
+    let unsaved = finrs_frames::Info {
+        calibration_origin: finrs_frames::CalibrationOrigin::Unsaved,
+        ..i
+    };
+    assert_eq!(unsaved.config_crc(), i.config_crc());
 }
 
 #[test]
@@ -381,11 +397,11 @@ fn a_bad_info_is_refused_by_the_encoder_and_the_decoder() {
     // A config CRC that does not match, an unknown reset cause, another
     // layout version: each a frame whose CRC checks but whose content is
     // refused as corrupt.
-    for (at, value) in [(4 + 42, 0u8), (4 + 41, 99), (4, 2)] {
+    for (at, value) in [(4 + 57, 0u8), (4 + 56, 99), (4 + 55, 3), (4, 1)] {
         encode_info(&info(), &mut buf).unwrap();
         buf[at] = value;
-        let crc = crc16(&buf[2..48]);
-        buf[48..].copy_from_slice(&crc.to_le_bytes());
+        let crc = crc16(&buf[2..63]);
+        buf[63..].copy_from_slice(&crc.to_le_bytes());
         let mut events = Vec::new();
         let mut d = Decoder::new();
         d.push(&buf, &mut |e| events.push(e));

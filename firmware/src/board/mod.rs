@@ -7,7 +7,9 @@
 //!   counts, numbered by the board's count of periods; `None` when the run
 //!   is over), `write_v(Option<&[f32; N]>)`
 //!   through the `SegmentOutput`s (`None`: every output off, where 0 V
-//!   would hold the strip), `off()`, `feed_watchdog()`, `deadline_missed()`;
+//!   would hold the strip), `off()`, `feed_watchdog()`, `deadline_missed()`,
+//!   `store_calibration(&Calibration) -> bool` (false where it could not
+//!   be stored);
 //! - `FrameOut`: the controller's non-blocking `FrameSink`;
 //! - `CommandIn`: `read(&mut [u8]) -> usize`, never blocking;
 //! - `pace()` and `housekeeping(&mut Housekeeping)`: the board's async
@@ -42,4 +44,7 @@ pub struct Parts {
         finrs_firmware_support::supply::Supplies,
         finrs_firmware_support::supply::SupplyError,
     >,
+    /// The calibration stored in flash, if any (QEMU: none, it has no
+    /// flash to keep one).
+    pub stored_calibration: Option<finrs_frames::Calibration>,
 }

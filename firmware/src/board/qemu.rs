@@ -200,6 +200,8 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
         // QEMU's netduinoplus2 has no reset flags to read, and no supplies.
         reset_cause: finrs_frames::ResetCause::Unknown,
         supply,
+        // No flash to keep one across runs.
+        stored_calibration: None,
     }
 }
 
@@ -273,6 +275,12 @@ impl Io {
 
     /// QEMU does not emulate the IWDG: nothing to feed.
     pub fn feed_watchdog(&mut self) {}
+
+    /// QEMU's netduinoplus2 models no flash programming: a calibration the
+    /// host sets is used but not stored (the Info frame says "unsaved").
+    pub fn store_calibration(&mut self, _: &finrs_frames::Calibration) -> bool {
+        false
+    }
 
     /// Whether the pacer pended the next sample before this one finished.
     pub fn deadline_missed(&mut self) -> bool {

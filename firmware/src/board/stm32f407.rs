@@ -26,6 +26,17 @@
 //!   ([`FRAME_RTT_BYTES`]), down channel 0 the commands; all never block.
 //! - IWDG: [`WATCHDOG_MS`], fed by the sample task; frozen while a debugger
 //!   halts the core.
+//! - Calibration: records in flash sectors 10 and 11
+//!   (`calibration_store::BOARD_REGION`), read at boot, appended by the
+//!   sample task when the host sets one (the outputs are at 0 V then: the
+//!   controller refuses a SetCalibration while driving). Through the HAL's
+//!   flash driver (x8 parallelism, any supply voltage). A record programs
+//!   32 bytes; while flash programs, reads of it stall the core (RM0090
+//!   §3.5.4; DS8626 gives 16 µs typical a byte), so the tick overruns and
+//!   its unseen periods go out as dropped samples. Only when a sector is
+//!   full (every 4096 stores) is the other erased: DS8626 gives up to 4 s
+//!   for a 128 KiB sector at x8, during which nothing runs, so the
+//!   watchdog is widened to [`ERASE_WATCHDOG_MS`] first and restored after.
 //! - Panic, HardFault, NMI and any interrupt without a handler: every used
 //!   timer's PWM outputs are forced low (the bridge open) and its compare
 //!   registers zeroed, and every used DAC set to its 0 V code, by register
@@ -62,8 +73,11 @@ use crate::config::{
     BRIDGE_SUPPLY_V, DAC_GAIN, DAC_SEGMENTS, DAC_VREF_V, DAC_ZERO_CODE, N, SAMPLE_HZ,
 };
 use crate::{Mono, SYSCLK_HZ};
+use finrs_firmware_support::calibration_store::{self, BOARD_REGION};
 use finrs_firmware_support::reset;
 use finrs_firmware_support::supply::{self, Supplies, SupplyError};
+use finrs_frames::Calibration;
+use stm32f4xx_hal::flash::{FlashExt, LockedFlash};
 
 /// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
 /// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
@@ -73,6 +87,11 @@ pub const PWM_HZ: u32 = 25_000;
 /// Watchdog period, ms: 20 sample periods, far beyond any normal jitter,
 /// short enough that a hung firmware stops driving within a blink.
 pub const WATCHDOG_MS: u32 = 20;
+
+/// Watchdog period while a flash sector is erased, ms: twice DS8626's
+/// longest 128 KiB erase at x8 (4 s), so that the LSI's spread (17 to 47
+/// kHz, nominal 32) still leaves it above 4 s.
+pub const ERASE_WATCHDOG_MS: u32 = 8_000;
 
 /// Frame up channel, bytes. A Sample is 19 + 8 N bytes: 43 at N = 3 (43
 /// kB/s at 1 kHz), 83 at N = 8. probe-rs polls RTT every few ms but a busy
@@ -257,6 +276,8 @@ pub struct Io {
     /// The supplies were in range at boot; if not, nothing is ever driven.
     supply_ok: bool,
     watchdog: IndependentWatchdog,
+    /// The calibration's records (flash sectors 10 and 11).
+    flash: LockedFlash,
 }
 
 /// RTT up channel 1, in NoBlockSkip mode: a frame goes whole or not at all.
@@ -483,6 +504,18 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     init_adcs(&dp.ADC1, &dp.ADC2, &dp.ADC3, &dp.ADC_COMMON, &mut rcc);
     init_trigger(dp.TIM5, &dp.TIM3, &mut rcc);
 
+    let mut flash = LockedFlash::new(dp.FLASH);
+    let stored_calibration = match calibration_store::load(&mut flash, BOARD_REGION) {
+        Ok(found) => found,
+        Err(_) => {
+            defmt::warn!("calibration: flash unreadable, build defaults");
+            None
+        }
+    };
+    if let Some(s) = stored_calibration {
+        defmt::info!("calibration: record {} from flash", s.seq);
+    }
+
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.stop_on_debug(&dp.DBGMCU, true);
     watchdog.start(WATCHDOG_MS.millis());
@@ -501,12 +534,14 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             secondary_late: false,
             supply_ok: supply.is_ok(),
             watchdog,
+            flash,
         },
         frames,
         commands,
         housekeeping: Housekeeping,
         reset_cause: cause,
         supply,
+        stored_calibration: stored_calibration.map(|s| s.calibration),
     }
 }
 
@@ -770,11 +805,50 @@ impl Io {
         self.watchdog.feed();
     }
 
+    /// Appends `calibration` to the flash records; true once it reads back.
+    /// Call with the outputs at 0 V: it stalls the core (module doc).
+    pub fn store_calibration(&mut self, calibration: &Calibration) -> bool {
+        let Self {
+            flash, watchdog, ..
+        } = self;
+        let mut erased = false;
+        let result = {
+            let mut unlocked = flash.unlocked();
+            calibration_store::save(&mut unlocked, BOARD_REGION, calibration, || {
+                erased = true;
+                set_watchdog(watchdog, ERASE_WATCHDOG_MS);
+            })
+        };
+        if erased {
+            set_watchdog(watchdog, WATCHDOG_MS);
+        }
+        match result {
+            Ok(seq) => {
+                defmt::info!("calibration: stored as record {}", seq);
+                true
+            }
+            Err(_) => {
+                defmt::error!("calibration: the flash write failed; not stored");
+                false
+            }
+        }
+    }
+
     /// Whether the next group already ended (this period overran), or
     /// ADC2/ADC3's group was late (their results are then a period old).
     pub fn deadline_missed(&mut self) -> bool {
         core::mem::take(&mut self.secondary_late) || self.adc1.sr().read().jeoc().bit_is_set()
     }
+}
+
+/// A new watchdog period, in force before this returns: the IWDG takes a
+/// new prescaler and reload value up to 5 LSI periods after they are
+/// written (RM0090 §21.3.2, PVU/RVU), and a reload before that would load
+/// the old one; 1 ms covers 5 periods of the slowest LSI (17 kHz).
+fn set_watchdog(watchdog: &mut IndependentWatchdog, period_ms: u32) {
+    watchdog.start(period_ms.millis());
+    cortex_m::asm::delay(SYSCLK_HZ / 1_000);
+    watchdog.feed();
 }
 
 /// Waits (bounded) for a secondary ADC's group to end and clears its flag;

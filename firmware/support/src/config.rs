@@ -1,7 +1,7 @@
 //! The fin driver's configuration: one place for the numbers both builds
 //! run with (the QEMU build converts its plant with the same scales).
 
-use finrs_controller::Config;
+use finrs_controller::{Calibration, Config};
 use finrs_drive::{LimitError, Limits};
 
 /// Segments driven: `FINRS_SEGMENTS` at build time (1..=8), 3 if unset.
@@ -152,6 +152,13 @@ pub const AMPS_PER_COUNT: f32 = 2.5e-4;
 /// Shunt reading at zero current, counts (bipolar amplifier at mid-scale).
 pub const CURRENT_ZERO_COUNTS: u16 = 2048;
 
+/// The calibration a board uses until one is stored in its flash
+/// (`finrs calibrate`): the nominal scale, every shunt at its nominal zero.
+pub const DEFAULT_CALIBRATION: Calibration = Calibration {
+    newtons_per_count: NEWTONS_PER_COUNT,
+    current_zero_counts: [CURRENT_ZERO_COUNTS; finrs_frames::MAX_SEGMENTS],
+};
+
 /// A segment drawing more than this is a fault, A.
 pub const OVERCURRENT_A: f32 = 0.4;
 
@@ -160,11 +167,10 @@ pub fn controller_config() -> Result<Config, LimitError> {
     Ok(Config {
         sample_hz: SAMPLE_HZ,
         limits: Limits::new(POWER_UP_LIMIT_V, SLEW_V_PER_S)?,
-        newtons_per_count: NEWTONS_PER_COUNT,
+        calibration: DEFAULT_CALIBRATION,
         adc_full_scale: 4095,
         saturation_margin_counts: 8,
         amps_per_count: AMPS_PER_COUNT,
-        current_zero_counts: CURRENT_ZERO_COUNTS,
         overcurrent_a: OVERCURRENT_A,
         tare_samples: 200,
     })

@@ -3,6 +3,8 @@
 //! tests (`tests/scenarios`) depend on the same code instead of including
 //! its files.
 //!
+//! - [`calibration_store`]: the calibration's append-only records in a
+//!   flash sector, safe against a reset or power cut at any byte.
 //! - [`config`]: the segment count and DAC segments chosen at build time
 //!   (`FINRS_SEGMENTS`, `FINRS_DAC_SEGMENTS`), the sample rate, limits and
 //!   sensor scales both boards run with.
@@ -19,6 +21,7 @@
 #![no_std]
 #![deny(unsafe_code, missing_docs)]
 
+pub mod calibration_store;
 pub mod config;
 pub mod identity;
 pub mod pins;

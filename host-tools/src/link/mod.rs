@@ -1,7 +1,8 @@
 //! The running firmware: the debug probe ([`probe`]), its force stream
-//! turned into a recording ([`stream`], [`capture`]) and the commands sent
-//! to it ([`command`]).
+//! turned into a recording ([`stream`], [`capture`]), the commands sent
+//! to it ([`command`]) and its calibration ([`calibrate`]).
 
+pub mod calibrate;
 pub mod capture;
 pub(crate) mod causes;
 pub mod command;

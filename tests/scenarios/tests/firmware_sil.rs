@@ -354,12 +354,13 @@ fn check_run<const N: usize, const S: usize>() {
         (N as u8, [None, None], config::SAMPLE_HZ)
     );
     assert_eq!(
-        (
-            info.newtons_per_count,
-            info.amps_per_count,
-            info.overcurrent_a
-        ),
-        (cfg.newtons_per_count, cfg.amps_per_count, cfg.overcurrent_a)
+        (info.calibration, info.amps_per_count, info.overcurrent_a),
+        (cfg.calibration, cfg.amps_per_count, cfg.overcurrent_a)
+    );
+    // No flash in QEMU: the build's defaults.
+    assert_eq!(
+        info.calibration_origin,
+        finrs_frames::CalibrationOrigin::Defaults
     );
     // The limit in force at the first tick: the power-up one, or the
     // commanded one if the command task read the down channel first (it
@@ -582,13 +583,32 @@ fn firmware_in_qemu_reports_a_missed_deadline_and_stops() {
     }
 }
 
-/// The firmware boots stopped: with nothing on its down channel it drives
+/// The firmware boots stopped: with no wave on its down channel it drives
 /// nothing for the whole 12 s run (the power-up tare, then waiting), while
-/// its Samples flow, gap-free.
+/// its Samples flow, gap-free. Stopped, it takes a SetCalibration: the
+/// shunts read against the new zeros, and an Info frame carries them,
+/// "unsaved" (QEMU has no flash to keep them).
 #[test]
-fn firmware_in_qemu_drives_nothing_until_a_wave_is_sent() {
+fn firmware_in_qemu_drives_nothing_until_a_wave_and_takes_a_calibration() {
+    use finrs_frames::{Calibration, CalibrationOrigin};
     let elf = build_elf(3);
-    let (bytes, _) = run_qemu(&elf, ICOUNT_SHIFT, &[]);
+    let defaults = config::DEFAULT_CALIBRATION;
+    let mut zeros = defaults.current_zero_counts;
+    zeros[0] += 40;
+    zeros[1] -= 40;
+    let new = Calibration {
+        newtons_per_count: 2.0 * defaults.newtons_per_count,
+        current_zero_counts: zeros,
+    };
+    let mut buf = [0u8; finrs_frames::MAX_COMMAND_LEN];
+    let n = encode_command(&FinCommand::SetCalibration(new), &mut buf).unwrap();
+    let (bytes, log) = run_qemu(&elf, ICOUNT_SHIFT, &buf[..n]);
+    let log = defmt_lines(&elf, &log);
+    assert!(
+        log.iter()
+            .any(|l| l.contains("command accepted: SetCalibration")),
+        "{log:#?}"
+    );
     let (events, stats) = decode(&bytes);
     let samples = samples_of(&events);
     assert_eq!(
@@ -610,6 +630,32 @@ fn firmware_in_qemu_drives_nothing_until_a_wave_is_sent() {
             "sample {}",
             s.seq
         );
+    }
+    let infos: Vec<finrs_frames::Info> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Info(i) => Some(*i),
+            _ => None,
+        })
+        .collect();
+    let last = infos.last().expect("an Info frame");
+    assert_eq!(
+        (last.calibration, last.calibration_origin),
+        (new, CalibrationOrigin::Unsaved),
+        "{infos:?}"
+    );
+    // At 0 V the plant draws no current: segment 1 now reads 40 counts
+    // below its zero, segment 2 40 above, segment 3 as before (before this
+    // build's injected overcurrent on segment 2).
+    let a = config::AMPS_PER_COUNT;
+    let end = samples
+        .iter()
+        .rev()
+        .find(|s| u64::from(s.seq) < sim::INJECT_TICK - 100)
+        .unwrap()
+        .currents();
+    for (got, want) in end.iter().zip([-40.0 * a, 40.0 * a, 0.0]) {
+        assert!((got - want).abs() < 0.5 * a, "{end:?}");
     }
 }
 

@@ -58,11 +58,13 @@ pub fn config() -> Config {
     Config {
         sample_hz: 1000,
         limits: Limits::new(2.0, 100.0).unwrap(),
-        newtons_per_count: 1e-3,
+        calibration: finrs_frames::Calibration {
+            newtons_per_count: 1e-3,
+            current_zero_counts: [2048; 8],
+        },
         adc_full_scale: 4095,
         saturation_margin_counts: 2,
         amps_per_count: 1e-3,
-        current_zero_counts: 2048,
         overcurrent_a: 0.5,
         tare_samples: 10,
     }

@@ -494,11 +494,18 @@ fn describe(i: &Info) -> String {
         .flatten()
         .map(|s| (s + 1).to_string())
         .collect();
+    // The driven segments' zeros only: the others are carried, unused.
+    let n = usize::from(i.segments).min(i.calibration.current_zero_counts.len());
+    let zeros = i.calibration.current_zero_counts[..n]
+        .iter()
+        .map(u16::to_string)
+        .collect::<Vec<_>>()
+        .join("/");
     format!(
         "firmware {major}.{minor}.{patch} (git {:08x}), {} segments ({}), {} Hz, \
          limit {} V, slew {} V/s, bridge supply {} V, overcurrent {} A, \
-         load cell {:e} N/count, shunts {:e} A/count from {} counts, \
-         reset cause {}, configuration CRC {:04x}",
+         load cell {:e} N/count, shunts {:e} A/count from zeros of {} counts \
+         (calibration: {}), reset cause {}, configuration CRC {:04x}",
         i.git_hash,
         i.segments,
         if dac.is_empty() {
@@ -511,9 +518,10 @@ fn describe(i: &Info) -> String {
         i.slew_v_per_s,
         i.bridge_supply_v,
         i.overcurrent_a,
-        i.newtons_per_count,
+        i.calibration.newtons_per_count,
         i.amps_per_count,
-        i.current_zero_counts,
+        zeros,
+        i.calibration_origin.name(),
         i.reset_cause.name(),
         i.config_crc().unwrap_or(0),
     )

@@ -531,13 +531,16 @@ fn info_bytes(max_abs_v: f32) -> Vec<u8> {
         segments: 3,
         dac_segments: [None, Some(2)],
         sample_hz: 1000,
-        newtons_per_count: 2.5e-5,
+        calibration: finrs_frames::Calibration {
+            newtons_per_count: 2.5e-5,
+            current_zero_counts: [2048, 2050, 2046, 2048, 2048, 2048, 2048, 2048],
+        },
         amps_per_count: 2.5e-4,
-        current_zero_counts: 2048,
         max_abs_v,
         slew_v_per_s: 200.0,
         bridge_supply_v: 5.0,
         overcurrent_a: 0.4,
+        calibration_origin: finrs_frames::CalibrationOrigin::Stored,
         reset_cause: finrs_frames::ResetCause::Watchdog,
     };
     let mut buf = [0u8; finrs_frames::INFO_FRAME_LEN];
@@ -563,7 +566,7 @@ fn the_firmwares_info_goes_into_the_notes_once_per_configuration() {
     let notes = rec.meta.notes.unwrap();
     assert!(
         notes.contains(
-            "10 samples; firmware 0.1.0 (git deadbeef), 3 segments (DAC on segment 3), 1000 Hz, limit 4 V, slew 200 V/s, bridge supply 5 V, overcurrent 0.4 A, load cell 2.5e-5 N/count, shunts 2.5e-4 A/count from 2048 counts, reset cause watchdog, configuration CRC "
+            "10 samples; firmware 0.1.0 (git deadbeef), 3 segments (DAC on segment 3), 1000 Hz, limit 4 V, slew 200 V/s, bridge supply 5 V, overcurrent 0.4 A, load cell 2.5e-5 N/count, shunts 2.5e-4 A/count from zeros of 2048/2050/2046 counts (calibration: stored in flash), reset cause watchdog, configuration CRC "
         ),
         "{notes}"
     );
