@@ -244,11 +244,27 @@ impl<const N: usize> Controller<N> {
         Ok(())
     }
 
-    /// The calibration a SetCalibration asked to store, if any (taken: the
+    /// The calibration a SetCalibration asked to store, if any, and only
+    /// while nothing drives (a SetWave that followed it at once defers the
+    /// store to the next stop: a flash write stalls the core). Taken: the
     /// board stores it once, then reports with
-    /// [`calibration_stored`](Self::calibration_stored)).
+    /// [`calibration_stored`](Self::calibration_stored).
     pub fn take_calibration_to_store(&mut self) -> Option<Calibration> {
+        if self.driving() {
+            return None;
+        }
         self.calibration_to_store.take()
+    }
+
+    /// Whether a program drives the outputs, is about to (a wave waiting
+    /// for the power-up tare), or they have not yet slewed to 0 V.
+    fn driving(&self) -> bool {
+        let wants = self.fault.is_none()
+            && matches!(
+                self.mode,
+                Mode::Running { .. } | Mode::PowerUpTare { then_run: true }
+            );
+        wants || self.limiter.last_v().iter().any(|&v| v != 0.0)
     }
 
     /// The board's report of a store: the origin becomes `Stored` or
@@ -387,11 +403,7 @@ impl<const N: usize> Controller<N> {
             }
             Command::RequestInfo => self.info_pending = self.identity.is_some(),
             Command::SetCalibration(calibration) => {
-                let driving = matches!(
-                    self.mode,
-                    Mode::Running { .. } | Mode::PowerUpTare { then_run: true }
-                ) || self.limiter.last_v().iter().any(|&v| v != 0.0);
-                if driving {
+                if self.driving() {
                     return Err(CommandRefused::CalibrationWhileDriving);
                 }
                 let config = Config {

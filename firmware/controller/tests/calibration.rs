@@ -223,3 +223,29 @@ fn a_stored_calibration_is_checked_before_use() {
         "nothing to store again"
     );
 }
+
+#[test]
+fn a_wave_right_after_a_calibration_defers_its_store_to_the_next_stop() {
+    let (mut c, mut ch, t0) = tared();
+    let new = calibration(2e-3, [2050; N]);
+    c.command(Command::SetCalibration(new)).unwrap();
+    c.command(wave()).unwrap();
+    let mut t = t0;
+    for _ in 0..20 {
+        c.tick(&input(t, 1000, IDLE), &mut ch);
+        t += 1;
+        assert_eq!(c.take_calibration_to_store(), None, "driving");
+    }
+    assert_eq!(c.calibration(), (new, CalibrationOrigin::Unsaved), "in use");
+    c.command(Command::Stop).unwrap();
+    let mut stored = None;
+    for _ in 0..20 {
+        c.tick(&input(t, 1000, IDLE), &mut ch);
+        t += 1;
+        stored = stored.or(c.take_calibration_to_store());
+        if stored.is_some() {
+            assert_eq!(c.outputs_v(), [0.0; N], "stored only at 0 V");
+        }
+    }
+    assert_eq!(stored, Some(new));
+}

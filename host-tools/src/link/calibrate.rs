@@ -380,10 +380,11 @@ pub struct LoadCellScale {
     pub reference_n: f64,
 }
 
-/// Tares with no load, averages the force, asks for the reference load
-/// (`prompt` returns once it is on), averages again, and rescales so that
-/// the difference reads `reference_n` (positive: the load pushes the way
-/// the board reads as positive force; negative: the other way).
+/// Stops the outputs, tares with no load, averages the force, asks for
+/// the reference load (`prompt` returns once it is on), averages again,
+/// and rescales so that the difference reads `reference_n` (positive: the
+/// load pushes the way the board reads as positive force; negative: the
+/// other way).
 pub fn measure_load_cell(
     board: &mut impl Board,
     opts: &CalibrateOptions,
@@ -398,6 +399,8 @@ pub fn measure_load_cell(
     }
     let before = read_info(board, opts)?;
     let window = samples_in(&before, opts.average_s, "--average-s")?;
+    // The strip must not push on the cell while it is weighed.
+    board.send(&Command::Stop)?;
     let ask = |p: &mut dyn FnMut(&str) -> std::io::Result<()>, text: &str| {
         p(text).map_err(|e| CalibrateError::Prompt(e.to_string()))
     };
