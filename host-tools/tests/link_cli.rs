@@ -339,3 +339,90 @@ fn log_from_bytes_reads_the_standard_input() {
     assert_eq!(Recording::read(&out).unwrap().meta.segments, 3);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A capture killed mid-run (SIGKILL: no handler, no flush) leaves its
+/// journal with every byte it had read, and `finrs log --from-bytes` on it
+/// gives the recording, gaps accounted.
+#[cfg(unix)]
+#[test]
+fn a_killed_capture_leaves_a_journal_that_recovers_every_sample() {
+    use std::io::Write;
+    let dir = temp_dir("killed");
+    let out = dir.join("blocked-01.csv");
+    let journal = dir.join("blocked-01.csv.frames");
+    let _ = std::fs::remove_file(&journal);
+    let mut child = finrs()
+        .args(["log", "--from-bytes", "-", "--out"])
+        .arg(&out)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    // 2000 samples with seq 700..=701 dropped (reported), sent in pieces.
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for seq in 0..2000u32 {
+        if (700..702).contains(&seq) {
+            continue;
+        }
+        if seq == 702 {
+            let n = encode_dropped(
+                &Dropped {
+                    first_seq: 700,
+                    count: 2,
+                },
+                &mut buf,
+            )
+            .unwrap();
+            bytes.extend_from_slice(&buf[..n]);
+        }
+        let s = Sample::<3> {
+            seq,
+            t_us: seq * 1000,
+            force_n: 1e-3 * (seq as f32 * 0.01).sin(),
+            flags: Default::default(),
+            voltages_v: [1.0, 0.0, -1.0],
+            currents_a: [0.01, 0.0, -0.01],
+        };
+        let n = encode_sample(&s, &mut buf).unwrap();
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    for piece in bytes.chunks(997) {
+        stdin.write_all(piece).unwrap();
+    }
+    stdin.flush().unwrap();
+    // The capture reads as it comes: wait until the journal holds it all.
+    let started = Instant::now();
+    while std::fs::metadata(&journal).map_or(0, |m| m.len()) < bytes.len() as u64 {
+        assert!(
+            started.elapsed() < Duration::from_secs(20),
+            "the journal did not fill"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    drop(stdin);
+    assert!(!out.exists(), "killed before it wrote the recording");
+    assert_eq!(std::fs::read(&journal).unwrap(), bytes);
+    let recovered = dir.join("recovered.csv");
+    let report = finrs()
+        .args(["log", "--from-bytes"])
+        .arg(&journal)
+        .arg("--out")
+        .arg(&recovered)
+        .output()
+        .unwrap();
+    assert!(report.status.success(), "{report:?}");
+    let stderr = String::from_utf8_lossy(&report.stderr);
+    assert!(
+        stderr.contains("1998 samples; 2 lost in 1 gaps"),
+        "{stderr}"
+    );
+    let rec = Recording::read(&recovered).unwrap();
+    assert_eq!(rec.t_s.len(), 1998);
+    assert!(rec.meta.notes.unwrap().contains("700+2 reported"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

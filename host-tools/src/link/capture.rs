@@ -17,7 +17,9 @@ use crate::link::probe::{
 use crate::link::stream::{GapSource, Recorder, Setup};
 
 mod error;
+pub mod journal;
 pub use error::CaptureError;
+use journal::Journal;
 
 /// Where the recording goes and when to stop.
 #[derive(Clone, Debug)]
@@ -109,23 +111,35 @@ pub fn finish(mut rec: Recorder, out: &Path) -> Result<String, CaptureError> {
 
 /// `finrs log --from-bytes FILE`: a raw dump of the up channel (`-`: the
 /// standard input, e.g. piped from QEMU) through the same recorder.
-/// Returns the report.
+/// Returns the report. The standard input is read as it comes, with a
+/// journal (see [`journal`]); a file is its own record.
 pub fn from_bytes(path: &Path, opts: &CaptureOptions) -> Result<String, CaptureError> {
     opts.check()?;
-    let bytes = if path == Path::new("-") {
-        let mut bytes = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::stdin(), &mut bytes)
-            .map_err(CaptureError::Stdin)?;
-        bytes
-    } else {
-        std::fs::read(path).map_err(|source| CaptureError::Read {
+    let mut rec = Recorder::new(opts.setup.clone());
+    if path != Path::new("-") {
+        let bytes = std::fs::read(path).map_err(|source| CaptureError::Read {
             path: path.to_path_buf(),
             source,
-        })?
-    };
-    let mut rec = Recorder::new(opts.setup.clone());
-    rec.push_bytes(&bytes);
-    finish(rec, &opts.out)
+        })?;
+        rec.push_bytes(&bytes);
+        return finish(rec, &opts.out);
+    }
+    let mut journal = Journal::create(&opts.out)?;
+    let mut stdin = std::io::stdin().lock();
+    let mut buf = vec![0u8; 64 * 1024];
+    loop {
+        let n = match std::io::Read::read(&mut stdin, &mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(CaptureError::Stdin(e)),
+        };
+        journal.append(&buf[..n])?;
+        rec.push_bytes(&buf[..n]);
+    }
+    let report = finish(rec, &opts.out)?;
+    journal.remove()?;
+    Ok(report)
 }
 
 /// Who watches a recording: hears the defmt log and notices line by line,
@@ -244,6 +258,16 @@ pub fn capture(
     monitor: &dyn Monitor,
 ) -> Result<String, CaptureError> {
     opts.check()?;
+    let mut journal = Some(Journal::create(&opts.out)?);
+    if let Some(j) = &journal {
+        monitor.line(&format!(
+            "journal: {} (should this process die: finrs log --from-bytes {} --out {})",
+            j.path().display(),
+            j.path().display(),
+            opts.out.display()
+        ));
+    }
+    let mut journal_failed = None;
     let mut defmt = table.map(|t| t.new_stream_decoder());
     let mut rec = Recorder::new(opts.setup.clone());
     let mut buf = vec![0u8; 16 * 1024];
@@ -265,6 +289,16 @@ pub fn capture(
             Ok(n) => n,
             Err(e) => break Err(e),
         };
+        if let Some(j) = &mut journal {
+            // A journal that cannot be written (a full disk) does not end
+            // the recording, which is still whole in memory.
+            if let Err(e) = j.append(&buf[..n]) {
+                let text = with_causes(&e);
+                monitor.line(&format!("{text}; recording on without it"));
+                journal_failed = Some(text);
+                journal = None;
+            }
+        }
         rec.push_bytes(&buf[..n]);
         let mut m = 0;
         if let Some(decoder) = defmt.as_mut() {
@@ -283,7 +317,24 @@ pub fn capture(
             std::thread::sleep(Duration::from_millis(2));
         }
     };
-    conclude(rec, outcome, &opts.out, monitor, malformed_defmt)
+    let concluded = conclude(rec, outcome, &opts.out, monitor, malformed_defmt);
+    if let Some(j) = journal {
+        match &concluded {
+            // The recording is written: the journal is not needed.
+            Ok(_) | Err(CaptureError::LinkFailed { .. }) => j.remove()?,
+            Err(_) => monitor.line(&format!(
+                "the stream is kept in {}: finrs log --from-bytes {} --out {}",
+                j.path().display(),
+                j.path().display(),
+                opts.out.display()
+            )),
+        }
+    }
+    let mut text = concluded?;
+    if let Some(why) = journal_failed {
+        text.push_str(&format!("  journal: {why}\n"));
+    }
+    Ok(text)
 }
 
 /// Shows every whole defmt frame the decoder holds; counts malformed ones

@@ -62,6 +62,23 @@ pub enum CaptureError {
     /// Finding, attaching to or setting up the target failed.
     #[error(transparent)]
     Probe(#[from] ProbeError),
+    /// A journal is already where this capture's would go.
+    #[error("{} exists: a capture to {} ended before it was written; recover it with `finrs log --from-bytes {} --out {}`, or remove it", journal.display(), out.display(), journal.display(), out.display())]
+    JournalExists {
+        /// The journal left behind.
+        journal: PathBuf,
+        /// The recording it was for.
+        out: PathBuf,
+    },
+    /// The journal could not be created, written or removed.
+    #[error("the capture's journal {}", journal.display())]
+    Journal {
+        /// The journal.
+        journal: PathBuf,
+        /// The system's reason.
+        #[source]
+        source: std::io::Error,
+    },
     /// The link failed while recording; what came is written.
     #[error("the link failed; the samples so far are in {}", out.display())]
     LinkFailed {

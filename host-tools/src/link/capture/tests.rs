@@ -129,7 +129,33 @@ fn ctrl_c_writes_every_sample_so_far_and_the_gap_report() {
         .contains("7+2 reported, 12+1 detected"));
     // Without a defmt table the log channel is not read.
     assert_eq!(link.log_reads, 0);
+    assert!(
+        !journal::path_for(&opts.out).exists(),
+        "the journal goes once the recording is written"
+    );
     std::fs::remove_dir_all(opts.out.parent().unwrap()).unwrap();
+}
+
+/// A journal left by a capture that died is neither overwritten nor lost:
+/// the next capture to the same file is refused, saying how to recover it,
+/// and recovering it gives the same recording.
+#[test]
+fn a_journal_left_behind_is_refused_and_recovers_the_same_recording() {
+    let (mut link, stop) = link(Then::CtrlC);
+    let opts = options("left", None);
+    let dir = opts.out.parent().unwrap().to_path_buf();
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let left = journal::path_for(&opts.out);
+    let bytes: Vec<u8> = chunks().into_iter().flatten().collect();
+    std::fs::write(&left, &bytes).unwrap();
+    let e = capture(&mut link, None, &stop, &opts, &Silent).unwrap_err();
+    assert!(matches!(e, CaptureError::JournalExists { .. }), "{e}");
+    assert_eq!(std::fs::read(&left).unwrap(), bytes, "untouched");
+    let report = from_bytes(&left, &opts).unwrap();
+    assert!(report.contains("17 samples; 3 lost in 2 gaps"), "{report}");
+    assert_eq!(Recording::read(&opts.out).unwrap().t_s.len(), 17);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
