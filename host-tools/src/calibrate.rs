@@ -3,15 +3,13 @@
 //! stores it unless `--dry-run`; the prompts for the reference load are
 //! asked here, on the terminal.
 
-use std::io::BufRead;
-
-use anyhow::{bail, Context};
+use anyhow::bail;
 use finrs::link::calibrate::{self, CalibrateOptions};
 use finrs::link::capture::{self, Connected, Firmware};
 use finrs_frames::{Calibration, Info, MAX_SEGMENTS};
 
 use crate::cli::{timeout, CalibrateWhat, LoadDirection, SendArgs};
-use crate::commands::{capture_flags, StatusLine};
+use crate::commands::{capture_flags, prompt, StatusLine};
 
 /// `finrs calibrate ...`.
 pub fn run(what: CalibrateWhat) -> anyhow::Result<()> {
@@ -138,22 +136,4 @@ fn store(
 
 fn describe(c: &Calibration, info: &Info) -> String {
     calibrate::describe(c, info.calibration_origin, info.segments)
-}
-
-/// Shows `text` and waits for Enter.
-fn prompt(text: &str) -> std::io::Result<()> {
-    eprint!("{text} ");
-    let mut line = String::new();
-    let n = std::io::stdin()
-        .lock()
-        .read_line(&mut line)
-        .context("stdin")
-        .map_err(std::io::Error::other)?;
-    if n == 0 {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::UnexpectedEof,
-            "stdin closed before Enter",
-        ));
-    }
-    Ok(())
 }

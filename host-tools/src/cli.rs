@@ -62,6 +62,13 @@ pub enum Command {
     },
     /// Clear a latched fault (outputs stay at 0 V until the next wave).
     ClearFault(SendArgs),
+    /// Record a whole session from the board by a protocol, through one
+    /// link.
+    Bench {
+        /// What to do.
+        #[command(subcommand)]
+        what: BenchWhat,
+    },
     /// Measure the board's sensors (shunt zeros, load-cell scale) and store
     /// the calibration in its flash; or show or set it.
     Calibrate {
@@ -69,6 +76,36 @@ pub enum Command {
         #[command(subcommand)]
         what: CalibrateWhat,
     },
+}
+
+/// `finrs bench`'s commands.
+#[derive(Subcommand)]
+pub enum BenchWhat {
+    /// Run a protocol (a TOML list of recordings, `finrs-protocol/1`)
+    /// against the running firmware and write the session, a file per
+    /// recording as it ends.
+    Run(BenchRunArgs),
+}
+
+/// `finrs bench run`.
+#[derive(Args)]
+pub struct BenchRunArgs {
+    /// The protocol file.
+    pub protocol: PathBuf,
+    /// The session's folder (its recordings must not exist yet).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The running firmware's ELF, for its `_SEGGER_RTT` (default: scan RAM).
+    #[arg(long)]
+    pub elf: Option<PathBuf>,
+    /// Wait this long for the board's answers, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub timeout_s: f64,
+    /// Run `finrs diagnose` on the session once it is recorded.
+    #[arg(long)]
+    pub diagnose: bool,
+    #[command(flatten)]
+    pub probe: ProbeArgs,
 }
 
 /// `finrs calibrate`'s steps.

@@ -500,3 +500,17 @@ fn check_writable(path: &Path) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+/// Shows `text` and waits for Enter.
+pub(crate) fn prompt(text: &str) -> std::io::Result<()> {
+    eprint!("{text} ");
+    let mut line = String::new();
+    let n = std::io::BufRead::read_line(&mut std::io::stdin().lock(), &mut line)?;
+    if n == 0 {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::UnexpectedEof,
+            "stdin closed before Enter",
+        ));
+    }
+    Ok(())
+}

@@ -10,10 +10,12 @@
 //! - [`session`]: the recordings of one sample;
 //! - [`model`] (parameters, prediction, simulation, drives from waves),
 //!   [`link`] (probe, force stream, commands to the firmware) and [`plot`];
-//! - [`analysis`]: fit, diagnosis and the seed's check, on top.
+//! - [`analysis`] (fit, diagnosis and the seed's check) and [`bench`] (a
+//!   session's protocol run against the board), on top.
 #![deny(missing_docs)]
 
 pub mod analysis;
+pub mod bench;
 pub mod link;
 pub mod model;
 pub mod plot;

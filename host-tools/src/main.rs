@@ -2,8 +2,10 @@
 //!
 //! [`cli`] declares the commands and options, [`commands`] runs each one
 //! (progress bars, Ctrl-C and the files it writes), [`calibrate`] the
-//! board's calibration; this file only parses and dispatches.
+//! board's calibration, [`bench_cli`] a session by protocol; this file
+//! only parses and dispatches.
 
+mod bench_cli;
 mod calibrate;
 mod cli;
 mod commands;
@@ -41,5 +43,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::ClearFault(args) => commands::send(&args, &finrs_frames::Command::ClearFault),
         Command::Limit { max_abs_v, send } => commands::limit(max_abs_v, &send),
         Command::Calibrate { what } => calibrate::run(what),
+        Command::Bench { what } => bench_cli::run(what),
     }
 }

@@ -210,6 +210,19 @@ fn commands_without_a_probe_fail_fast() {
         &["clear-fault"],
         &["limit", "2.5"],
         &["wave", "sine:2,1,120", "--segments", "4"],
+        &["calibrate", "show"],
+        &["calibrate", "shunts"],
+        &["calibrate", "set", "--newtons-per-count", "2.6e-5"],
+        &[
+            "bench",
+            "run",
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../examples/bench/protocol.toml"
+            ),
+            "--out",
+            "/tmp/finrs-never-written",
+        ],
         &[
             "wave",
             "step:1,-1",
@@ -424,5 +437,32 @@ fn a_killed_capture_leaves_a_journal_that_recovers_every_sample() {
     let rec = Recording::read(&recovered).unwrap();
     assert_eq!(rec.t_s.len(), 1998);
     assert!(rec.meta.notes.unwrap().contains("700+2 reported"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A protocol that breaks a rule is refused before any probe is looked
+/// for, naming the file, the recording's field and the rule.
+#[test]
+fn a_bad_protocol_is_refused_before_any_probe() {
+    let dir = temp_dir("bad-protocol");
+    let path = dir.join("p.toml");
+    std::fs::write(
+        &path,
+        "format = \"finrs-protocol/1\"\nmedium = \"air\"\n[[recording]]\nname = \"x\"\nfixture = \"blocked\"\nwave = \"step:2\"\nhold_s = -3\n",
+    )
+    .unwrap();
+    let out = finrs()
+        .args(["bench", "run"])
+        .arg(&path)
+        .args(["--out", "/tmp/finrs-never-written"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("p.toml: recording[1].hold_s: -3 must be above 0 seconds"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("probe"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -6,5 +6,7 @@ pub mod calibrate;
 pub mod capture;
 pub(crate) mod causes;
 pub mod command;
+#[cfg(test)]
+pub(crate) mod fake_board;
 pub mod probe;
 pub mod stream;

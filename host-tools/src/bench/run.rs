@@ -1,0 +1,385 @@
+//! `finrs bench run`: a whole session from the board, through one link.
+//!
+//! For each recording of the protocol, in order: the operator's prompt if
+//! any, a tare for a blocked one, then a recorder fed from the one stream
+//! while the board rests at 0 V for `rest_s`, runs the wave for `hold_s`
+//! (its envelope ends it) and rests again for `off_s`. Times are counted
+//! in the board's samples (its Info gives the rate), never on the host's
+//! clock; a recording's `t_session_start_s` is its first sample's number
+//! less the session's first, over the rate, so drying over a session is
+//! measured on the board's clock. Each recording is written as soon as it
+//! ends, so a session stopped half-way keeps what it recorded.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use finrs_frames::{Command, Decoder, Event, Info, SampleFlags};
+
+use super::protocol::{Protocol, Step};
+use crate::link::calibrate::{self, Board, CalibrateError, CalibrateOptions};
+use crate::link::capture::Monitor;
+use crate::link::command::wave_command;
+use crate::link::probe::ProbeError;
+use crate::link::stream::{Recorder, Setup};
+use crate::recording::{Channel, Fixture, Recording, RecordingError};
+use crate::wave::{WaveError, WaveOptions};
+
+/// Why a session stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// The probe failed.
+    #[error(transparent)]
+    Probe(#[from] ProbeError),
+    /// The board did not answer (no Info, no samples).
+    #[error(transparent)]
+    Board(#[from] CalibrateError),
+    /// A recording's wave is refused for this board.
+    #[error("recording {k} ({name}): {source}")]
+    Wave {
+        /// Its number, from 1.
+        k: usize,
+        /// Its name.
+        name: String,
+        /// The wave's field and rule.
+        #[source]
+        source: WaveError,
+    },
+    /// A file the session would write is there already.
+    #[error("{} exists: a session is not written over another; choose another --out", path.display())]
+    Exists {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The session's folder could not be created.
+    #[error("cannot create {}", dir.display())]
+    Folder {
+        /// The folder.
+        dir: PathBuf,
+        /// The system's reason.
+        #[source]
+        source: std::io::Error,
+    },
+    /// No samples came within the wait.
+    #[error("no samples from the board for {timeout_s} s during recording {k} ({name})")]
+    Stalled {
+        /// The recording's number.
+        k: usize,
+        /// Its name.
+        name: String,
+        /// The wait, s.
+        timeout_s: f64,
+    },
+    /// The board latched a fault: the recording is written, the session
+    /// stops.
+    #[error("the board latched a fault (seq {seq}) during recording {k} ({name}); it is written with the fault in its notes, the session stops here: find the cause, finrs clear-fault, and record the rest")]
+    Faulted {
+        /// The recording's number.
+        k: usize,
+        /// Its name.
+        name: String,
+        /// The Fault frame's sequence number.
+        seq: u32,
+    },
+    /// A recording could not be made or written.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// The operator's prompt failed (stdin closed).
+    #[error("the prompt failed: {0}")]
+    Prompt(String),
+}
+
+/// How long to wait for the board.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchOptions {
+    /// Longest wait for anything from the board, wall-clock.
+    pub timeout: Duration,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        Self {
+            timeout: Duration::from_secs(10),
+        }
+    }
+}
+
+/// What a session wrote.
+#[derive(Clone, Debug)]
+pub struct SessionReport {
+    /// The board's Info at the start.
+    pub info: Info,
+    /// The recordings written, in order, with their report lines.
+    pub written: Vec<(PathBuf, String)>,
+}
+
+/// The board's stream, decoded once for the whole session.
+struct Stream {
+    decoder: Decoder,
+    pending: std::collections::VecDeque<Event>,
+    buf: Vec<u8>,
+}
+
+impl Stream {
+    fn new() -> Self {
+        Self {
+            decoder: Decoder::new(),
+            pending: Default::default(),
+            buf: vec![0; 16 * 1024],
+        }
+    }
+
+    /// The next event, reading the board as needed; `None` after
+    /// `timeout` of silence.
+    fn next(
+        &mut self,
+        board: &mut impl Board,
+        timeout: Duration,
+    ) -> Result<Option<Event>, ProbeError> {
+        let started = Instant::now();
+        loop {
+            if let Some(e) = self.pending.pop_front() {
+                return Ok(Some(e));
+            }
+            if started.elapsed() >= timeout {
+                return Ok(None);
+            }
+            let n = board.read_force(&mut self.buf)?;
+            let pending = &mut self.pending;
+            self.decoder
+                .push(&self.buf[..n], &mut |e| pending.push_back(e));
+            if n == 0 {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
+    }
+}
+
+/// Records the session `protocol` into `out_dir`; `prompt` asks the
+/// operator and returns on Enter, `monitor` hears progress.
+pub fn run_session(
+    board: &mut impl Board,
+    protocol: &Protocol,
+    out_dir: &Path,
+    opts: &BenchOptions,
+    prompt: &mut dyn FnMut(&str) -> std::io::Result<()>,
+    monitor: &dyn Monitor,
+) -> Result<SessionReport, BenchError> {
+    let info = calibrate::read_info(
+        board,
+        &CalibrateOptions {
+            timeout: opts.timeout,
+            ..CalibrateOptions::default()
+        },
+    )?;
+    let segments = usize::from(info.segments);
+    // Every wave checked for this board, every file free, before anything
+    // moves.
+    let mut commands = Vec::with_capacity(protocol.recordings.len());
+    for (i, step) in protocol.recordings.iter().enumerate() {
+        let options = WaveOptions {
+            hold_s: step.hold_s,
+            ..WaveOptions::steady(step.hold_s)
+        };
+        let command =
+            wave_command(&step.wave, segments, &options).map_err(|source| BenchError::Wave {
+                k: i + 1,
+                name: step.name.clone(),
+                source,
+            })?;
+        commands.push(command);
+        let path = out_dir.join(step.file_name(i + 1));
+        if path.exists() {
+            return Err(BenchError::Exists { path });
+        }
+    }
+    std::fs::create_dir_all(out_dir).map_err(|source| BenchError::Folder {
+        dir: out_dir.to_path_buf(),
+        source,
+    })?;
+    board.send(&Command::Stop)?;
+    let mut stream = Stream::new();
+    let mut session_first_seq: Option<u32> = None;
+    let mut written = Vec::new();
+    let count = protocol.recordings.len();
+    for (i, (step, command)) in protocol.recordings.iter().zip(&commands).enumerate() {
+        let k = i + 1;
+        if let Some(text) = &step.prompt {
+            prompt(&format!(
+                "recording {k} of {count} ({}): {text}; then press Enter",
+                step.name
+            ))
+            .map_err(|e| BenchError::Prompt(e.to_string()))?;
+        }
+        let ctx = Ctx {
+            k,
+            name: &step.name,
+            timeout: opts.timeout,
+        };
+        if step.tare {
+            board.send(&Command::Tare)?;
+            // The tare's samples carry its flag; it is done at the first
+            // sample without it after one with it.
+            ctx.skip_until(board, &mut stream, |f| f.has(SampleFlags::TARING))?;
+            ctx.skip_until(board, &mut stream, |f| !f.has(SampleFlags::TARING))?;
+        }
+        monitor.line(&format!(
+            "recording {k} of {count}: {} ({})",
+            step.name, step.wave
+        ));
+        let (recording, first_seq, fault_seq, report) = record_one(
+            board,
+            &mut stream,
+            protocol,
+            step,
+            command,
+            &info,
+            ctx,
+            monitor,
+        )?;
+        let first = *session_first_seq.get_or_insert(first_seq);
+        let path = out_dir.join(step.file_name(k));
+        let mut recording = recording;
+        recording.meta.t_session_start_s =
+            Some(f64::from(first_seq.wrapping_sub(first)) / f64::from(info.sample_hz));
+        recording.write(&path)?;
+        monitor.line(&format!("wrote {}: {}", path.display(), report.trim_end()));
+        written.push((path, report));
+        if let Some(seq) = fault_seq {
+            return Err(BenchError::Faulted {
+                k,
+                name: step.name.clone(),
+                seq,
+            });
+        }
+    }
+    board.send(&Command::Stop)?;
+    Ok(SessionReport { info, written })
+}
+
+/// The recording under way, for messages and waits.
+#[derive(Clone, Copy)]
+struct Ctx<'a> {
+    k: usize,
+    name: &'a str,
+    timeout: Duration,
+}
+
+impl Ctx<'_> {
+    fn stalled(&self) -> BenchError {
+        BenchError::Stalled {
+            k: self.k,
+            name: self.name.to_string(),
+            timeout_s: self.timeout.as_secs_f64(),
+        }
+    }
+
+    /// Reads and drops events up to the first Sample whose flags satisfy
+    /// `done`.
+    fn skip_until(
+        &self,
+        board: &mut impl Board,
+        stream: &mut Stream,
+        done: impl Fn(SampleFlags) -> bool,
+    ) -> Result<(), BenchError> {
+        loop {
+            match stream.next(board, self.timeout)? {
+                None => return Err(self.stalled()),
+                Some(Event::Sample(s)) if done(s.flags) => return Ok(()),
+                Some(_) => {}
+            }
+        }
+    }
+}
+
+/// One recording: rest, wave, rest, from the stream into a recorder.
+/// Returns the recording (its time from 0), its first sample's number, the
+/// fault that ended it early (if one did) and the recorder's report.
+#[allow(clippy::too_many_arguments)]
+fn record_one(
+    board: &mut impl Board,
+    stream: &mut Stream,
+    protocol: &Protocol,
+    step: &Step,
+    command: &Command,
+    info: &Info,
+    ctx: Ctx<'_>,
+    monitor: &dyn Monitor,
+) -> Result<(Recording, u32, Option<u32>, String), BenchError> {
+    let hz = f64::from(info.sample_hz);
+    let periods = |s: f64| (s * hz).round() as u64;
+    let rest = periods(step.rest_s);
+    let total = rest + periods(step.hold_s) + periods(step.off_s);
+    let mut rec = Recorder::new(Setup {
+        geometry: protocol.geometry,
+        medium: protocol.medium,
+        sample: protocol.sample.clone(),
+        source: format!("finrs bench, recording {} ({})", ctx.k, step.name),
+    });
+    // Events before this recording's first Sample (a Dropped frame for
+    // periods missed while the operator was asked) belong to no recording.
+    let first_seq = loop {
+        match stream.next(board, ctx.timeout)? {
+            None => return Err(ctx.stalled()),
+            Some(Event::Sample(s)) => {
+                rec.event(Event::Sample(s));
+                break s.seq;
+            }
+            Some(_) => {}
+        }
+    };
+    let mut sent = false;
+    let mut fault_seq = None;
+    let mut last = 0u64;
+    while last + 1 < total {
+        let Some(e) = stream.next(board, ctx.timeout)? else {
+            return Err(ctx.stalled());
+        };
+        if let Event::Sample(s) = &e {
+            // Periods since the first sample, dropped ones counted.
+            last = u64::from(s.seq.wrapping_sub(first_seq));
+        }
+        if let Event::Fault(f) = &e {
+            fault_seq = Some(f.seq);
+            rec.event(e);
+            break;
+        }
+        rec.event(e);
+        if !sent && last + 1 >= rest {
+            board.send(command)?;
+            sent = true;
+        }
+    }
+    board.send(&Command::Stop)?;
+    rec.finish();
+    let report = crate::link::capture::report(&rec);
+    let mut recording = rec.recording(&step.file_name(ctx.k))?;
+    let t0 = recording.t_s.first().copied().unwrap_or(0.0);
+    for t in &mut recording.t_s {
+        *t -= t0;
+    }
+    let mut notes = step.notes.clone().unwrap_or_default();
+    if !notes.is_empty() {
+        notes.push_str("; ");
+    }
+    notes.push_str(&format!(
+        "wave {} after {} s at 0 V, held {} s, then {} s at 0 V; ",
+        step.wave, step.rest_s, step.hold_s, step.off_s
+    ));
+    notes.push_str(recording.meta.notes.as_deref().unwrap_or(""));
+    recording.meta.notes = Some(notes);
+    if step.fixture == Fixture::Free {
+        // The board records no positions: the camera's come later
+        // (merge-camera); the load cell pushes on nothing.
+        recording.meta.fixture = Fixture::Free;
+        recording.channels.retain(|(c, _)| *c != Channel::Force);
+        recording.meta.dots_s_m = protocol.dots_s_m.clone();
+    }
+    recording.validate(&step.file_name(ctx.k))?;
+    if !sent {
+        monitor.line("the recording ended before its wave was sent (a fault?)");
+    }
+    Ok((recording, first_seq, fault_seq, report))
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,153 @@
+//! A board for the host's tests: the firmware's own controller on
+//! simulated sensors with known true zeros and scale, a load set by the
+//! test, and a strip whose blocking force follows the mean drive voltage
+//! through a first-order lag; 50 ticks (50 ms) per read.
+
+use std::cell::Cell;
+use std::rc::Rc;
+
+use finrs_controller::{Config, Controller, FrameSink, Identity, TickInput};
+use finrs_drive::Limits;
+use finrs_frames::{Calibration, Command, CommandDecoder, CommandEvent, ResetCause};
+
+use crate::link::calibrate::Board;
+use crate::link::capture::Link;
+use crate::link::probe::ProbeError;
+
+pub const N: usize = 3;
+pub const NOMINAL_SCALE: f32 = 2.5e-5;
+pub const TRUE_SCALE: f64 = 3.1e-5;
+pub const TRUE_ZEROS: [u16; N] = [2056, 2041, 2048];
+pub const AMPS_PER_COUNT: f32 = 2.5e-4;
+
+struct Bytes(Vec<u8>);
+
+impl FrameSink for Bytes {
+    fn try_write(&mut self, frame: &[u8]) -> bool {
+        self.0.extend_from_slice(frame);
+        true
+    }
+}
+
+/// The firmware's controller on simulated sensors: a load (N, set by the
+/// test), the shunts at their true zeros plus a decaying discharge, and
+/// ±`noise` counts of noise; 50 ticks per read.
+pub struct FakeBoard {
+    pub c: Controller<N>,
+    tick: u64,
+    decoder: CommandDecoder,
+    load_n: Rc<Cell<f64>>,
+    noise: u32,
+    rng: u32,
+    /// Counts added to every shunt at tick 0, decaying with `tau_ticks`.
+    pub discharge_counts: f64,
+    pub tau_ticks: f64,
+    pub stores: usize,
+    /// The strip's blocking force, N, lagging the mean voltage.
+    pub strip_force_n: f64,
+    /// Blocking force per volt of mean drive at steady state, N/V.
+    pub newtons_per_volt: f64,
+    last_v: [f32; N],
+}
+
+impl FakeBoard {
+    pub fn new(load_n: Rc<Cell<f64>>) -> Self {
+        let config = Config {
+            sample_hz: 1000,
+            limits: Limits::new(3.64, 200.0).unwrap(),
+            calibration: Calibration {
+                newtons_per_count: NOMINAL_SCALE,
+                current_zero_counts: [2048; 8],
+            },
+            adc_full_scale: 4095,
+            saturation_margin_counts: 8,
+            amps_per_count: AMPS_PER_COUNT,
+            overcurrent_a: 0.4,
+            tare_samples: 200,
+        };
+        let mut c = Controller::new(config).unwrap();
+        c.set_identity(Identity {
+            version: [0, 1, 0],
+            git_hash: 0,
+            dac_segments: [None, None],
+            bridge_supply_v: 5.0,
+            reset_cause: ResetCause::PowerOn,
+        });
+        Self {
+            c,
+            tick: 0,
+            decoder: CommandDecoder::new(),
+            load_n,
+            noise: 3,
+            rng: 0x1234_5678,
+            discharge_counts: 0.0,
+            tau_ticks: 1.0,
+            stores: 0,
+            strip_force_n: 0.0,
+            newtons_per_volt: 1e-3,
+            last_v: [0.0; N],
+        }
+    }
+
+    fn noise(&mut self) -> f64 {
+        let mut x = self.rng;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.rng = x;
+        f64::from(x % (2 * self.noise + 1)) - f64::from(self.noise)
+    }
+}
+
+impl Link for FakeBoard {
+    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
+        let mut out = Bytes(Vec::new());
+        for _ in 0..50 {
+            // The strip's force lags the mean voltage by 50 ms.
+            let mean_v = self.last_v.iter().map(|&v| f64::from(v)).sum::<f64>() / N as f64;
+            self.strip_force_n += (self.newtons_per_volt * mean_v - self.strip_force_n) / 50.0;
+            let load_counts =
+                2000.0 + (self.load_n.get() + self.strip_force_n) / TRUE_SCALE + self.noise();
+            let discharge = self.discharge_counts * (-(self.tick as f64) / self.tau_ticks).exp();
+            let current_counts = std::array::from_fn(|k| {
+                (f64::from(TRUE_ZEROS[k]) + discharge + self.noise()) as u16
+            });
+            let applied = self.c.tick(
+                &TickInput {
+                    tick: self.tick,
+                    t_us: (self.tick * 1000) as u32,
+                    load_cell_counts: load_counts.round() as u16,
+                    current_counts,
+                },
+                &mut out,
+            );
+            self.last_v = applied.voltages_v;
+            if self.c.take_calibration_to_store().is_some() {
+                self.stores += 1;
+                self.c.calibration_stored(true);
+            }
+            self.tick += 1;
+        }
+        assert!(out.0.len() <= buf.len());
+        buf[..out.0.len()].copy_from_slice(&out.0);
+        Ok(out.0.len())
+    }
+
+    fn read_log(&mut self, _: &mut [u8]) -> Result<usize, ProbeError> {
+        Ok(0)
+    }
+}
+
+impl Board for FakeBoard {
+    fn send(&mut self, command: &Command) -> Result<(), ProbeError> {
+        let bytes = crate::link::command::encode(command);
+        let c = &mut self.c;
+        self.decoder.push(&bytes, &mut |e| {
+            if let CommandEvent::Command(cmd) = e {
+                // A refusal changes nothing, as on the board.
+                let _ = c.command(cmd);
+            }
+        });
+        Ok(())
+    }
+}
