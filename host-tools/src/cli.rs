@@ -62,6 +62,8 @@ pub enum Command {
     },
     /// Clear a latched fault (outputs stay at 0 V until the next wave).
     ClearFault(SendArgs),
+    /// Merge a camera's tracked dots into a free recording from the board.
+    MergeCamera(MergeCameraArgs),
     /// Record a whole session from the board by a protocol, through one
     /// link.
     Bench {
@@ -76,6 +78,37 @@ pub enum Command {
         #[command(subcommand)]
         what: CalibrateWhat,
     },
+}
+
+/// `finrs merge-camera`.
+#[derive(Args)]
+pub struct MergeCameraArgs {
+    /// The DAQ's free recording (from `finrs bench run` or `finrs log`).
+    #[arg(long)]
+    pub daq: PathBuf,
+    /// The tracker's CSV: frame, time_s (or --fps), dot (1.., tip, sync),
+    /// x_px, y_px.
+    #[arg(long)]
+    pub track: PathBuf,
+    /// The merged recording to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Image scale at the strip's plane, m per pixel.
+    #[arg(long)]
+    pub m_per_px: f64,
+    /// The camera's frame rate, for a track without time_s, frames/s.
+    #[arg(long)]
+    pub fps: Option<f64>,
+    /// The image's x runs from the tip toward the clamp.
+    #[arg(long)]
+    pub flip_x: bool,
+    /// The image's y runs opposite to the strip's positive bending (as in
+    /// most image coordinates, y down).
+    #[arg(long)]
+    pub flip_y: bool,
+    /// The sync event's camera time, s, if the track has no `sync` row.
+    #[arg(long)]
+    pub sync_time_s: Option<f64>,
 }
 
 /// `finrs bench`'s commands.

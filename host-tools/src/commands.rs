@@ -501,6 +501,36 @@ fn check_writable(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `finrs merge-camera`.
+pub fn merge_camera(args: crate::cli::MergeCameraArgs) -> anyhow::Result<()> {
+    use finrs::camera::merge::{merge, MergeOptions};
+    use finrs::camera::track::Track;
+    let daq = Recording::read(&args.daq)?;
+    let track = Track::read(&args.track, args.fps)?;
+    let opts = MergeOptions {
+        flip_x: args.flip_x,
+        flip_y: args.flip_y,
+        sync_time_s: args.sync_time_s,
+        ..MergeOptions::new(args.m_per_px)
+    };
+    let m = merge(
+        &daq,
+        &args.daq.display().to_string(),
+        &track,
+        &args.track.display().to_string(),
+        &opts,
+    )?;
+    m.recording.write(&args.out)?;
+    eprintln!(
+        "wrote {}: {} positions placed, {} outside the DAQ's rows; camera clock + {:.4} s = DAQ clock",
+        args.out.display(),
+        m.placed,
+        m.outside,
+        m.offset_s
+    );
+    Ok(())
+}
+
 /// Shows `text` and waits for Enter.
 pub(crate) fn prompt(text: &str) -> std::io::Result<()> {
     eprint!("{text} ");

@@ -7,7 +7,8 @@
 //! (`scripts/module-graph` checks this, and `cargo test` runs it):
 //! - [`recording`] (the `ipmc-bench/1` format) and [`wave`] (the `--wave`
 //!   syntax on the firmware's generator), at the bottom;
-//! - [`session`]: the recordings of one sample;
+//! - [`session`] (the recordings of one sample) and [`camera`] (a
+//!   tracker's dots merged into a free recording);
 //! - [`model`] (parameters, prediction, simulation, drives from waves),
 //!   [`link`] (probe, force stream, commands to the firmware) and [`plot`];
 //! - [`analysis`] (fit, diagnosis and the seed's check) and [`bench`] (a
@@ -16,6 +17,7 @@
 
 pub mod analysis;
 pub mod bench;
+pub mod camera;
 pub mod link;
 pub mod model;
 pub mod plot;

@@ -44,5 +44,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Limit { max_abs_v, send } => commands::limit(max_abs_v, &send),
         Command::Calibrate { what } => calibrate::run(what),
         Command::Bench { what } => bench_cli::run(what),
+        Command::MergeCamera(args) => commands::merge_camera(args),
     }
 }
