@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 use finrs_frames::{Command, Decoder, Event, Info, SampleFlags};
 
 use super::protocol::{Protocol, Step};
-use crate::link::calibrate::{self, Board, CalibrateError, CalibrateOptions};
+use crate::link::board::{request_info, Board};
 use crate::link::capture::Monitor;
 use crate::link::command::wave_command;
 use crate::link::probe::ProbeError;
@@ -30,9 +30,12 @@ pub enum BenchError {
     /// The probe failed.
     #[error(transparent)]
     Probe(#[from] ProbeError),
-    /// The board did not answer (no Info, no samples).
-    #[error(transparent)]
-    Board(#[from] CalibrateError),
+    /// The board did not send its Info frame.
+    #[error("no Info frame from the board within {timeout_s} s (is the firmware running, and is it this board's?)")]
+    NoInfo {
+        /// The wait, s.
+        timeout_s: f64,
+    },
     /// A recording's wave is refused for this board.
     #[error("recording {k} ({name}): {source}")]
     Wave {
@@ -164,13 +167,9 @@ pub fn run_session(
     prompt: &mut dyn FnMut(&str) -> std::io::Result<()>,
     monitor: &dyn Monitor,
 ) -> Result<SessionReport, BenchError> {
-    let info = calibrate::read_info(
-        board,
-        &CalibrateOptions {
-            timeout: opts.timeout,
-            ..CalibrateOptions::default()
-        },
-    )?;
+    let info = request_info(board, opts.timeout)?.ok_or(BenchError::NoInfo {
+        timeout_s: opts.timeout.as_secs_f64(),
+    })?;
     let segments = usize::from(info.segments);
     // Every wave checked for this board, every file free, before anything
     // moves.

@@ -23,8 +23,8 @@ use finrs_frames::{
     Calibration, CalibrationOrigin, Command, DecodedSample, Decoder, Event, Info, SampleFlags,
 };
 
-use crate::link::capture::Link;
-use crate::link::probe::{self, Bounded, ProbeError, Target, COMMAND_DOWN_CHANNEL};
+pub use crate::link::board::Board;
+use crate::link::probe::ProbeError;
 
 /// Standard gravity, m/s² (a reference mass's weight unless the local
 /// value is given).
@@ -39,25 +39,6 @@ const DRIFT_SIGMAS: f64 = 4.0;
 
 /// A load difference must exceed its standard error this many times.
 const LOAD_SIGMAS: f64 = 20.0;
-
-/// The board as `finrs calibrate` talks to it: its force stream, and
-/// commands down. The probe in use, a fake in the tests.
-pub trait Board: Link {
-    /// Sends one command whole.
-    fn send(&mut self, command: &Command) -> Result<(), ProbeError>;
-}
-
-impl<T: Target> Board for Bounded<T> {
-    fn send(&mut self, command: &Command) -> Result<(), ProbeError> {
-        let timeout = self.timeouts().call;
-        probe::write_all(
-            self,
-            COMMAND_DOWN_CHANNEL,
-            &crate::link::command::encode(command),
-            timeout,
-        )
-    }
-}
 
 /// How long to wait and average.
 #[derive(Clone, Copy, Debug)]
@@ -243,10 +224,10 @@ impl Listener {
 
 /// The Info frame the board sends on request.
 pub fn read_info(board: &mut impl Board, opts: &CalibrateOptions) -> Result<Info, CalibrateError> {
-    let mut l = Listener::new();
-    board.send(&Command::RequestInfo)?;
-    l.until(board, opts, "Info frame", |l| !l.infos.is_empty())?;
-    Ok(l.infos[0])
+    crate::link::board::request_info(board, opts.timeout)?.ok_or(CalibrateError::Timeout {
+        what: "Info frame",
+        timeout_s: opts.timeout.as_secs_f64(),
+    })
 }
 
 /// A mean, its standard error, and the window's drift, from block means.

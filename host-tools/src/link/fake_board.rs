@@ -10,7 +10,7 @@ use finrs_controller::{Config, Controller, FrameSink, Identity, TickInput};
 use finrs_drive::Limits;
 use finrs_frames::{Calibration, Command, CommandDecoder, CommandEvent, ResetCause};
 
-use crate::link::calibrate::Board;
+use crate::link::board::Board;
 use crate::link::capture::Link;
 use crate::link::probe::ProbeError;
 

@@ -1,7 +1,9 @@
 //! The running firmware: the debug probe ([`probe`]), its force stream
 //! turned into a recording ([`stream`], [`capture`]), the commands sent
-//! to it ([`command`]) and its calibration ([`calibrate`]).
+//! to it ([`command`]), the board as one client sees it ([`board`]) and
+//! its calibration ([`calibrate`]).
 
+pub mod board;
 pub mod calibrate;
 pub mod capture;
 pub(crate) mod causes;
