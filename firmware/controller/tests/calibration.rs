@@ -5,24 +5,15 @@
 
 mod common;
 
-use common::{config, Channel};
+use common::{config, input, Channel};
 use finrs_controller::{
-    Calibration, CalibrationOrigin, CommandRefused, ConfigRule, Controller, Identity, TickInput,
+    Calibration, CalibrationOrigin, CommandRefused, ConfigRule, Controller, Identity,
 };
 use finrs_drive::{Envelope, Program};
 use finrs_frames::{Command, Event, ResetCause};
 
 const N: usize = 3;
 const IDLE: [u16; N] = [2048; N];
-
-fn input(tick: u64, load_cell_counts: u16, current_counts: [u16; N]) -> TickInput<N> {
-    TickInput {
-        tick,
-        t_us: (tick * 1000) as u32,
-        load_cell_counts,
-        current_counts,
-    }
-}
 
 /// Past the power-up tare at 1000 counts, with an identity (its first Info
 /// taken), the channel emptied.

@@ -4,22 +4,13 @@
 
 mod common;
 
-use common::{config, Channel};
-use finrs_controller::{CommandRefused, ConfigError, ConfigRule, Controller, FaultCode, TickInput};
+use common::{config, input, Channel};
+use finrs_controller::{CommandRefused, ConfigError, ConfigRule, Controller, FaultCode};
 use finrs_drive::{Envelope, Generator, LimitError, Limiter, Program, WaveRule};
 use finrs_frames::{Command, Dropped, Event, Fault};
 
 const N: usize = 3;
 const IDLE: [u16; N] = [2048; N];
-
-fn input(tick: u64, load_cell_counts: u16, current_counts: [u16; N]) -> TickInput<N> {
-    TickInput {
-        tick,
-        t_us: (tick * 1000) as u32,
-        load_cell_counts,
-        current_counts,
-    }
-}
 
 /// A controller past its power-up tare (10 readings of 1000 counts), the
 /// channel emptied.

@@ -69,3 +69,17 @@ pub fn config() -> Config {
         tare_samples: 10,
     }
 }
+
+/// The readings of tick `tick` (1 kHz: `t_us` = 1000 · `tick`).
+pub fn input<const N: usize>(
+    tick: u64,
+    load_cell_counts: u16,
+    current_counts: [u16; N],
+) -> finrs_controller::TickInput<N> {
+    finrs_controller::TickInput {
+        tick,
+        t_us: (tick * 1000) as u32,
+        load_cell_counts,
+        current_counts,
+    }
+}
