@@ -31,6 +31,7 @@ fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {
         &protocol,
         &args.out,
         &opts,
+        connected.table.as_ref(),
         &mut prompt,
         &status,
     )?;

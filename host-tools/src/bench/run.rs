@@ -17,7 +17,7 @@ use finrs_frames::{Command, Decoder, Event, Info, SampleFlags};
 
 use super::protocol::{Protocol, Step};
 use crate::link::board::{request_info, Board};
-use crate::link::capture::Monitor;
+use crate::link::capture::{show_log, Monitor};
 use crate::link::command::wave_command;
 use crate::link::probe::ProbeError;
 use crate::link::stream::{Recorder, Setup};
@@ -115,19 +115,24 @@ pub struct SessionReport {
     pub written: Vec<(PathBuf, String)>,
 }
 
-/// The board's stream, decoded once for the whole session.
-struct Stream {
+/// The board's stream, decoded once for the whole session, and its defmt
+/// log shown as it comes (when the ELF's table is known).
+struct Stream<'t> {
     decoder: Decoder,
     pending: std::collections::VecDeque<Event>,
     buf: Vec<u8>,
+    defmt: Option<Box<dyn defmt_decoder::StreamDecoder + Send + Sync + 't>>,
+    malformed_defmt: u64,
 }
 
-impl Stream {
-    fn new() -> Self {
+impl<'t> Stream<'t> {
+    fn new(table: Option<&'t defmt_decoder::Table>) -> Self {
         Self {
             decoder: Decoder::new(),
             pending: Default::default(),
             buf: vec![0; 16 * 1024],
+            defmt: table.map(|t| t.new_stream_decoder()),
+            malformed_defmt: 0,
         }
     }
 
@@ -137,6 +142,7 @@ impl Stream {
         &mut self,
         board: &mut impl Board,
         timeout: Duration,
+        monitor: &dyn Monitor,
     ) -> Result<Option<Event>, ProbeError> {
         let started = Instant::now();
         loop {
@@ -150,7 +156,14 @@ impl Stream {
             let pending = &mut self.pending;
             self.decoder
                 .push(&self.buf[..n], &mut |e| pending.push_back(e));
-            if n == 0 {
+            let mut m = 0;
+            if let Some(d) = self.defmt.as_mut() {
+                // The firmware's refusals and faults, in its own words.
+                m = board.read_log(&mut self.buf)?;
+                d.received(&self.buf[..m]);
+                show_log(d.as_mut(), monitor, &mut self.malformed_defmt);
+            }
+            if n == 0 && m == 0 {
                 std::thread::sleep(Duration::from_millis(2));
             }
         }
@@ -158,12 +171,14 @@ impl Stream {
 }
 
 /// Records the session `protocol` into `out_dir`; `prompt` asks the
-/// operator and returns on Enter, `monitor` hears progress.
+/// operator and returns on Enter, `monitor` hears progress and, given the
+/// ELF's defmt `table`, the firmware's log.
 pub fn run_session(
     board: &mut impl Board,
     protocol: &Protocol,
     out_dir: &Path,
     opts: &BenchOptions,
+    table: Option<&defmt_decoder::Table>,
     prompt: &mut dyn FnMut(&str) -> std::io::Result<()>,
     monitor: &dyn Monitor,
 ) -> Result<SessionReport, BenchError> {
@@ -196,7 +211,7 @@ pub fn run_session(
         source,
     })?;
     board.send(&Command::Stop)?;
-    let mut stream = Stream::new();
+    let mut stream = Stream::new(table);
     let mut session_first_seq: Option<u32> = None;
     let mut written = Vec::new();
     let count = protocol.recordings.len();
@@ -213,6 +228,7 @@ pub fn run_session(
             k,
             name: &step.name,
             timeout: opts.timeout,
+            monitor,
         };
         if step.tare {
             board.send(&Command::Tare)?;
@@ -261,6 +277,7 @@ struct Ctx<'a> {
     k: usize,
     name: &'a str,
     timeout: Duration,
+    monitor: &'a dyn Monitor,
 }
 
 impl Ctx<'_> {
@@ -277,11 +294,11 @@ impl Ctx<'_> {
     fn skip_until(
         &self,
         board: &mut impl Board,
-        stream: &mut Stream,
+        stream: &mut Stream<'_>,
         done: impl Fn(SampleFlags) -> bool,
     ) -> Result<(), BenchError> {
         loop {
-            match stream.next(board, self.timeout)? {
+            match stream.next(board, self.timeout, self.monitor)? {
                 None => return Err(self.stalled()),
                 Some(Event::Sample(s)) if done(s.flags) => return Ok(()),
                 Some(_) => {}
@@ -296,7 +313,7 @@ impl Ctx<'_> {
 #[allow(clippy::too_many_arguments)]
 fn record_one(
     board: &mut impl Board,
-    stream: &mut Stream,
+    stream: &mut Stream<'_>,
     protocol: &Protocol,
     step: &Step,
     command: &Command,
@@ -317,7 +334,7 @@ fn record_one(
     // Events before this recording's first Sample (a Dropped frame for
     // periods missed while the operator was asked) belong to no recording.
     let first_seq = loop {
-        match stream.next(board, ctx.timeout)? {
+        match stream.next(board, ctx.timeout, monitor)? {
             None => return Err(ctx.stalled()),
             Some(Event::Sample(s)) => {
                 rec.event(Event::Sample(s));
@@ -330,7 +347,7 @@ fn record_one(
     let mut fault_seq = None;
     let mut last = 0u64;
     while last + 1 < total {
-        let Some(e) = stream.next(board, ctx.timeout)? else {
+        let Some(e) = stream.next(board, ctx.timeout, monitor)? else {
             return Err(ctx.stalled());
         };
         if let Event::Sample(s) = &e {

@@ -339,7 +339,7 @@ pub fn capture(
 
 /// Shows every whole defmt frame the decoder holds; counts malformed ones
 /// and says so at the first.
-fn show_log(
+pub(crate) fn show_log(
     decoder: &mut dyn defmt_decoder::StreamDecoder,
     monitor: &dyn Monitor,
     malformed: &mut u64,

@@ -51,6 +51,7 @@ fn a_session_is_recorded_in_order_on_the_boards_clock() {
         &protocol,
         &dir,
         &BenchOptions::default(),
+        None,
         &mut |text: &str| {
             prompts.push(text.to_string());
             Ok(())
@@ -129,6 +130,7 @@ fn a_session_is_not_written_over_another_and_bad_waves_are_refused_first() {
         &protocol,
         &dir,
         &BenchOptions::default(),
+        None,
         &mut |_: &str| Ok(()),
         &Silent,
     )
@@ -147,6 +149,7 @@ fn a_session_is_not_written_over_another_and_bad_waves_are_refused_first() {
         &protocol,
         &dir,
         &BenchOptions::default(),
+        None,
         &mut |_: &str| Ok(()),
         &Silent,
     )
@@ -260,6 +263,7 @@ fn the_example_protocol_runs_whole() {
         &p,
         &dir,
         &BenchOptions::default(),
+        None,
         &mut |_: &str| Ok(()),
         &Silent,
     )
