@@ -67,6 +67,33 @@ fn a_track_is_merged_into_the_daq_recording() {
     assert!((tip[1000].unwrap() - 2e-3).abs() < 1e-9, "{:?}", tip[1000]);
     assert_eq!(tip[1001], None);
 
+    // In place: the DAQ file becomes the merged one.
+    let out = finrs()
+        .current_dir(&dir)
+        .args([
+            "merge-camera",
+            "--daq",
+            "daq.csv",
+            "--track",
+            "track.csv",
+            "--fps",
+            "50",
+            "--m-per-px",
+            "1e-4",
+            "--flip-y",
+            "--out",
+            "daq.csv",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let merged = Recording::read(&dir.join("daq.csv")).unwrap();
+    assert_eq!(merged.channel(Channel::TipY).unwrap(), tip);
+
     // Without --fps a track with no time_s is refused by file and line.
     let out = finrs()
         .current_dir(&dir)
