@@ -346,7 +346,29 @@ fn record_one(
     let mut sent = false;
     let mut fault_seq = None;
     let mut last = 0u64;
+    let mut shown = Instant::now();
     while last + 1 < total {
+        if shown.elapsed() >= Duration::from_millis(250) {
+            shown = Instant::now();
+            let s = rec.summary();
+            monitor.status(&format!(
+                "recording {} ({}): {:.1} of {:.1} s, {}, {} samples lost in {} gaps, {} faults",
+                ctx.k,
+                step.name,
+                last as f64 / hz,
+                total as f64 / hz,
+                if !sent {
+                    "resting"
+                } else if last < rest + periods(step.hold_s) {
+                    "wave on"
+                } else {
+                    "resting after"
+                },
+                s.lost_samples,
+                s.gaps,
+                s.faults
+            ));
+        }
         let Some(e) = stream.next(board, ctx.timeout, monitor)? else {
             return Err(ctx.stalled());
         };
