@@ -1,20 +1,79 @@
 //! `finrs bench run`: reads the protocol (refused before any probe is
 //! touched), connects, runs the session through the library
 //! ([`finrs::bench`]) with the operator's prompts on the terminal, and
-//! diagnoses the session if asked.
+//! diagnoses the session if asked. `finrs bench live`: the library's live
+//! view on the real terminal, its keys read from it.
 
 use finrs::bench::protocol::Protocol;
 use finrs::bench::run::{run_session, BenchOptions};
 use finrs::link::capture::{self, Firmware};
 
-use crate::cli::{timeout, BenchRunArgs, BenchWhat, DiagnoseArgs};
+use crate::cli::{timeout, BenchLiveArgs, BenchRunArgs, BenchWhat, DiagnoseArgs};
 use crate::commands::{capture_flags, prompt, StatusLine};
 
 /// `finrs bench ...`.
 pub fn run(what: BenchWhat) -> anyhow::Result<()> {
     match what {
         BenchWhat::Run(args) => bench_run(args),
+        BenchWhat::Live(args) => bench_live(args),
     }
+}
+
+fn bench_live(args: BenchLiveArgs) -> anyhow::Result<()> {
+    if let Some(path) = &args.from_bytes {
+        let opts = args.record.options(format!(
+            "the byte dump {} (finrs bench live)",
+            path.display()
+        ))?;
+        let mut replay = finrs::link::replay::Replay::read(path)?;
+        return live_on(&mut replay, None, &opts);
+    }
+    let probe = args.probe.options()?;
+    let opts = args.record.options(format!(
+        "RTT up channel {} on {} (finrs bench live)",
+        finrs::link::probe::FORCE_UP_CHANNEL,
+        probe.chip
+    ))?;
+    let mut connected = {
+        let status = StatusLine::new();
+        capture::connect(&probe, &Firmware::Running(args.elf.clone()), &status)
+            .map_err(capture_flags)?
+    };
+    live_on(&mut connected.link, connected.table.as_ref(), &opts)
+}
+
+/// The live view on the real terminal.
+fn live_on(
+    board: &mut impl finrs::link::board::Board,
+    table: Option<&defmt_decoder::Table>,
+    opts: &finrs::link::capture::CaptureOptions,
+) -> anyhow::Result<()> {
+    use finrs::bench::live::{run_live, Key};
+    use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind};
+    // The terminal in raw mode on its alternate screen, put back whatever
+    // happens (ratatui's panic hook restores it too).
+    let mut term = ratatui::try_init()?;
+    let mut keys = || -> std::io::Result<Option<Key>> {
+        while event::poll(std::time::Duration::ZERO)? {
+            if let Event::Key(k) = event::read()? {
+                if k.kind != KeyEventKind::Press {
+                    continue;
+                }
+                return Ok(match k.code {
+                    KeyCode::Char(c) => Some(Key::Char(c)),
+                    KeyCode::Enter => Some(Key::Enter),
+                    KeyCode::Esc => Some(Key::Esc),
+                    KeyCode::Backspace => Some(Key::Backspace),
+                    _ => continue,
+                });
+            }
+        }
+        Ok(None)
+    };
+    let result = run_live(board, table, opts, &mut term, &mut keys);
+    ratatui::restore();
+    eprint!("{}", result?);
+    Ok(())
 }
 
 fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {

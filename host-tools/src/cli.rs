@@ -118,6 +118,26 @@ pub enum BenchWhat {
     /// against the running firmware and write the session, a file per
     /// recording as it ends.
     Run(BenchRunArgs),
+    /// Record the running firmware while showing force, currents and what
+    /// was lost, with keys to send a wave, stop, tare, lower the limit and
+    /// mark events.
+    Live(BenchLiveArgs),
+}
+
+/// `finrs bench live`.
+#[derive(Args)]
+pub struct BenchLiveArgs {
+    /// The running firmware's ELF: its `_SEGGER_RTT` and defmt table.
+    #[arg(long, conflicts_with = "from_bytes")]
+    pub elf: Option<PathBuf>,
+    /// Play a raw byte dump of the up channel instead of a probe (a
+    /// journal, a QEMU run); keys that command are refused.
+    #[arg(long)]
+    pub from_bytes: Option<PathBuf>,
+    #[command(flatten)]
+    pub probe: ProbeArgs,
+    #[command(flatten)]
+    pub record: RecordArgs,
 }
 
 /// `finrs bench run`.

@@ -211,6 +211,7 @@ fn commands_without_a_probe_fail_fast() {
         &["limit", "2.5"],
         &["wave", "sine:2,1,120", "--segments", "4"],
         &["calibrate", "show"],
+        &["bench", "live", "--out", "/tmp/finrs-never-written.csv"],
         &["calibrate", "shunts"],
         &["calibrate", "set", "--newtons-per-count", "2.6e-5"],
         &[
@@ -464,5 +465,80 @@ fn a_bad_protocol_is_refused_before_any_probe() {
         "{stderr}"
     );
     assert!(!stderr.contains("probe"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `finrs bench live` under a pseudo-terminal (util-linux `script`): it
+/// draws its view, plays a dump, takes `q` from the terminal, restores
+/// it, and writes the recording.
+#[cfg(unix)]
+#[test]
+fn the_live_view_runs_under_a_pseudo_terminal() {
+    use std::io::Write;
+    if Command::new("script").arg("--version").output().is_err() {
+        panic!("util-linux `script` is needed for this test (Debian: bsdutils)");
+    }
+    let dir = temp_dir("live-pty");
+    let dump = dir.join("dump.bin");
+    let out = dir.join("live.csv");
+    let _ = std::fs::remove_file(&out);
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    for seq in 0..3000u32 {
+        let s = Sample::<3> {
+            seq,
+            t_us: seq * 1000,
+            force_n: 1e-3,
+            flags: Default::default(),
+            voltages_v: [1.0, 0.0, -1.0],
+            currents_a: [0.01, 0.0, -0.01],
+        };
+        let n = encode_sample(&s, &mut buf).unwrap();
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    std::fs::write(&dump, &bytes).unwrap();
+    let command = format!(
+        "stty cols 100 rows 40; {} bench live --from-bytes {} --out {}",
+        env!("CARGO_BIN_EXE_finrs"),
+        dump.display(),
+        out.display()
+    );
+    let mut child = Command::new("script")
+        .args(["-qec", &command, "/dev/null"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    stdin.write_all(b"q").unwrap();
+    stdin.flush().unwrap();
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > Duration::from_secs(20) {
+            child.kill().unwrap();
+            panic!("finrs bench live did not end on q");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    drop(stdin);
+    let mut screen = String::new();
+    std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut screen).unwrap();
+    assert!(status.success(), "{status:?}: {screen}");
+    // The view was drawn (the terminal moves the cursor between words),
+    // the terminal put back, then the report printed.
+    assert!(screen.contains("┌finrs"), "{screen}");
+    assert!(screen.contains("\u{1b}[?1049h"), "alternate screen entered");
+    assert!(screen.contains("\u{1b}[?1049l"), "and left: {screen}");
+    assert!(
+        screen.contains("3000 samples; 0 lost in 0 gaps"),
+        "{screen}"
+    );
+    let rec = Recording::read(&out).unwrap();
+    assert_eq!(rec.t_s.len(), 3000);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,6 +1,7 @@
 //! The bench as one workflow: a session's protocol ([`protocol`]) run
 //! against the board through one link ([`run`]), each recording written
-//! as it ends.
+//! as it ends; a live view that records and commands ([`live`]).
 
+pub mod live;
 pub mod protocol;
 pub mod run;

@@ -11,4 +11,5 @@ pub mod command;
 #[cfg(test)]
 pub(crate) mod fake_board;
 pub mod probe;
+pub mod replay;
 pub mod stream;

@@ -122,6 +122,8 @@ pub struct Recorder {
     /// The firmware's first Info frame, and any later one whose
     /// configuration differs from it.
     infos: Vec<Info>,
+    /// Events the operator marked, at the time of the last row then, s.
+    marks: Vec<Option<f64>>,
 }
 
 impl Recorder {
@@ -143,7 +145,16 @@ impl Recorder {
             stopped_early: None,
             summary: Summary::default(),
             infos: Vec::new(),
+            marks: Vec::new(),
         }
+    }
+
+    /// Marks an event at the last row's time (for the notes); returns the
+    /// mark in words.
+    pub fn mark(&mut self) -> String {
+        let t = self.t_s.last().copied();
+        self.marks.push(t);
+        describe_mark(self.marks.len(), t)
     }
 
     /// Decodes the next bytes of the stream, in chunks of any size.
@@ -436,6 +447,15 @@ impl Recorder {
                 s.after_restart
             );
         }
+        if !self.marks.is_empty() {
+            let marks: Vec<String> = self
+                .marks
+                .iter()
+                .enumerate()
+                .map(|(k, &t)| describe_mark(k + 1, t))
+                .collect();
+            let _ = write!(out, "; marks: {}", marks.join(", "));
+        }
         if let Some(why) = &self.stopped_early {
             let _ = write!(out, "; stopped early: {why}");
         }
@@ -482,6 +502,14 @@ impl Recorder {
         };
         rec.validate(name)?;
         Ok(rec)
+    }
+}
+
+/// Mark `k` (from 1) at `t_s` in words.
+fn describe_mark(k: usize, t_s: Option<f64>) -> String {
+    match t_s {
+        Some(t) => format!("mark {k} at t_s {t:.3}"),
+        None => format!("mark {k} before the first row"),
     }
 }
 
