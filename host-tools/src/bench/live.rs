@@ -28,7 +28,6 @@ use crate::link::board::Board;
 use crate::link::capture::journal::Journal;
 use crate::link::capture::{finish, show_log, CaptureError, CaptureOptions, Monitor};
 use crate::link::command::{limit_command, wave_command};
-use crate::link::probe::ProbeError;
 use crate::link::stream::{Recorder, Summary};
 use crate::wave::WaveOptions;
 
@@ -328,18 +327,13 @@ fn chart<'a>(title: &'a str, traces: &[&'a [(f64, f64)]]) -> Chart<'a> {
         )
 }
 
-/// Why the live view stopped without writing.
+/// Why the live view wrote nothing (a link, terminal or key source that
+/// fails ends it, and what came is written with why in its notes).
 #[derive(Debug, thiserror::Error)]
 pub enum LiveError {
     /// The capture (journal, recording) failed.
     #[error(transparent)]
     Capture(#[from] CaptureError),
-    /// The terminal failed to draw.
-    #[error("the terminal: {0}")]
-    Terminal(String),
-    /// The key source failed.
-    #[error("reading the keys: {0}")]
-    Keys(#[source] std::io::Error),
 }
 
 /// Collects monitor lines (the firmware's log) for the view.
@@ -356,8 +350,8 @@ impl Monitor for Lines {
 /// Records from `board` into `opts.out` (with its journal) while drawing
 /// the view on `term` and taking keys from `keys` (`None`: no key now)
 /// until `q` (or `opts.duration_s`); then writes the recording and
-/// returns `finrs log`'s report.
-/// A link that fails ends the view; what came is written.
+/// returns `finrs log`'s report. A link, terminal or key source that fails
+/// ends the view; what came is written, with why in its notes.
 pub fn run_live<B: ratatui::backend::Backend>(
     board: &mut impl Board,
     table: Option<&defmt_decoder::Table>,
@@ -365,7 +359,7 @@ pub fn run_live<B: ratatui::backend::Backend>(
     term: &mut Terminal<B>,
     keys: &mut dyn FnMut() -> std::io::Result<Option<Key>>,
 ) -> Result<String, LiveError> {
-    let mut journal = Journal::create(&opts.out)?;
+    let mut journal = Some(Journal::create(&opts.out)?);
     let mut rec = Recorder::new(opts.setup.clone());
     let mut state = LiveState::new();
     let mut decoder = Decoder::new();
@@ -377,12 +371,21 @@ pub fn run_live<B: ratatui::backend::Backend>(
     if let Err(e) = board.send(&Command::RequestInfo) {
         state.message(format!("not sent: {e}"));
     }
-    let outcome: Result<(), ProbeError> = loop {
+    // Whatever ends the loop, what came is written; why it ended early
+    // goes into the notes.
+    let stopped: Option<String> = loop {
         let n = match board.read_force(&mut buf) {
             Ok(n) => n,
-            Err(e) => break Err(e),
+            Err(e) => break Some(format!("the link failed: {e}")),
         };
-        journal.append(&buf[..n])?;
+        if let Some(j) = &mut journal {
+            // A journal that cannot be written (a full disk) does not end
+            // the recording, which is still whole in memory.
+            if let Err(e) = j.append(&buf[..n]) {
+                state.message(format!("{e}; recording on without it"));
+                journal = None;
+            }
+        }
         let mut events = Vec::new();
         decoder.push(&buf[..n], &mut |e| events.push(e));
         for e in events {
@@ -393,7 +396,7 @@ pub fn run_live<B: ratatui::backend::Backend>(
         if let Some(d) = defmt.as_mut() {
             m = match board.read_log(&mut buf) {
                 Ok(m) => m,
-                Err(e) => break Err(e),
+                Err(e) => break Some(format!("the link failed: {e}")),
             };
             d.received(&buf[..m]);
             show_log(d.as_mut(), &lines, &mut malformed);
@@ -402,7 +405,16 @@ pub fn run_live<B: ratatui::backend::Backend>(
             }
         }
         let mut quit = false;
-        while let Some(key) = keys().map_err(LiveError::Keys)? {
+        loop {
+            let key = match keys() {
+                Ok(Some(key)) => key,
+                Ok(None) => break,
+                Err(e) => {
+                    rec.stopped_early(format!("reading the keys failed: {e}"));
+                    quit = true;
+                    break;
+                }
+            };
             match state.on_key(key) {
                 Action::None => {}
                 Action::Send(c) => {
@@ -427,21 +439,24 @@ pub fn run_live<B: ratatui::backend::Backend>(
         if drawn.elapsed() >= Duration::from_millis(100) || quit {
             drawn = Instant::now();
             state.set_summary(rec.summary());
-            term.draw(|f| state.render(f))
-                .map_err(|e| LiveError::Terminal(e.to_string()))?;
+            if let Err(e) = term.draw(|f| state.render(f)) {
+                break Some(format!("the terminal failed: {e}"));
+            }
         }
         if quit {
-            break Ok(());
+            break None;
         }
         if n == 0 && m == 0 {
             std::thread::sleep(Duration::from_millis(2));
         }
     };
-    if let Err(e) = &outcome {
-        rec.stopped_early(format!("the link failed: {e}"));
+    if let Some(why) = stopped {
+        rec.stopped_early(why);
     }
     let report = finish(rec, &opts.out)?;
-    journal.remove()?;
+    if let Some(j) = journal {
+        j.remove()?;
+    }
     Ok(report)
 }
 

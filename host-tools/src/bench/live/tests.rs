@@ -135,3 +135,59 @@ fn the_loop_records_commands_and_marks() {
     assert!(text.contains("3 segments, 1000 Hz"), "{text}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The fake board, failing after `reads` reads.
+struct Failing {
+    board: FakeBoard,
+    reads: usize,
+}
+
+impl crate::link::capture::Link for Failing {
+    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, crate::link::probe::ProbeError> {
+        if self.reads == 0 {
+            return Err(crate::link::probe::ProbeError::Target(
+                crate::link::probe::TargetError::new("the probe went away"),
+            ));
+        }
+        self.reads -= 1;
+        self.board.read_force(buf)
+    }
+    fn read_log(&mut self, buf: &mut [u8]) -> Result<usize, crate::link::probe::ProbeError> {
+        self.board.read_log(buf)
+    }
+}
+
+impl Board for Failing {
+    fn send(&mut self, c: &Command) -> Result<(), crate::link::probe::ProbeError> {
+        self.board.send(c)
+    }
+}
+
+#[test]
+fn a_failing_link_ends_the_view_and_what_came_is_written() {
+    let mut board = Failing {
+        board: FakeBoard::new(Rc::new(Cell::new(0.0))),
+        reads: 20,
+    };
+    let dir = std::env::temp_dir().join(format!("finrs-live-fail-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let opts = CaptureOptions {
+        out: dir.join("live.csv"),
+        duration_s: None,
+        setup: Setup {
+            geometry: Geometry::THESIS_2006,
+            medium: Medium::Air,
+            sample: None,
+            source: "a failing board".to_string(),
+        },
+    };
+    let mut term = Terminal::new(TestBackend::new(100, 40)).unwrap();
+    let report = run_live(&mut board, None, &opts, &mut term, &mut || Ok(None)).unwrap();
+    assert!(report.contains("1000 samples"), "{report}");
+    let notes = Recording::read(&opts.out).unwrap().meta.notes.unwrap();
+    assert!(
+        notes.contains("stopped early: the link failed: the probe went away"),
+        "{notes}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
