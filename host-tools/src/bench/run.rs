@@ -72,9 +72,9 @@ pub enum BenchError {
         /// The wait, s.
         timeout_s: f64,
     },
-    /// The board latched a fault: the recording is written, the session
-    /// stops.
-    #[error("the board latched a fault (seq {seq}) during recording {k} ({name}); it is written with the fault in its notes, the session stops here: find the cause, finrs clear-fault, and record the rest")]
+    /// The board latched a fault: a recording it ended is written, the
+    /// session stops.
+    #[error("the board has a fault latched (seq {seq}) at recording {k} ({name}); the recordings before it are written (this one too if the fault came during it, with the fault in its notes), the session stops here: find the cause, finrs clear-fault, and record the rest")]
     Faulted {
         /// The recording's number.
         k: usize,
@@ -297,10 +297,14 @@ impl Ctx<'_> {
         stream: &mut Stream<'_>,
         done: impl Fn(SampleFlags) -> bool,
     ) -> Result<(), BenchError> {
+        // Bounded too while samples flow: a flag that never comes (a tare
+        // the board ignores) is a stall, not a wait for ever.
+        let started = Instant::now();
         loop {
             match stream.next(board, self.timeout, self.monitor)? {
                 None => return Err(self.stalled()),
                 Some(Event::Sample(s)) if done(s.flags) => return Ok(()),
+                Some(_) if started.elapsed() >= self.timeout => return Err(self.stalled()),
                 Some(_) => {}
             }
         }
@@ -336,6 +340,15 @@ fn record_one(
     let first_seq = loop {
         match stream.next(board, ctx.timeout, monitor)? {
             None => return Err(ctx.stalled()),
+            // A fault latched before the recording: the board would refuse
+            // the wave; nothing is recorded.
+            Some(Event::Sample(s)) if s.flags.has(SampleFlags::FAULT) => {
+                return Err(BenchError::Faulted {
+                    k: ctx.k,
+                    name: step.name.clone(),
+                    seq: s.seq,
+                })
+            }
             Some(Event::Sample(s)) => {
                 rec.event(Event::Sample(s));
                 break s.seq;

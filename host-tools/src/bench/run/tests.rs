@@ -286,3 +286,33 @@ fn the_example_protocol_runs_whole() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A fault latched before a recording stops the session there: the
+/// recordings before it are kept, nothing is recorded for it.
+#[test]
+fn a_latched_fault_stops_the_session_before_the_next_recording() {
+    struct Sink;
+    impl finrs_controller::FrameSink for Sink {
+        fn try_write(&mut self, _: &[u8]) -> bool {
+            true
+        }
+    }
+    let protocol = Protocol::parse("p.toml", PROTOCOL).unwrap();
+    let mut board = FakeBoard::new(Rc::new(Cell::new(0.0)));
+    board
+        .c
+        .fault(finrs_frames::FaultCode::Other, None, &mut Sink);
+    let dir = out_dir("faulted");
+    let e = run_session(
+        &mut board,
+        &protocol,
+        &dir,
+        &BenchOptions::default(),
+        None,
+        &mut |_: &str| Ok(()),
+        &Silent,
+    )
+    .unwrap_err();
+    assert!(matches!(&e, BenchError::Faulted { k: 1, .. }), "{e}");
+    assert!(!dir.join("01_free_step_1.0V.csv").exists());
+}
