@@ -403,7 +403,7 @@ fn record_one(
     board.send(&Command::Stop)?;
     rec.finish();
     let report = crate::link::capture::report(&rec);
-    let mut recording = rec.recording(&step.file_name(ctx.k))?;
+    let mut recording = rec.into_recording(&step.file_name(ctx.k))?;
     let t0 = recording.t_s.first().copied().unwrap_or(0.0);
     for t in &mut recording.t_s {
         *t -= t0;

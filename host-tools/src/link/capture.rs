@@ -94,7 +94,7 @@ pub fn finish(mut rec: Recorder, out: &Path) -> Result<String, CaptureError> {
     let report = report(&rec);
     let name = out.display().to_string();
     let recording = rec
-        .recording(&name)
+        .into_recording(&name)
         .map_err(|source| CaptureError::NothingWritten {
             report: report.trim_end().to_string(),
             source,

@@ -110,7 +110,8 @@ pub struct Recorder {
     clock: Clock,
     segments: Option<usize>,
     t_s: Vec<f64>,
-    v_v: Vec<Vec<f64>>,
+    /// One flat row of voltages per sample (no allocation per row).
+    v_v: Option<Voltages>,
     currents_a: Vec<Vec<f64>>,
     force_n: Vec<f64>,
     gaps: Vec<Gap>,
@@ -135,7 +136,7 @@ impl Recorder {
             clock: Clock::new(),
             segments: None,
             t_s: Vec::new(),
-            v_v: Vec::new(),
+            v_v: None,
             currents_a: Vec::new(),
             force_n: Vec::new(),
             gaps: Vec::new(),
@@ -257,8 +258,11 @@ impl Recorder {
                 }
                 // Division rounds correctly: 7000 µs is the double nearest 0.007 s.
                 self.t_s.push(t_us as f64 / 1e6);
+                let volts: [f64; finrs_frames::MAX_SEGMENTS] =
+                    std::array::from_fn(|k| s.voltages().get(k).map_or(0.0, |&v| f64::from(v)));
                 self.v_v
-                    .push(s.voltages().iter().map(|&v| f64::from(v)).collect());
+                    .get_or_insert_with(|| Voltages::with_capacity(s.n, 1024))
+                    .push(&volts[..s.n]);
                 for (column, &i) in self.currents_a.iter_mut().zip(s.currents()) {
                     column.push(f64::from(i));
                 }
@@ -465,23 +469,29 @@ impl Recorder {
     /// The recording so far (blocked fixture; voltages, currents and force
     /// per row), checked against the format as if written to `name`.
     pub fn recording(&self, name: &str) -> Result<Recording, RecordingError> {
+        self.clone().into_recording(name)
+    }
+
+    /// The recording, as [`recording`](Self::recording) makes it, from the
+    /// recorder itself: its columns move into the recording (one column at
+    /// a time is copied to the format's optional values), so that the end
+    /// of a long capture does not hold every sample twice.
+    pub fn into_recording(mut self, name: &str) -> Result<Recording, RecordingError> {
         let Some(segments) = self.segments else {
             return Err(RecordingError::file(
                 name,
                 "the stream held no valid Sample frame: nothing to record",
             ));
         };
+        let notes = self.notes();
         let g = self.setup.geometry;
-        let mut channels: Vec<(Channel, Vec<Option<f64>>)> = self
-            .currents_a
-            .iter()
-            .enumerate()
-            .map(|(k, c)| (Channel::Current(k), c.iter().map(|&x| Some(x)).collect()))
-            .collect();
-        channels.push((
-            Channel::Force,
-            self.force_n.iter().map(|&x| Some(x)).collect(),
-        ));
+        let optional = |c: Vec<f64>| c.into_iter().map(Some).collect::<Vec<_>>();
+        let mut channels: Vec<(Channel, Vec<Option<f64>>)> =
+            Vec::with_capacity(self.currents_a.len() + 1);
+        for (k, c) in std::mem::take(&mut self.currents_a).into_iter().enumerate() {
+            channels.push((Channel::Current(k), optional(c)));
+        }
+        channels.push((Channel::Force, optional(std::mem::take(&mut self.force_n))));
         let rec = Recording {
             meta: Metadata {
                 segments,
@@ -490,14 +500,17 @@ impl Recorder {
                 thickness_m: g.thickness_m,
                 fixture: Fixture::Blocked,
                 medium: self.setup.medium,
-                sample: self.setup.sample.clone(),
+                sample: self.setup.sample.take(),
                 cation: None,
                 dots_s_m: None,
-                notes: Some(self.notes()),
+                notes: Some(notes),
                 t_session_start_s: None,
             },
-            t_s: self.t_s.clone(),
-            v_v: Voltages::from_rows(segments, &self.v_v),
+            t_s: std::mem::take(&mut self.t_s),
+            v_v: self
+                .v_v
+                .take()
+                .unwrap_or_else(|| Voltages::with_capacity(segments, 0)),
             channels,
         };
         rec.validate(name)?;
