@@ -1,7 +1,8 @@
 //! `finrs bench run`: a whole session from the board, through one link.
 //!
 //! For each recording of the protocol, in order: the operator's prompt if
-//! any, a tare for a blocked one, then a recorder fed from the one stream
+//! any, the samples the board buffered meanwhile dropped (an Info request
+//! as the barrier), a tare for a blocked one, then a recorder fed from the one stream
 //! while the board rests at 0 V for `rest_s`, runs the wave for `hold_s`
 //! (its envelope ends it) and rests again for `off_s`. Times are counted
 //! in the board's samples (its Info gives the rate), never on the host's
@@ -13,11 +14,11 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use finrs_frames::{Command, Decoder, Event, Info, SampleFlags};
+use finrs_frames::{Command, Event, Info, SampleFlags};
 
 use super::protocol::{Protocol, Step};
-use crate::link::board::{request_info, Board};
-use crate::link::capture::{show_log, Monitor};
+use crate::link::board::{request_info, Board, Frames};
+use crate::link::capture::Monitor;
 use crate::link::command::wave_command;
 use crate::link::probe::ProbeError;
 use crate::link::stream::{Recorder, Setup};
@@ -115,61 +116,6 @@ pub struct SessionReport {
     pub written: Vec<(PathBuf, String)>,
 }
 
-/// The board's stream, decoded once for the whole session, and its defmt
-/// log shown as it comes (when the ELF's table is known).
-struct Stream<'t> {
-    decoder: Decoder,
-    pending: std::collections::VecDeque<Event>,
-    buf: Vec<u8>,
-    defmt: Option<Box<dyn defmt_decoder::StreamDecoder + Send + Sync + 't>>,
-    malformed_defmt: u64,
-}
-
-impl<'t> Stream<'t> {
-    fn new(table: Option<&'t defmt_decoder::Table>) -> Self {
-        Self {
-            decoder: Decoder::new(),
-            pending: Default::default(),
-            buf: vec![0; 16 * 1024],
-            defmt: table.map(|t| t.new_stream_decoder()),
-            malformed_defmt: 0,
-        }
-    }
-
-    /// The next event, reading the board as needed; `None` after
-    /// `timeout` of silence.
-    fn next(
-        &mut self,
-        board: &mut impl Board,
-        timeout: Duration,
-        monitor: &dyn Monitor,
-    ) -> Result<Option<Event>, ProbeError> {
-        let started = Instant::now();
-        loop {
-            if let Some(e) = self.pending.pop_front() {
-                return Ok(Some(e));
-            }
-            if started.elapsed() >= timeout {
-                return Ok(None);
-            }
-            let n = board.read_force(&mut self.buf)?;
-            let pending = &mut self.pending;
-            self.decoder
-                .push(&self.buf[..n], &mut |e| pending.push_back(e));
-            let mut m = 0;
-            if let Some(d) = self.defmt.as_mut() {
-                // The firmware's refusals and faults, in its own words.
-                m = board.read_log(&mut self.buf)?;
-                d.received(&self.buf[..m]);
-                show_log(d.as_mut(), monitor, &mut self.malformed_defmt);
-            }
-            if n == 0 && m == 0 {
-                std::thread::sleep(Duration::from_millis(2));
-            }
-        }
-    }
-}
-
 /// Records the session `protocol` into `out_dir`; `prompt` asks the
 /// operator and returns on Enter, `monitor` hears progress and, given the
 /// ELF's defmt `table`, the firmware's log.
@@ -211,7 +157,7 @@ pub fn run_session(
         source,
     })?;
     board.send(&Command::Stop)?;
-    let mut stream = Stream::new(table);
+    let mut stream = Frames::new(table);
     let mut session_first_seq: Option<u32> = None;
     let mut written = Vec::new();
     let count = protocol.recordings.len();
@@ -230,6 +176,11 @@ pub fn run_session(
             timeout: opts.timeout,
             monitor,
         };
+        // What the board buffered while nobody read (the prompt) is from
+        // before: it is dropped, and the recording starts in the present.
+        if stream.barrier(board, opts.timeout, monitor)?.is_none() {
+            return Err(ctx.stalled());
+        }
         if step.tare {
             board.send(&Command::Tare)?;
             // The tare's samples carry its flag; it is done at the first
@@ -294,7 +245,7 @@ impl Ctx<'_> {
     fn skip_until(
         &self,
         board: &mut impl Board,
-        stream: &mut Stream<'_>,
+        stream: &mut Frames<'_>,
         done: impl Fn(SampleFlags) -> bool,
     ) -> Result<(), BenchError> {
         // Bounded too while samples flow: a flag that never comes (a tare
@@ -317,7 +268,7 @@ impl Ctx<'_> {
 #[allow(clippy::too_many_arguments)]
 fn record_one(
     board: &mut impl Board,
-    stream: &mut Stream<'_>,
+    stream: &mut Frames<'_>,
     protocol: &Protocol,
     step: &Step,
     command: &Command,

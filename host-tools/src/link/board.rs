@@ -1,13 +1,15 @@
 //! The board as a whole-session client sees it: its force stream up
 //! ([`Link`]) and commands down, through one owner of the probe
-//! ([`Bounded`]) or a fake in the tests. `finrs calibrate` and
-//! `finrs bench run` talk to it through this trait.
+//! ([`Bounded`]) or a fake in the tests. `finrs calibrate`, `finrs bench
+//! run` and `finrs bench live` talk to it through this trait, and read its
+//! stream through [`Frames`].
 
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use finrs_frames::{Command, Decoder, Event, Info};
 
-use crate::link::capture::Link;
+use crate::link::capture::{show_log, Link, Monitor, Silent};
 use crate::link::probe::{self, Bounded, ProbeError, Target, COMMAND_DOWN_CHANNEL};
 
 /// The board: its stream, and commands down.
@@ -28,27 +30,86 @@ impl<T: Target> Board for Bounded<T> {
     }
 }
 
+/// The board's stream decoded into events, one at a time, and its defmt
+/// log shown as it comes (when the ELF's table is known).
+pub struct Frames<'t> {
+    decoder: Decoder,
+    pending: VecDeque<Event>,
+    buf: Vec<u8>,
+    defmt: Option<Box<dyn defmt_decoder::StreamDecoder + Send + Sync + 't>>,
+    malformed_defmt: u64,
+}
+
+impl<'t> Frames<'t> {
+    /// At the start of the stream, with the ELF's defmt `table` if known.
+    pub fn new(table: Option<&'t defmt_decoder::Table>) -> Self {
+        Self {
+            decoder: Decoder::new(),
+            pending: VecDeque::new(),
+            buf: vec![0; 16 * 1024],
+            defmt: table.map(|t| t.new_stream_decoder()),
+            malformed_defmt: 0,
+        }
+    }
+
+    /// The next event, reading the board as needed; `None` after
+    /// `timeout` of silence. The firmware's log lines go to `monitor`.
+    pub fn next(
+        &mut self,
+        board: &mut impl Board,
+        timeout: Duration,
+        monitor: &dyn Monitor,
+    ) -> Result<Option<Event>, ProbeError> {
+        let started = Instant::now();
+        loop {
+            if let Some(e) = self.pending.pop_front() {
+                return Ok(Some(e));
+            }
+            if started.elapsed() >= timeout {
+                return Ok(None);
+            }
+            let n = board.read_force(&mut self.buf)?;
+            let pending = &mut self.pending;
+            self.decoder
+                .push(&self.buf[..n], &mut |e| pending.push_back(e));
+            let mut m = 0;
+            if let Some(d) = self.defmt.as_mut() {
+                // The firmware's refusals and faults, in its own words.
+                m = board.read_log(&mut self.buf)?;
+                d.received(&self.buf[..m]);
+                show_log(d.as_mut(), monitor, &mut self.malformed_defmt);
+            }
+            if n == 0 && m == 0 {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
+    }
+
+    /// Asks for an Info frame and drops every event before it: what the
+    /// board buffered while the host was not reading (an operator's
+    /// prompt) is behind, and the events after it are the board's present.
+    /// Returns the Info; `None` if it did not come within `timeout`.
+    pub fn barrier(
+        &mut self,
+        board: &mut impl Board,
+        timeout: Duration,
+        monitor: &dyn Monitor,
+    ) -> Result<Option<Info>, ProbeError> {
+        board.send(&Command::RequestInfo)?;
+        let started = Instant::now();
+        while let Some(left) = timeout.checked_sub(started.elapsed()) {
+            match self.next(board, left, monitor)? {
+                Some(Event::Info(i)) => return Ok(Some(i)),
+                Some(_) => {}
+                None => break,
+            }
+        }
+        Ok(None)
+    }
+}
+
 /// Asks for the board's Info frame and reads until it comes; `None` if it
 /// did not within `timeout` (the stream read meanwhile is dropped).
 pub fn request_info(board: &mut impl Board, timeout: Duration) -> Result<Option<Info>, ProbeError> {
-    board.send(&Command::RequestInfo)?;
-    let mut decoder = Decoder::new();
-    let mut buf = vec![0u8; 16 * 1024];
-    let started = Instant::now();
-    while started.elapsed() < timeout {
-        let n = board.read_force(&mut buf)?;
-        let mut info = None;
-        decoder.push(&buf[..n], &mut |e| {
-            if let Event::Info(i) = e {
-                info.get_or_insert(i);
-            }
-        });
-        if info.is_some() {
-            return Ok(info);
-        }
-        if n == 0 {
-            std::thread::sleep(Duration::from_millis(2));
-        }
-    }
-    Ok(None)
+    Frames::new(None).barrier(board, timeout, &Silent)
 }

@@ -20,10 +20,12 @@
 use std::time::{Duration, Instant};
 
 use finrs_frames::{
-    Calibration, CalibrationOrigin, Command, DecodedSample, Decoder, Event, Info, SampleFlags,
+    Calibration, CalibrationOrigin, Command, DecodedSample, Event, Info, SampleFlags,
 };
 
 pub use crate::link::board::Board;
+use crate::link::board::Frames;
+use crate::link::capture::Silent;
 use crate::link::probe::ProbeError;
 
 /// Standard gravity, m/s² (a reference mass's weight unless the local
@@ -121,65 +123,55 @@ pub enum CalibrateError {
     Prompt(String),
 }
 
-/// The board's frames as they come.
+/// The board's stream as the measurements read it.
 struct Listener {
-    decoder: Decoder,
-    infos: Vec<Info>,
-    samples: Vec<DecodedSample>,
-    fault_seq: Option<u32>,
-    buf: Vec<u8>,
+    frames: Frames<'static>,
 }
 
 impl Listener {
     fn new() -> Self {
         Self {
-            decoder: Decoder::new(),
-            infos: Vec::new(),
-            samples: Vec::new(),
-            fault_seq: None,
-            buf: vec![0; 16 * 1024],
+            frames: Frames::new(None),
         }
     }
 
-    /// Reads what the board sent; false if nothing came.
-    fn pump(&mut self, board: &mut impl Board) -> Result<bool, CalibrateError> {
-        let n = board.read_force(&mut self.buf)?;
-        let (infos, samples, fault) = (&mut self.infos, &mut self.samples, &mut self.fault_seq);
-        self.decoder.push(&self.buf[..n], &mut |e| match e {
-            Event::Info(i) => infos.push(i),
-            Event::Sample(s) => samples.push(s),
-            Event::Fault(f) => *fault = Some(f.seq),
-            _ => {}
-        });
-        Ok(n > 0)
-    }
-
-    /// Pumps until `done` holds, within the timeout.
-    fn until(
+    /// The next event within what is left of the wait that began at
+    /// `started`, or a timeout naming `what`.
+    fn next(
         &mut self,
         board: &mut impl Board,
         opts: &CalibrateOptions,
+        started: Instant,
         what: &'static str,
-        mut done: impl FnMut(&Self) -> bool,
+    ) -> Result<Event, CalibrateError> {
+        let timeout = || CalibrateError::Timeout {
+            what,
+            timeout_s: opts.timeout.as_secs_f64(),
+        };
+        let left = opts
+            .timeout
+            .checked_sub(started.elapsed())
+            .ok_or_else(timeout)?;
+        self.frames.next(board, left, &Silent)?.ok_or_else(timeout)
+    }
+
+    /// Drops what the board buffered while nobody read (a prompt): the
+    /// samples after this are the board's present.
+    fn barrier(
+        &mut self,
+        board: &mut impl Board,
+        opts: &CalibrateOptions,
     ) -> Result<(), CalibrateError> {
-        let started = Instant::now();
-        loop {
-            if done(self) {
-                return Ok(());
-            }
-            if started.elapsed() >= opts.timeout {
-                return Err(CalibrateError::Timeout {
-                    what,
-                    timeout_s: opts.timeout.as_secs_f64(),
-                });
-            }
-            if !self.pump(board)? {
-                std::thread::sleep(Duration::from_millis(2));
-            }
+        match self.frames.barrier(board, opts.timeout, &Silent)? {
+            Some(_) => Ok(()),
+            None => Err(CalibrateError::Timeout {
+                what: "Info frame",
+                timeout_s: opts.timeout.as_secs_f64(),
+            }),
         }
     }
 
-    /// `count` new samples that satisfy `keep` (others are skipped), in
+    /// `count` next samples that satisfy `keep` (others are skipped), in
     /// order; a latched fault refuses.
     fn collect(
         &mut self,
@@ -188,36 +180,18 @@ impl Listener {
         count: usize,
         keep: impl Fn(&DecodedSample) -> bool,
     ) -> Result<Vec<DecodedSample>, CalibrateError> {
-        self.samples.clear();
-        self.fault_seq = None;
         let mut kept = Vec::with_capacity(count);
         let started = Instant::now();
         while kept.len() < count {
-            if let Some(seq) = self.fault_seq {
-                return Err(CalibrateError::Faulted { seq });
-            }
-            if let Some(s) = self
-                .samples
-                .iter()
-                .find(|s| s.flags.has(SampleFlags::FAULT))
-            {
-                return Err(CalibrateError::Faulted { seq: s.seq });
-            }
-            kept.extend(self.samples.drain(..).filter(|s| keep(s)));
-            if kept.len() >= count {
-                break;
-            }
-            if started.elapsed() >= opts.timeout {
-                return Err(CalibrateError::Timeout {
-                    what: "samples",
-                    timeout_s: opts.timeout.as_secs_f64(),
-                });
-            }
-            if !self.pump(board)? {
-                std::thread::sleep(Duration::from_millis(2));
+            match self.next(board, opts, started, "samples")? {
+                Event::Fault(f) => return Err(CalibrateError::Faulted { seq: f.seq }),
+                Event::Sample(s) if s.flags.has(SampleFlags::FAULT) => {
+                    return Err(CalibrateError::Faulted { seq: s.seq })
+                }
+                Event::Sample(s) if keep(&s) => kept.push(s),
+                _ => {}
             }
         }
-        kept.truncate(count);
         Ok(kept)
     }
 }
@@ -389,8 +363,9 @@ pub fn measure_load_cell(
         prompt,
         "take every load off the load cell, then press Enter",
     )?;
-    board.send(&Command::Tare)?;
     let mut l = Listener::new();
+    l.barrier(board, opts)?;
+    board.send(&Command::Tare)?;
     // The tare's own samples carry its flag; the first after it is tared.
     let tared = |s: &DecodedSample| !s.flags.has(SampleFlags::TARING);
     l.collect(board, opts, 1, |s| s.flags.has(SampleFlags::TARING))?;
@@ -399,6 +374,9 @@ pub fn measure_load_cell(
         prompt,
         &format!("put the reference load ({reference_n} N) on the load cell, then press Enter"),
     )?;
+    // The samples the board buffered while the operator loaded the cell
+    // are mostly unloaded ones: only what comes after the barrier counts.
+    l.barrier(board, opts)?;
     let loaded = force_mean(&l.collect(board, opts, window, tared)?);
     let delta = Mean {
         mean: loaded.mean - unloaded.mean,
@@ -450,27 +428,22 @@ pub fn apply(
 ) -> Result<Info, CalibrateError> {
     let mut l = Listener::new();
     board.send(&Command::SetCalibration(*calibration))?;
-    let confirmed = |l: &Listener| {
-        l.infos.iter().any(|i| {
-            i.calibration == *calibration && i.calibration_origin != CalibrationOrigin::Defaults
-        })
-    };
-    match l.until(board, opts, "Info frame", confirmed) {
-        Ok(()) => {}
-        Err(CalibrateError::Timeout { timeout_s, .. }) => {
-            return Err(CalibrateError::NotConfirmed { timeout_s })
+    let started = Instant::now();
+    loop {
+        match l.next(board, opts, started, "Info frame") {
+            Ok(Event::Info(i))
+                if i.calibration == *calibration
+                    && i.calibration_origin != CalibrationOrigin::Defaults =>
+            {
+                return Ok(i)
+            }
+            Ok(_) => {}
+            Err(CalibrateError::Timeout { timeout_s, .. }) => {
+                return Err(CalibrateError::NotConfirmed { timeout_s })
+            }
+            Err(e) => return Err(e),
         }
-        Err(e) => return Err(e),
     }
-    let info = l
-        .infos
-        .iter()
-        .rev()
-        .find(|i| i.calibration == *calibration)
-        .copied();
-    info.ok_or(CalibrateError::NotConfirmed {
-        timeout_s: opts.timeout.as_secs_f64(),
-    })
 }
 
 /// The calibration in words, for the driven segments.

@@ -1,7 +1,11 @@
 //! A board for the host's tests: the firmware's own controller on
 //! simulated sensors with known true zeros and scale, a load set by the
 //! test, and a strip whose blocking force follows the mean drive voltage
-//! through a first-order lag; 50 ticks (50 ms) per read.
+//! through a first-order lag; 50 ticks (50 ms) per read. Its frames go
+//! through a channel of the board's size that refuses a frame that does
+//! not fit, as RTT does, so that a pause of the host (an operator's
+//! prompt, [`FakeBoard::pause`]) leaves the oldest frames buffered and
+//! the rest dropped, as on the board.
 
 use std::cell::Cell;
 use std::rc::Rc;
@@ -20,10 +24,17 @@ pub const TRUE_SCALE: f64 = 3.1e-5;
 pub const TRUE_ZEROS: [u16; N] = [2056, 2041, 2048];
 pub const AMPS_PER_COUNT: f32 = 2.5e-4;
 
-struct Bytes(Vec<u8>);
+/// The board's RTT up channel for frames at N = 3, bytes.
+const CHANNEL_BYTES: usize = 8192;
 
-impl FrameSink for Bytes {
+/// Frames waiting for the host; a frame that does not fit is refused.
+struct Channel(Vec<u8>);
+
+impl FrameSink for Channel {
     fn try_write(&mut self, frame: &[u8]) -> bool {
+        if self.0.len() + frame.len() > CHANNEL_BYTES {
+            return false;
+        }
         self.0.extend_from_slice(frame);
         true
     }
@@ -48,6 +59,10 @@ pub struct FakeBoard {
     /// Blocking force per volt of mean drive at steady state, N/V.
     pub newtons_per_volt: f64,
     last_v: [f32; N],
+    /// Ticks to run before the next read with nobody reading (set by a
+    /// test's prompt), then the load to put on.
+    pub pause: Rc<Cell<(u64, Option<f64>)>>,
+    channel: Channel,
 }
 
 impl FakeBoard {
@@ -86,6 +101,8 @@ impl FakeBoard {
             strip_force_n: 0.0,
             newtons_per_volt: 1e-3,
             last_v: [0.0; N],
+            pause: Rc::new(Cell::new((0, None))),
+            channel: Channel(Vec::new()),
         }
     }
 
@@ -99,10 +116,20 @@ impl FakeBoard {
     }
 }
 
-impl Link for FakeBoard {
-    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
-        let mut out = Bytes(Vec::new());
-        for _ in 0..50 {
+impl FakeBoard {
+    /// Runs a pause the test asked for (it is over before the host does
+    /// anything else), then puts on its load.
+    fn catch_up(&mut self) {
+        let (ticks, load) = self.pause.replace((0, None));
+        self.run(ticks);
+        if let Some(l) = load {
+            self.load_n.set(l);
+        }
+    }
+
+    /// `ticks` sample periods, their frames into the channel.
+    fn run(&mut self, ticks: u64) {
+        for _ in 0..ticks {
             // The strip's force lags the mean voltage by 50 ms.
             let mean_v = self.last_v.iter().map(|&v| f64::from(v)).sum::<f64>() / N as f64;
             self.strip_force_n += (self.newtons_per_volt * mean_v - self.strip_force_n) / 50.0;
@@ -119,7 +146,7 @@ impl Link for FakeBoard {
                     load_cell_counts: load_counts.round() as u16,
                     current_counts,
                 },
-                &mut out,
+                &mut self.channel,
             );
             self.last_v = applied.voltages_v;
             if self.c.take_calibration_to_store().is_some() {
@@ -128,9 +155,17 @@ impl Link for FakeBoard {
             }
             self.tick += 1;
         }
-        assert!(out.0.len() <= buf.len());
-        buf[..out.0.len()].copy_from_slice(&out.0);
-        Ok(out.0.len())
+    }
+}
+
+impl Link for FakeBoard {
+    fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
+        self.catch_up();
+        self.run(50);
+        let n = self.channel.0.len().min(buf.len());
+        buf[..n].copy_from_slice(&self.channel.0[..n]);
+        self.channel.0.drain(..n);
+        Ok(n)
     }
 
     fn read_log(&mut self, _: &mut [u8]) -> Result<usize, ProbeError> {
@@ -140,6 +175,7 @@ impl Link for FakeBoard {
 
 impl Board for FakeBoard {
     fn send(&mut self, command: &Command) -> Result<(), ProbeError> {
+        self.catch_up();
         let bytes = crate::link::command::encode(command);
         let c = &mut self.c;
         self.decoder.push(&bytes, &mut |e| {

@@ -316,3 +316,51 @@ fn a_latched_fault_stops_the_session_before_the_next_recording() {
     assert!(matches!(&e, BenchError::Faulted { k: 1, .. }), "{e}");
     assert!(!dir.join("01_free_step_1.0V.csv").exists());
 }
+
+/// An operator who takes 5 s at a prompt: the board's buffered samples
+/// from then are not the recording's, which starts after the prompt and
+/// lasts its protocol's time, the wave where the protocol puts it.
+#[test]
+fn a_long_prompt_does_not_eat_the_next_recording() {
+    // A prompt before the free recording too (no tare to skip the backlog).
+    let text = PROTOCOL.replacen(
+        "off_s = 0.5\n",
+        "off_s = 0.5\nprompt = \"free the tip\"\n",
+        1,
+    );
+    assert_ne!(text, PROTOCOL);
+    let protocol = Protocol::parse("p.toml", &text).unwrap();
+    let mut board = FakeBoard::new(Rc::new(Cell::new(0.0)));
+    let pause = board.pause.clone();
+    let dir = out_dir("pause");
+    let report = run_session(
+        &mut board,
+        &protocol,
+        &dir,
+        &BenchOptions::default(),
+        None,
+        &mut |_: &str| {
+            pause.set((5000, None));
+            Ok(())
+        },
+        &Silent,
+    )
+    .unwrap();
+    let free = Recording::read(&report.written[0].0).unwrap();
+    assert_eq!(free.t_s.len(), 2000);
+    let v: Vec<f64> = free.v_v.rows().map(|r| r[0]).collect();
+    let start = v.iter().position(|&x| x != 0.0).unwrap();
+    assert!((500..=560).contains(&start), "wave from row {start}");
+    let blocked = Recording::read(&report.written[1].0).unwrap();
+    assert_eq!(blocked.t_s.len(), 2500);
+    let v: Vec<f64> = blocked.v_v.rows().map(|r| r[0]).collect();
+    let start = v.iter().position(|&x| x != 0.0).unwrap();
+    assert!((400..=460).contains(&start), "wave from row {start}");
+    assert!((v[1500] - 2.0).abs() < 1e-6, "{}", v[1500]);
+    let t0 = blocked.meta.t_session_start_s.unwrap();
+    assert!(
+        t0 > 7.0,
+        "after the first recording and the 5 s pause: {t0}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

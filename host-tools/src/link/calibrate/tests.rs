@@ -74,11 +74,13 @@ fn the_load_cell_scale_comes_out_of_a_reference_load() {
     // 2 g at standard gravity.
     let reference_n = 0.002 * STANDARD_GRAVITY_M_PER_S2;
     let mut prompts = Vec::new();
-    let l = load.clone();
+    // The operator takes 3 s to hang the mass: the board samples the
+    // unloaded cell meanwhile and buffers what its channel holds.
+    let pause = b.pause.clone();
     let s = measure_load_cell(&mut b, &opts(), reference_n, &mut |text: &str| {
         prompts.push(text.to_string());
         if text.contains("put the reference load") {
-            l.set(reference_n);
+            pause.set((3000, Some(reference_n)));
         }
         Ok(())
     })
