@@ -11,6 +11,9 @@
 //! - `qemu` (`--no-default-features --features qemu`): QEMU's netduinoplus2
 //!   with the model core as plant; SysTick paces the sample interrupt, frames
 //!   go to a host file through semihosting, defmt to semihosting stdout.
+//!   With `qemu-serial`, the virtual bench: frames and commands over USART1
+//!   and the bench's world (fixture, camera) over USART2, for `finrs bench
+//!   run --qemu`.
 #![no_std]
 #![no_main]
 #![deny(unsafe_code, missing_docs)]

@@ -6,7 +6,8 @@
 
 use finrs::bench::protocol::Protocol;
 use finrs::bench::run::{run_session, BenchOptions};
-use finrs::link::capture::{self, Firmware};
+use finrs::link::capture::{self, Firmware, Monitor};
+use finrs::link::qemu::{VirtualBoard, QEMU};
 
 use crate::cli::{timeout, BenchLiveArgs, BenchRunArgs, BenchWhat, DiagnoseArgs};
 use crate::commands::{capture_flags, prompt, StatusLine};
@@ -81,19 +82,38 @@ fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {
     let opts = BenchOptions {
         timeout: timeout("--timeout-s", args.timeout_s)?,
     };
-    let probe = args.probe.options()?;
     let status = StatusLine::new();
-    let mut connected = capture::connect(&probe, &Firmware::Running(args.elf.clone()), &status)
-        .map_err(capture_flags)?;
-    let report = run_session(
-        &mut connected.link,
-        &protocol,
-        &args.out,
-        &opts,
-        connected.table.as_ref(),
-        &mut prompt,
-        &status,
-    )?;
+    let report = if let Some(elf) = &args.qemu {
+        let started = VirtualBoard::start(QEMU, elf, opts.timeout)?;
+        let mut board = started.board;
+        // No operator at a virtual bench: the prompt is shown and passed.
+        let mut show = |text: &str| {
+            status.line(&format!("(virtual bench, not waiting) {text}"));
+            Ok(())
+        };
+        run_session(
+            &mut board,
+            &protocol,
+            &args.out,
+            &opts,
+            started.table.as_ref(),
+            &mut show,
+            &status,
+        )?
+    } else {
+        let probe = args.probe.options()?;
+        let mut connected = capture::connect(&probe, &Firmware::Running(args.elf.clone()), &status)
+            .map_err(capture_flags)?;
+        run_session(
+            &mut connected.link,
+            &protocol,
+            &args.out,
+            &opts,
+            connected.table.as_ref(),
+            &mut prompt,
+            &status,
+        )?
+    };
     drop(status);
     eprintln!(
         "session {}: {} recordings",

@@ -151,6 +151,11 @@ pub struct BenchRunArgs {
     /// The running firmware's ELF, for its `_SEGGER_RTT` (default: scan RAM).
     #[arg(long)]
     pub elf: Option<PathBuf>,
+    /// The virtual bench: run this firmware (built with `--features
+    /// qemu-serial`) in QEMU, the model as the strip, instead of a board;
+    /// the operator's prompts are shown, not waited for.
+    #[arg(long, value_name = "ELF", conflicts_with = "elf")]
+    pub qemu: Option<PathBuf>,
     /// Wait this long for the board's answers, s.
     #[arg(long, default_value_t = 10.0)]
     pub timeout_s: f64,

@@ -408,7 +408,13 @@ impl StatusLine {
 
 impl Monitor for StatusLine {
     fn line(&self, text: &str) {
-        self.0.println(text);
+        // indicatif drops `println` when standard error is not a terminal
+        // (a log redirected to a file, CI): the lines matter more there.
+        if self.0.is_hidden() {
+            eprintln!("{text}");
+        } else {
+            self.0.println(text);
+        }
     }
 
     fn status(&self, text: &str) {

@@ -21,11 +21,18 @@
 //! - After [`sim::RUN_S`] simulated seconds the run flushes and exits
 //!   through semihosting; a panic or HardFault exits with a failure code
 //!   (the board's `udf`, which stops the core for probe-rs, would hang QEMU).
+//! - With `qemu-serial` (the virtual bench, see [`serial`]) frames and
+//!   commands go over USART1 to a host that sends them as it goes, instead
+//!   of the two files, and the run goes on until QEMU is stopped. The files
+//!   stay for the SIL tests: a script of commands read at boot makes their
+//!   runs repeat exactly.
 
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use cortex_m::peripheral::NVIC;
-use cortex_m_semihosting::{debug, nr, syscall};
+use cortex_m_semihosting::debug;
+#[cfg(not(feature = "qemu-serial"))]
+use cortex_m_semihosting::{nr, syscall};
 use defmt_semihosting as _;
 use finrs_controller::{FrameSink, SegmentOutput, TickInput};
 use heapless::spsc::{Consumer, Producer, Queue};
@@ -39,10 +46,17 @@ use crate::config::{
 };
 use crate::{sim, Mono, SYSCLK_HZ};
 
+#[cfg(feature = "qemu-serial")]
+mod serial;
+#[cfg(feature = "qemu-serial")]
+mod world;
+
 /// The host file the frames go to, relative to QEMU's working directory.
+#[cfg(not(feature = "qemu-serial"))]
 pub const FRAMES_FILE: &str = "finrs-frames.bin\0";
 
 /// The host file commands are read from, if it exists.
+#[cfg(not(feature = "qemu-serial"))]
 pub const COMMANDS_FILE: &str = "finrs-commands.bin\0";
 
 /// Interval between flushes of the frame queue, ms.
@@ -54,7 +68,13 @@ pub const FLUSH_MS: u32 = 20;
 const QUEUE_LEN: usize = 4096;
 
 const S: usize = state_len(N, 1);
-const RUN_TICKS: u64 = sim::RUN_S as u64 * SAMPLE_HZ as u64;
+/// The run's length in ticks; none for the virtual bench, whose run goes
+/// on until QEMU is stopped.
+const RUN_TICKS: Option<u64> = if cfg!(feature = "qemu-serial") {
+    None
+} else {
+    Some(sim::RUN_S as u64 * SAMPLE_HZ as u64)
+};
 
 /// Set when the run's time is up; the housekeeping task then exits.
 static DONE: AtomicBool = AtomicBool::new(false);
@@ -90,6 +110,10 @@ pub struct Io {
     /// The supplies were in range at boot; if not, nothing is ever driven
     /// (as on the board).
     supply_ok: bool,
+    /// The virtual bench's clamp and camera: the plant above is then the
+    /// blocked strip, used while the world says blocked.
+    #[cfg(feature = "qemu-serial")]
+    world: world::World,
 }
 
 /// Frames into the queue that housekeeping flushes.
@@ -107,15 +131,23 @@ impl FrameSink for FrameOut {
     }
 }
 
-/// The down channel's stand-in: the host file [`COMMANDS_FILE`] in QEMU's
+/// The down channel's stand-in: the host file `COMMANDS_FILE` in QEMU's
 /// working directory, read through semihosting as it goes (no file, no
-/// commands).
+/// commands); with `qemu-serial`, USART1's received bytes.
 pub struct CommandIn {
+    #[cfg(not(feature = "qemu-serial"))]
     fd: Option<usize>,
 }
 
 impl CommandIn {
+    /// Reads the bytes USART1 received into `buf` (0 when none came).
+    #[cfg(feature = "qemu-serial")]
+    pub fn read(&mut self, buf: &mut [u8]) -> usize {
+        serial::LINK_RX.read(buf)
+    }
+
     /// Reads the next command bytes into `buf` (0 at the end of the file).
+    #[cfg(not(feature = "qemu-serial"))]
     pub fn read(&mut self, buf: &mut [u8]) -> usize {
         let Some(fd) = self.fd else {
             return 0;
@@ -135,10 +167,19 @@ impl CommandIn {
     }
 }
 
-/// The flushing side of the frame queue and the semihosting file.
+/// The flushing side of the frame queue and the semihosting file (or,
+/// with `qemu-serial`, USART1's transmitter).
 pub struct Housekeeping {
     queue: Consumer<'static, u8>,
+    #[cfg(not(feature = "qemu-serial"))]
     fd: usize,
+    #[cfg(feature = "qemu-serial")]
+    tx: serial::Tx<pac::USART1>,
+    /// The world's messages (camera frames), flushed to USART2.
+    #[cfg(feature = "qemu-serial")]
+    world_queue: Consumer<'static, u8>,
+    #[cfg(feature = "qemu-serial")]
+    world_tx: serial::Tx<pac::USART2>,
     batch: [u8; 1024],
 }
 
@@ -148,7 +189,10 @@ pub struct Housekeeping {
 /// stack for a moment; inlined into RTIC's `main`, whose frame lives as long
 /// as the program, it would stay reserved below every task.
 #[inline(never)]
-pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
+// Without `qemu-serial` the link is two host files: USART1 and the NVIC
+// stay unused.
+#[cfg_attr(not(feature = "qemu-serial"), allow(unused_mut, unused_variables))]
+pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts {
     // No clock setup: QEMU does not emulate RCC (waiting for the PLL would
     // hang); SysTick runs at 168 MHz regardless.
     Mono::start(core.SYST, SYSCLK_HZ);
@@ -173,11 +217,14 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
         defmt::panic!("board init ran twice");
     };
     let (producer, consumer) = queue.split();
+    #[cfg(not(feature = "qemu-serial"))]
     let fd = match open_host_file(FRAMES_FILE, nr::open::W_TRUNC_BINARY) {
         Some(fd) => fd,
         None => defmt::panic!("cannot open the frames file through semihosting"),
     };
     let x = plant.rest();
+    #[cfg(feature = "qemu-serial")]
+    let (world, world_queue) = world_parts();
     Parts {
         io: Io {
             plant,
@@ -187,14 +234,24 @@ pub fn init(core: cortex_m::Peripherals, _device: pac::Peripherals) -> Parts {
             noise: sim::NOISE_SEED,
             tick: 0,
             supply_ok: supply.is_ok(),
+            #[cfg(feature = "qemu-serial")]
+            world,
         },
         frames: FrameOut { queue: producer },
         commands: CommandIn {
+            #[cfg(not(feature = "qemu-serial"))]
             fd: open_host_file(COMMANDS_FILE, nr::open::R_BINARY),
         },
         housekeeping: Housekeeping {
             queue: consumer,
+            #[cfg(not(feature = "qemu-serial"))]
             fd,
+            #[cfg(feature = "qemu-serial")]
+            tx: serial::enable(device.USART1, Interrupt::USART1, &mut core.NVIC),
+            #[cfg(feature = "qemu-serial")]
+            world_queue,
+            #[cfg(feature = "qemu-serial")]
+            world_tx: serial::enable(device.USART2, Interrupt::USART2, &mut core.NVIC),
             batch: [0; 1024],
         },
         // QEMU's netduinoplus2 has no reset flags to read, and no supplies.
@@ -222,13 +279,13 @@ impl Io {
     /// over.
     pub fn read(&mut self) -> Option<TickInput<N>> {
         let tick = self.tick;
-        if tick >= RUN_TICKS {
+        if RUN_TICKS.is_some_and(|end| tick >= end) {
             DONE.store(true, Ordering::Release);
             return None;
         }
         self.tick += 1;
         let noise = self.next_noise();
-        let force_counts = self.plant.blocking_force_n(&self.x) / NEWTONS_PER_COUNT;
+        let force_counts = self.force_n() / NEWTONS_PER_COUNT;
         let load_cell_counts =
             to_counts(f32::from(sim::LOAD_CELL_ZERO_COUNTS) + force_counts + noise as f32);
         let mut current_counts = [0u16; N];
@@ -260,10 +317,32 @@ impl Io {
             None => self.off(),
         }
         let applied = self.segments.map(|s| s.v);
+        #[cfg(feature = "qemu-serial")]
+        {
+            // `read` counted this period already.
+            let tick = self.tick.saturating_sub(1);
+            if self.world.poll(tick) {
+                self.x = self.plant.rest();
+            }
+            if let Some(currents) = self.world.step(&applied, tick) {
+                self.currents_a = currents;
+                return;
+            }
+        }
         self.plant.step(&mut self.x, &applied);
         // What the shunts read at the next sample: the new state under the
         // voltage still applied.
         self.currents_a = self.plant.currents_a(&self.x, &applied);
+    }
+
+    /// The force on the load cell: the blocked strip's, none when the
+    /// virtual bench's strip is free.
+    fn force_n(&self) -> f32 {
+        #[cfg(feature = "qemu-serial")]
+        if self.world.is_free() {
+            return 0.0;
+        }
+        self.plant.blocking_force_n(&self.x)
     }
 
     /// Every output to zero (the plant sees 0 V from its next step).
@@ -289,11 +368,7 @@ impl Io {
 
     /// Uniform integer noise in ±`LOAD_CELL_NOISE_COUNTS` (xorshift32).
     fn next_noise(&mut self) -> i32 {
-        let mut x = self.noise;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.noise = x;
+        let x = sim::xorshift32(&mut self.noise);
         let span = (2 * sim::LOAD_CELL_NOISE_COUNTS + 1) as u32;
         (x % span) as i32 - sim::LOAD_CELL_NOISE_COUNTS
     }
@@ -342,6 +417,10 @@ pub async fn housekeeping(h: &mut Housekeeping) -> ! {
 
 impl Housekeeping {
     fn flush(&mut self) -> bool {
+        #[cfg(feature = "qemu-serial")]
+        while let Some(b) = self.world_queue.dequeue() {
+            self.world_tx.write(&[b]);
+        }
         loop {
             let mut n = 0;
             while n < self.batch.len() {
@@ -356,6 +435,9 @@ impl Housekeeping {
             if n == 0 {
                 return true;
             }
+            #[cfg(feature = "qemu-serial")]
+            self.tx.write(&self.batch[..n]);
+            #[cfg(not(feature = "qemu-serial"))]
             if !write_host(self.fd, &self.batch[..n]) {
                 return false;
             }
@@ -364,6 +446,7 @@ impl Housekeeping {
 }
 
 /// Opens a host file in semihosting `mode` (`nr::open::*`).
+#[cfg(not(feature = "qemu-serial"))]
 fn open_host_file(name_nul: &str, mode: usize) -> Option<usize> {
     let name = name_nul.as_bytes();
     // SAFETY: the semihosting OPEN call reads `name.len() - 1` bytes of a
@@ -374,6 +457,7 @@ fn open_host_file(name_nul: &str, mode: usize) -> Option<usize> {
 }
 
 /// Writes all of `bytes` to a host file.
+#[cfg(not(feature = "qemu-serial"))]
 fn write_host(fd: usize, mut bytes: &[u8]) -> bool {
     while !bytes.is_empty() {
         // SAFETY: WRITE reads `bytes.len()` bytes from a slice we borrow.
@@ -410,4 +494,29 @@ unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
 fn panic(info: &core::panic::PanicInfo) -> ! {
     defmt::error!("panic: {}", defmt::Display2Format(info));
     exit(false)
+}
+
+/// The virtual bench's world, with the free strip's model, and its
+/// message queue's reading end.
+#[cfg(feature = "qemu-serial")]
+fn world_parts() -> (world::World, Consumer<'static, u8>) {
+    let built = Strip::new(
+        &Params::baseline_air_example(),
+        Fixture::Free,
+        1.0 / f64::from(SAMPLE_HZ),
+    );
+    let free = match built {
+        Ok(p) => cortex_m::singleton!(: Strip<f32, N, 1, S> = p),
+        Err(_) => defmt::panic!("the example session's parameters do not make a free strip"),
+    };
+    let Some(free) = free else {
+        defmt::panic!("board init ran twice");
+    };
+    // A camera frame is at most 42 bytes, one per 33 ms: a flush every
+    // 20 ms finds at most one.
+    let Some(queue) = cortex_m::singleton!(: Queue<u8, 512> = Queue::new()) else {
+        defmt::panic!("board init ran twice");
+    };
+    let (producer, consumer) = queue.split();
+    (world::World::new(free, producer), consumer)
 }

@@ -142,9 +142,12 @@ const _: () = {
 /// Slew limit, V/s.
 pub const SLEW_V_PER_S: f32 = 200.0;
 
-/// Load-cell scale: the instrumentation amplifier maps about ±0.05 N (a
-/// 10 g class cell) onto ±2048 counts of the 12-bit ADC.
-pub const NEWTONS_PER_COUNT: f32 = 2.5e-5;
+/// Load-cell scale: the instrumentation amplifier maps about ±0.1 N (a
+/// 10 g cell at full scale) onto ±2048 counts of the 12-bit ADC. The
+/// example strip pushes up to 58 mN at a 4 V step (its blocked recording
+/// 10): at half this scale (±0.05 N) the virtual bench's ADC saturated
+/// there, a fault at the limit the firmware allows.
+pub const NEWTONS_PER_COUNT: f32 = 5e-5;
 
 /// Shunt scale: ±0.512 A onto ±2048 counts around mid-scale.
 pub const AMPS_PER_COUNT: f32 = 2.5e-4;

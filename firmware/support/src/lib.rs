@@ -18,6 +18,8 @@
 //! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
 //!   load-cell offset and noise, the injected fault).
 //! - [`watermark`]: the stack high-water mark's paint pattern and scan.
+//! - [`world`]: the virtual bench's world channel (the clamp and the
+//!   camera around the QEMU board), its messages and decoders.
 #![no_std]
 #![deny(unsafe_code, missing_docs)]
 
@@ -29,3 +31,4 @@ pub mod reset;
 pub mod sim;
 pub mod supply;
 pub mod watermark;
+pub mod world;

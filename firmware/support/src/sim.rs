@@ -24,3 +24,21 @@ pub const INJECT_TICK: u64 = 10_500;
 
 /// The segment whose shunt the injected overcurrent concerns.
 pub const INJECT_SEGMENT: usize = 1;
+
+/// The next number of a xorshift32 generator (Marsaglia 2003) whose state
+/// is `state` (never 0): the simulated sensors' deterministic noise, the
+/// same sequence on every run and target.
+///
+/// ```
+/// let mut s = finrs_firmware_support::sim::NOISE_SEED;
+/// let (a, b) = (finrs_firmware_support::sim::xorshift32(&mut s), finrs_firmware_support::sim::xorshift32(&mut s));
+/// assert!(a != b && a != 0);
+/// ```
+pub fn xorshift32(state: &mut u32) -> u32 {
+    let mut x = *state;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    *state = x;
+    x
+}

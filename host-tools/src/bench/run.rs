@@ -17,10 +17,11 @@ use std::time::{Duration, Instant};
 use finrs_frames::{Command, Event, Info, SampleFlags};
 
 use super::protocol::{Protocol, Step};
-use crate::link::board::{request_info, Board, Frames};
+use crate::link::board::{request_info, Board, Frames, TrackStretch};
 use crate::link::capture::Monitor;
 use crate::link::command::wave_command;
 use crate::link::probe::ProbeError;
+use crate::link::qemu::world::VIRTUAL_M_PER_PX;
 use crate::link::stream::{Recorder, Setup};
 use crate::recording::{Channel, Fixture, Recording, RecordingError};
 use crate::wave::{WaveError, WaveOptions};
@@ -114,6 +115,8 @@ pub struct SessionReport {
     pub info: Info,
     /// The recordings written, in order, with their report lines.
     pub written: Vec<(PathBuf, String)>,
+    /// The camera tracks written (the virtual bench's free recordings).
+    pub tracks: Vec<PathBuf>,
 }
 
 /// Records the session `protocol` into `out_dir`; `prompt` asks the
@@ -160,6 +163,7 @@ pub fn run_session(
     let mut stream = Frames::new(table);
     let mut session_first_seq: Option<u32> = None;
     let mut written = Vec::new();
+    let mut tracks = Vec::new();
     let count = protocol.recordings.len();
     for (i, (step, command)) in protocol.recordings.iter().zip(&commands).enumerate() {
         let k = i + 1;
@@ -176,11 +180,15 @@ pub fn run_session(
             timeout: opts.timeout,
             monitor,
         };
+        board.set_fixture(
+            step.fixture == Fixture::Free,
+            protocol.dots_s_m.as_deref().unwrap_or(&[]),
+        )?;
         // What the board buffered while nobody read (the prompt) is from
         // before: it is dropped, and the recording starts in the present.
-        if stream.barrier(board, opts.timeout, monitor)?.is_none() {
+        let Some(info_now) = stream.barrier(board, opts.timeout, monitor)? else {
             return Err(ctx.stalled());
-        }
+        };
         if step.tare {
             board.send(&Command::Tare)?;
             // The tare's samples carry its flag; it is done at the first
@@ -192,13 +200,19 @@ pub fn run_session(
             "recording {k} of {count}: {} ({})",
             step.name, step.wave
         ));
-        let (recording, first_seq, fault_seq, report) = record_one(
+        let Recorded {
+            recording,
+            first_seq,
+            last_seq,
+            fault_seq,
+            report,
+        } = record_one(
             board,
             &mut stream,
             protocol,
             step,
             command,
-            &info,
+            &info_now,
             ctx,
             monitor,
         )?;
@@ -210,6 +224,23 @@ pub fn run_session(
         recording.write(&path)?;
         monitor.line(&format!("wrote {}: {}", path.display(), report.trim_end()));
         written.push((path, report));
+        if step.fixture == Fixture::Free {
+            let stretch = TrackStretch {
+                sample_hz: f64::from(info.sample_hz),
+                dots_s_m: protocol.dots_s_m.as_deref().unwrap_or(&[]),
+                length_m: protocol.geometry.length_m,
+            };
+            if let Some(csv) = board.camera_track(first_seq, last_seq, &stretch) {
+                let path = write_track(out_dir, &step.file_name(k), &csv)?;
+                monitor.line(&format!(
+                    "wrote {} (the virtual camera, {} m per pixel: finrs merge-camera --m-per-px {})",
+                    path.display(),
+                    VIRTUAL_M_PER_PX,
+                    VIRTUAL_M_PER_PX
+                ));
+                tracks.push(path);
+            }
+        }
         if let Some(seq) = fault_seq {
             return Err(BenchError::Faulted {
                 k,
@@ -219,7 +250,27 @@ pub fn run_session(
         }
     }
     board.send(&Command::Stop)?;
-    Ok(SessionReport { info, written })
+    Ok(SessionReport {
+        info,
+        written,
+        tracks,
+    })
+}
+
+/// Writes a camera track beside the session, in `tracks/` (not among the
+/// recordings, which `finrs diagnose` reads).
+fn write_track(out_dir: &Path, file_name: &str, csv: &str) -> Result<PathBuf, BenchError> {
+    let dir = out_dir.join("tracks");
+    std::fs::create_dir_all(&dir).map_err(|source| BenchError::Folder {
+        dir: dir.clone(),
+        source,
+    })?;
+    let path = dir.join(file_name);
+    std::fs::write(&path, csv).map_err(|source| BenchError::Folder {
+        dir: dir.clone(),
+        source,
+    })?;
+    Ok(path)
 }
 
 /// The recording under way, for messages and waits.
@@ -262,9 +313,21 @@ impl Ctx<'_> {
     }
 }
 
+/// What [`record_one`] made.
+struct Recorded {
+    /// The recording, its time from 0.
+    recording: Recording,
+    /// Its first sample's number.
+    first_seq: u32,
+    /// Its last sample's number.
+    last_seq: u32,
+    /// The fault that ended it early, if one did.
+    fault_seq: Option<u32>,
+    /// The recorder's report.
+    report: String,
+}
+
 /// One recording: rest, wave, rest, from the stream into a recorder.
-/// Returns the recording (its time from 0), its first sample's number, the
-/// fault that ended it early (if one did) and the recorder's report.
 #[allow(clippy::too_many_arguments)]
 fn record_one(
     board: &mut impl Board,
@@ -275,7 +338,7 @@ fn record_one(
     info: &Info,
     ctx: Ctx<'_>,
     monitor: &dyn Monitor,
-) -> Result<(Recording, u32, Option<u32>, String), BenchError> {
+) -> Result<Recorded, BenchError> {
     let hz = f64::from(info.sample_hz);
     let periods = |s: f64| (s * hz).round() as u64;
     let rest = periods(step.rest_s);
@@ -286,6 +349,9 @@ fn record_one(
         sample: protocol.sample.clone(),
         source: format!("finrs bench, recording {} ({})", ctx.k, step.name),
     });
+    // The barrier's Info, asked for just before: the firmware and set-up
+    // this recording was made with, in its notes.
+    rec.event(Event::Info(*info));
     // Events before this recording's first Sample (a Dropped frame for
     // periods missed while the operator was asked) belong to no recording.
     let first_seq = loop {
@@ -380,7 +446,13 @@ fn record_one(
     if !sent {
         monitor.line("the recording ended before its wave was sent (a fault?)");
     }
-    Ok((recording, first_seq, fault_seq, report))
+    Ok(Recorded {
+        recording,
+        first_seq,
+        last_seq: first_seq.wrapping_add(last as u32),
+        fault_seq,
+        report,
+    })
 }
 
 #[cfg(test)]

@@ -12,10 +12,41 @@ use finrs_frames::{Command, Decoder, Event, Info};
 use crate::link::capture::{show_log, Link, Monitor, Silent};
 use crate::link::probe::{self, Bounded, ProbeError, Target, COMMAND_DOWN_CHANNEL};
 
-/// The board: its stream, and commands down.
+/// The board: its stream, and commands down; on the virtual bench, the
+/// world around it too.
 pub trait Board: Link {
     /// Sends one command whole.
     fn send(&mut self, command: &Command) -> Result<(), ProbeError>;
+
+    /// Puts the strip free (the camera on `dots_s_m`) or blocked for the
+    /// next recording. At a real bench the operator does it, asked by the
+    /// protocol's prompt: nothing to do here.
+    fn set_fixture(&mut self, _free: bool, _dots_s_m: &[f64]) -> Result<(), ProbeError> {
+        Ok(())
+    }
+
+    /// The camera's track of sample periods `first..=last` as a
+    /// tracker's CSV (see `camera::track`), on the virtual bench; a real
+    /// bench's camera is tracked off-line (none here).
+    fn camera_track(
+        &mut self,
+        _first: u32,
+        _last: u32,
+        _stretch: &TrackStretch<'_>,
+    ) -> Option<String> {
+        None
+    }
+}
+
+/// What a camera track needs of the recording beside its periods.
+#[derive(Clone, Copy, Debug)]
+pub struct TrackStretch<'a> {
+    /// The board's sample rate, Hz.
+    pub sample_hz: f64,
+    /// The tracked dots, m from the clamp.
+    pub dots_s_m: &'a [f64],
+    /// The strip's free length (the tip's place), m.
+    pub length_m: f64,
 }
 
 impl<T: Target> Board for Bounded<T> {

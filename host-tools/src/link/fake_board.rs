@@ -107,11 +107,7 @@ impl FakeBoard {
     }
 
     fn noise(&mut self) -> f64 {
-        let mut x = self.rng;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.rng = x;
+        let x = finrs_firmware_support::sim::xorshift32(&mut self.rng);
         f64::from(x % (2 * self.noise + 1)) - f64::from(self.noise)
     }
 }

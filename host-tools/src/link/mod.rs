@@ -1,7 +1,8 @@
 //! The running firmware: the debug probe ([`probe`]), its force stream
 //! turned into a recording ([`stream`], [`capture`]), the commands sent
 //! to it ([`command`]), the board as one client sees it ([`board`]) and
-//! its calibration ([`calibrate`]).
+//! its calibration ([`calibrate`]), and the firmware in QEMU as a board
+//! ([`qemu`]).
 
 pub mod board;
 pub mod calibrate;
@@ -11,5 +12,6 @@ pub mod command;
 #[cfg(test)]
 pub(crate) mod fake_board;
 pub mod probe;
+pub mod qemu;
 pub mod replay;
 pub mod stream;

@@ -102,9 +102,11 @@ impl SessionTargets {
     pub fn new(session: &Session) -> SessionTargets {
         let mut spreads: Vec<(Sensor, Vec<f64>)> =
             Sensor::ALL.iter().map(|&s| (s, Vec::new())).collect();
+        let mut steps: Vec<(Sensor, Vec<f64>)> =
+            Sensor::ALL.iter().map(|&s| (s, Vec::new())).collect();
         let mut recordings = Vec::new();
         for (index, r) in session.recordings.iter().enumerate() {
-            let (targets, camera_rows) = targets_of(r, &mut spreads);
+            let (targets, camera_rows) = targets_of(r, &mut spreads, &mut steps);
             recordings.push(RecordingTargets {
                 index,
                 targets,
@@ -112,9 +114,29 @@ impl SessionTargets {
             });
         }
         let mut sigma = Vec::new();
-        for (sensor, s) in spreads {
+        for ((sensor, s), (_, q)) in spreads.into_iter().zip(steps) {
+            // Never below the rounding of its own numbers: an ADC that
+            // reads the same count at rest shows no spread there, yet
+            // every reading is off by up to half a count (σ = step/√12).
+            let rounding = median(q).unwrap_or(0.0) / 12f64.sqrt();
             if let Some(m) = median(s) {
-                sigma.push((sensor, m));
+                sigma.push((sensor, m.max(rounding)));
+            }
+        }
+        // A tracker that reports the along-strip position as a constant
+        // (no large deflection, no noise: a virtual camera, a tracker that
+        // rounds) shows no spread at rest; with no scale at all, its
+        // channels would get an infinite weight. The same camera's pixels
+        // measure both axes: its across-strip spread stands in.
+        let across = sigma
+            .iter()
+            .find(|(s, v)| *s == Sensor::CameraY && *v > 0.0)
+            .map(|&(_, v)| v);
+        if let Some(across) = across {
+            match sigma.iter_mut().find(|(s, _)| *s == Sensor::CameraX) {
+                Some((_, v)) if *v == 0.0 => *v = across,
+                Some(_) => {}
+                None => sigma.push((Sensor::CameraX, across)),
             }
         }
         for rt in &mut recordings {
@@ -137,6 +159,7 @@ impl SessionTargets {
 fn targets_of(
     r: &SessionRecording,
     spreads: &mut [(Sensor, Vec<f64>)],
+    steps: &mut [(Sensor, Vec<f64>)],
 ) -> (Vec<Target>, Vec<bool>) {
     let rows_total = r.rec.t_s.len();
     let mut camera_rows = vec![false; rows_total];
@@ -192,6 +215,11 @@ fn targets_of(
                 camera_rows[i] = true;
             }
         }
+        if let Some(step) = resolution(&vals) {
+            if let Some((_, q)) = steps.iter_mut().find(|(s, _)| *s == Sensor::of(*ch)) {
+                q.push(step);
+            }
+        }
         if rest.len() >= 2 {
             let var =
                 rest.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (rest.len() - 1) as f64;
@@ -208,4 +236,72 @@ fn targets_of(
         });
     }
     (targets, camera_rows)
+}
+
+/// The smallest step between the distinct values of `values`: the
+/// resolution the sensor (or the file's digits) rounds to. `None` for a
+/// constant channel.
+fn resolution(values: &[f64]) -> Option<f64> {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|&d| d > 0.0)
+        .min_by(f64::total_cmp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::Recording;
+
+    #[test]
+    fn resolution_is_the_smallest_step() {
+        assert_eq!(resolution(&[0.5, 0.0, 0.25, 0.5, 1.0]), Some(0.25));
+        assert_eq!(resolution(&[2.0, 2.0]), None);
+        assert_eq!(resolution(&[]), None);
+    }
+
+    /// A camera whose along-strip columns are all 0 (its x has neither
+    /// noise nor motion) gets the across-strip noise level for them, not an
+    /// infinite weight (which made `finrs diagnose` fail on a virtual
+    /// bench's session with "b_nm_per_c_s must be finite").
+    #[test]
+    fn a_constant_camera_axis_borrows_the_other_axis_noise() {
+        let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/rig-session");
+        let dir = std::env::temp_dir().join(format!("finrs-const-x-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for entry in std::fs::read_dir(&src).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "csv") {
+                let mut rec = Recording::read(&path).unwrap();
+                for (ch, values) in &mut rec.channels {
+                    if matches!(ch, Channel::TipX | Channel::DotX(_)) {
+                        for v in values.iter_mut().flatten() {
+                            *v = 0.0;
+                        }
+                    }
+                }
+                rec.write(&dir.join(path.file_name().unwrap())).unwrap();
+            }
+        }
+        let session = Session::read(&dir).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let targets = SessionTargets::new(&session);
+        let of = |sensor| targets.sigma.iter().find(|(s, _)| *s == sensor).unwrap().1;
+        assert!(of(Sensor::CameraY) > 1e-6, "{:?}", targets.sigma);
+        assert_eq!(of(Sensor::CameraX), of(Sensor::CameraY));
+        for rt in &targets.recordings {
+            for t in &rt.targets {
+                assert!(
+                    t.sigma.is_finite() && t.sigma > 1e-9,
+                    "{:?}: {}",
+                    t.channel,
+                    t.sigma
+                );
+            }
+        }
+    }
 }

@@ -1,0 +1,189 @@
+//! The whole bench chain on the virtual bench, as a user runs it: the
+//! firmware built for QEMU with `qemu-serial` (its waves, limiter, frames
+//! and commands, the model core as the strip, a camera around it), `finrs
+//! bench run --qemu` on the example protocol, `finrs merge-camera` on each
+//! free recording's track, then `finrs diagnose`.
+//!
+//! What it checks: every recording whole (no sample lost, no fault), the
+//! blocked ones with a force and the free ones with the camera's columns
+//! once merged; the merged tip equal to the model's own simulation of the
+//! recorded drive (`finrs simulate` with the plant's parameters) to within
+//! the virtual camera's tracking noise, which only holds if the waves, the
+//! world's fixture switching, the camera's clock and the merge's alignment
+//! are all right; and the diagnosis runs on the session.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use finrs::recording::{Channel, Fixture, Recording};
+use finrs_firmware_support::world::CAMERA_NOISE_M;
+
+mod common;
+
+fn finrs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_finrs"))
+}
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The QEMU firmware with the serial link, built from `firmware/` (its
+/// `.cargo/config.toml`: target, linker) into `target/qemu`, the QEMU
+/// tests' own target folder (this `cargo test` holds the workspace's).
+fn build_firmware() -> PathBuf {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    let target_dir = workspace().join("target/qemu");
+    let status = Command::new(cargo)
+        .current_dir(workspace().join("firmware"))
+        .args(["build", "--release", "--locked", "-p", "finrs-firmware"])
+        .args(["--no-default-features", "--features", "qemu-serial"])
+        .arg("--target-dir")
+        .arg(&target_dir)
+        .env_remove("FINRS_SEGMENTS")
+        .env_remove("FINRS_DAC_SEGMENTS")
+        .status()
+        .expect("cargo runs");
+    assert!(
+        status.success(),
+        "building the QEMU firmware failed (target, flip-link installed? run scripts/setup)"
+    );
+    target_dir.join("thumbv7em-none-eabihf/release/finrs-firmware")
+}
+
+fn run_ok(mut c: Command, what: &str) -> String {
+    let out = c.output().expect("finrs runs");
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{what} failed:\n{stderr}");
+    stderr
+}
+
+#[test]
+fn the_example_protocol_on_the_virtual_bench_is_recorded_merged_and_diagnosed() {
+    let elf = build_firmware();
+    let dir = std::env::temp_dir().join(format!("finrs-virtual-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let session = dir.join("session");
+
+    let mut run = finrs();
+    run.args(["bench", "run"])
+        .arg(workspace().join("examples/bench/protocol.toml"))
+        .arg("--qemu")
+        .arg(&elf)
+        .arg("--out")
+        .arg(&session);
+    let log = run_ok(run, "finrs bench run --qemu");
+    assert!(log.contains("session"), "{log}");
+
+    let mut recordings: Vec<PathBuf> = std::fs::read_dir(&session)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    recordings.sort();
+    assert_eq!(recordings.len(), 10, "{recordings:?}");
+    let mut free = 0;
+    for path in &recordings {
+        let name = path.file_name().unwrap().to_str().unwrap().to_string();
+        let rec = Recording::read(path).unwrap();
+        let notes = rec.meta.notes.clone().unwrap_or_default();
+        assert!(
+            notes.contains("no gaps")
+                && notes.contains("no faults")
+                && notes.contains("firmware 0.1.0"),
+            "{name}: {notes}"
+        );
+        let has = |ch: Channel| rec.channels.iter().any(|(c, _)| *c == ch);
+        match rec.meta.fixture {
+            Fixture::Blocked => assert!(has(Channel::Force), "{name}"),
+            Fixture::Free => {
+                free += 1;
+                let track = session.join("tracks").join(&name);
+                let mut merge = finrs();
+                merge
+                    .arg("merge-camera")
+                    .arg("--daq")
+                    .arg(path)
+                    .arg("--track")
+                    .arg(&track)
+                    .args(["--m-per-px", "5e-5"])
+                    .arg("--out")
+                    .arg(path);
+                run_ok(merge, "finrs merge-camera");
+                check_tip_against_the_model(path, &dir);
+            }
+        }
+    }
+    assert_eq!(free, 8);
+
+    let json = dir.join("verdict.json");
+    let mut diagnose = finrs();
+    diagnose
+        .arg("diagnose")
+        .arg(&session)
+        .arg("--json")
+        .arg(&json);
+    run_ok(diagnose, "finrs diagnose");
+    let verdict: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // It runs and says something; what it says is not checked yet: the
+    // board reads its sensors before it applies the period's voltage, which
+    // the model does not know, and the misfit this leaves makes the
+    // diagnosis name `dehydration` on some runs (docs/bench.md).
+    assert!(verdict["causes"].is_array(), "{verdict}");
+    eprintln!(
+        "virtual session: {} {}",
+        verdict["verdict"], verdict["causes"]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The merged tip against `finrs simulate` of the recording's drive with
+/// the plant's parameters (the example session's): the difference is the
+/// camera's tracking error, uniform in ±`CAMERA_NOISE_M` (RMS that over
+/// √3), and no more.
+fn check_tip_against_the_model(path: &Path, dir: &Path) {
+    let params = dir.join("plant.toml");
+    std::fs::write(&params, common::baseline_air_model().to_toml()).unwrap();
+    let sim = dir.join("sim.csv");
+    let mut simulate = finrs();
+    simulate
+        .arg("simulate")
+        .arg("--input")
+        .arg(path)
+        .arg("--params")
+        .arg(&params)
+        .arg("--out")
+        .arg(&sim);
+    run_ok(simulate, "finrs simulate");
+    let column = |rec: &Recording| {
+        rec.channels
+            .iter()
+            .find(|(c, _)| *c == Channel::TipY)
+            .map(|(_, v)| v.clone())
+            .unwrap()
+    };
+    let measured = column(&Recording::read(path).unwrap());
+    let model = column(&Recording::read(&sim).unwrap());
+    let (mut sum_sq, mut n, mut peak) = (0.0, 0, 0.0f64);
+    for (m, s) in measured.iter().zip(&model) {
+        if let (Some(m), Some(s)) = (m, s) {
+            sum_sq += (m - s) * (m - s);
+            n += 1;
+            peak = peak.max(s.abs());
+        }
+    }
+    let rms = (sum_sq / f64::from(n)).sqrt();
+    let noise_rms = f64::from(CAMERA_NOISE_M) / 3f64.sqrt();
+    assert!(n > 100, "{}: {n} camera rows", path.display());
+    assert!(
+        peak > 50.0 * noise_rms,
+        "{}: the tip barely moves ({peak} m)",
+        path.display()
+    );
+    assert!(
+        rms < 1.3 * noise_rms,
+        "{}: the tip differs from the model's by {rms:e} m RMS; the camera's noise alone is {noise_rms:e} m",
+        path.display()
+    );
+}
