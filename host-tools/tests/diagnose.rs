@@ -25,6 +25,7 @@ fn sample(ext: Extensions) -> ModelSpec {
         ext,
         dehydration_per_s: 0.0,
         dehydration_curvature: 0.0,
+        sensors_before_update: false,
     }
 }
 

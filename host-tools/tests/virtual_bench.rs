@@ -10,7 +10,9 @@
 //! recorded drive (`finrs simulate` with the plant's parameters) to within
 //! the virtual camera's tracking noise, which only holds if the waves, the
 //! world's fixture switching, the camera's clock and the merge's alignment
-//! are all right; and the diagnosis runs on the session.
+//! are all right; the fit finding that the board reads its currents
+//! before each period's voltage; and the diagnosis naming no effect: the
+//! plant hides none.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -126,15 +128,28 @@ fn the_example_protocol_on_the_virtual_bench_is_recorded_merged_and_diagnosed() 
     run_ok(diagnose, "finrs diagnose");
     let verdict: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    // It runs and says something; what it says is not checked yet: the
-    // board reads its sensors before it applies the period's voltage, which
-    // the model does not know, and the misfit this leaves makes the
-    // diagnosis name `dehydration` on some runs (docs/bench.md).
-    assert!(verdict["causes"].is_array(), "{verdict}");
-    eprintln!(
-        "virtual session: {} {}",
-        verdict["verdict"], verdict["causes"]
+    // The bench reads its currents before each period's voltage, and the
+    // fit must have found that in the data (else its circuit is off and
+    // the mechanics after it).
+    let fit_log = {
+        let mut fit = finrs();
+        fit.arg("fit").arg(&session);
+        let out = fit.output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr)
+    };
+    assert!(
+        fit_log.contains("currents read before each row's voltage was applied"),
+        "{fit_log}"
     );
+    // The plant hides no effect: none may be named.
+    assert_eq!(
+        verdict["causes"],
+        serde_json::json!([]),
+        "the plant hides no effect: {}",
+        verdict["verdict"]
+    );
+    eprintln!("virtual session: {}", verdict["verdict"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -5,9 +5,10 @@
 //!   blocked fixture, stepped once per sample with the voltages the
 //!   controller commanded); the load-cell ADC reads the plant's blocking
 //!   force in counts ([`NEWTONS_PER_COUNT`], zero at
-//!   [`sim::LOAD_CELL_ZERO_COUNTS`]) plus deterministic xorshift noise of at
-//!   most [`sim::LOAD_CELL_NOISE_COUNTS`]; the shunts read the plant's
-//!   segment currents.
+//!   [`sim::LOAD_CELL_ZERO_COUNTS`]) with deterministic xorshift noise of at
+//!   most [`sim::LOAD_CELL_NOISE_COUNTS`] before the rounding; the shunts
+//!   read the plant's segment currents, with at most
+//!   [`sim::SHUNT_NOISE_COUNTS`].
 //! - QEMU emulates neither the clock tree nor reliable TIM timing, but its
 //!   SysTick counts at 168 MHz: [`pace`] pends the ADC interrupt (the sample
 //!   task) every millisecond from the SysTick monotonic.
@@ -284,13 +285,14 @@ impl Io {
             return None;
         }
         self.tick += 1;
-        let noise = self.next_noise();
+        let noise = self.next_noise_counts(sim::LOAD_CELL_NOISE_COUNTS);
         let force_counts = self.force_n() / NEWTONS_PER_COUNT;
         let load_cell_counts =
-            to_counts(f32::from(sim::LOAD_CELL_ZERO_COUNTS) + force_counts + noise as f32);
+            to_counts(f32::from(sim::LOAD_CELL_ZERO_COUNTS) + force_counts + noise);
         let mut current_counts = [0u16; N];
         for (c, i) in current_counts.iter_mut().zip(self.currents_a) {
-            *c = to_counts(f32::from(CURRENT_ZERO_COUNTS) + i / AMPS_PER_COUNT);
+            let noise = self.next_noise_counts(sim::SHUNT_NOISE_COUNTS);
+            *c = to_counts(f32::from(CURRENT_ZERO_COUNTS) + i / AMPS_PER_COUNT + noise);
         }
         if cfg!(feature = "inject-overcurrent") && tick >= sim::INJECT_TICK {
             // 1.1 × the threshold: an overcurrent, below ADC saturation.
@@ -366,11 +368,10 @@ impl Io {
         NVIC::is_pending(Interrupt::ADC)
     }
 
-    /// Uniform integer noise in ±`LOAD_CELL_NOISE_COUNTS` (xorshift32).
-    fn next_noise(&mut self) -> i32 {
+    /// Uniform noise in ±`amplitude` counts (xorshift32).
+    fn next_noise_counts(&mut self, amplitude: f32) -> f32 {
         let x = sim::xorshift32(&mut self.noise);
-        let span = (2 * sim::LOAD_CELL_NOISE_COUNTS + 1) as u32;
-        (x % span) as i32 - sim::LOAD_CELL_NOISE_COUNTS
+        (x as f32 / u32::MAX as f32 * 2.0 - 1.0) * amplitude
     }
 }
 

@@ -11,9 +11,17 @@ pub const RUN_S: u32 = 12;
 /// Load-cell counts at zero force (the preload the tare removes).
 pub const LOAD_CELL_ZERO_COUNTS: u16 = 2048;
 
-/// Largest deterministic noise added to the load cell, counts (uniform in
-/// `-LOAD_CELL_NOISE_COUNTS..=LOAD_CELL_NOISE_COUNTS`).
-pub const LOAD_CELL_NOISE_COUNTS: i32 = 2;
+/// Largest deterministic noise at the load cell's ADC input, counts
+/// (uniform in ±this, before the ADC rounds: an input's noise, which also
+/// dithers the rounding, so that a mean over many readings is not held
+/// off by up to half a count as a noiseless input's would be).
+pub const LOAD_CELL_NOISE_COUNTS: f32 = 2.0;
+
+/// Largest deterministic noise at each shunt's ADC input, counts (as the
+/// load cell's). Without it a shunt reads a held current as the same count
+/// for seconds, off by up to half a count, differently at each voltage: a
+/// fit of the currents saw that pattern as an electrochemical nonlinearity.
+pub const SHUNT_NOISE_COUNTS: f32 = 1.0;
 
 /// Seed of the xorshift32 noise generator.
 pub const NOISE_SEED: u32 = 0x2545_F491;

@@ -422,6 +422,8 @@ impl ModelFile {
             ext: core,
             dehydration_per_s: ext.dehydration_per_s,
             dehydration_curvature: ext.dehydration_curvature,
+            // A bench's, not a parameter file's: the fit finds it.
+            sensors_before_update: false,
         })
     }
 }

@@ -25,6 +25,12 @@ pub struct ModelSpec {
     /// How drying slows as the strip loses its water, `c ≥ 0` (see
     /// [`drying_gain`]); 0 is a constant rate.
     pub dehydration_curvature: f64,
+    /// The bench read each row's currents before it applied the row's
+    /// voltage (the finrs board samples at the start of a period, then
+    /// drives): the currents are predicted under the previous row's
+    /// voltage. Not the strip's but the recording's; the fit finds it in
+    /// the data (`analysis::fit::sampling`).
+    pub sensors_before_update: bool,
 }
 
 /// The moment gain after drying for `t_s` at initial rate `r` with
@@ -47,6 +53,7 @@ impl ModelSpec {
             ext: Extensions::NONE,
             dehydration_per_s: 0.0,
             dehydration_curvature: 0.0,
+            sensors_before_update: false,
         }
     }
 }
@@ -128,13 +135,18 @@ pub fn predict_currents(
         let rows = rec.t_s.len();
         let mut out = vec![Vec::with_capacity(rows); N];
         let mut x = circuit.rest();
-        for v_row in rec.v_v.rows() {
+        let mut read_under = [0.0; N];
+        for (row, v_row) in rec.v_v.rows().enumerate() {
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
-            for (c, i) in out.iter_mut().zip(circuit.currents_a(&x, &v)) {
+            if !spec.sensors_before_update || row == 0 {
+                read_under = v;
+            }
+            for (c, i) in out.iter_mut().zip(circuit.currents_a(&x, &read_under)) {
                 c.push(i);
             }
             circuit.step(&mut x, &v);
+            read_under = v;
         }
         Ok(out)
     }
@@ -210,9 +222,15 @@ impl Run<'_> {
         // `position_at_m` interpolates two nodes (at ξ = 1, up to rounding).
         let tip_is_node = !strip.extensions().large_deflection;
         let mut x = strip.rest();
+        // The voltage the currents are read under: the row's, or with
+        // `sensors_before_update` the one before (the first row's own).
+        let mut read_under = [0.0; N];
         for (row, (v_row, &t_s)) in self.rec.v_v.rows().zip(&self.rec.t_s).enumerate() {
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
+            if !spec.sensors_before_update || row == 0 {
+                read_under = v;
+            }
             if spec.dehydration_per_s != 0.0 {
                 strip.set_moment_gain(drying_gain(
                     spec.dehydration_per_s,
@@ -221,7 +239,11 @@ impl Run<'_> {
                 ));
             }
             // Outputs at this row's instant, then hold its voltage to the next.
-            for (c, i) in t.currents_a.iter_mut().zip(strip.currents_a(&x, &v)) {
+            for (c, i) in t
+                .currents_a
+                .iter_mut()
+                .zip(strip.currents_a(&x, &read_under))
+            {
                 c.push(i);
             }
             if free {
@@ -244,6 +266,7 @@ impl Run<'_> {
                 t.force_n.push(strip.blocking_force_n(&x));
             }
             strip.step(&mut x, &v);
+            read_under = v;
             if row % 4096 == 0 {
                 progress(row as u64);
             }

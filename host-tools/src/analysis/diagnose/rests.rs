@@ -58,7 +58,9 @@ const FLOOR_HALF_WIDTH_HZ: f64 = 12.0;
 /// A bench imperfection seen in the opening rests.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct BenchFinding {
-    /// `mains-hum` or `coloured-noise`.
+    /// `mains-hum`, `coloured-noise`, or `currents-read-before-update`
+    /// (the bench samples its currents before each row's voltage: found in
+    /// the currents by `fit::sampling`, and followed by the fit).
     pub what: String,
     /// The channel's column name.
     pub channel: String,

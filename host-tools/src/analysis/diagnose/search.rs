@@ -7,7 +7,7 @@ use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
 use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
 use super::identify;
-use super::rests::rest_structure;
+use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness;
 use crate::analysis::fit::mode_start as starts;
@@ -122,7 +122,19 @@ pub fn diagnose(
         .iter()
         .map(|e| e.name().to_string())
         .collect();
-    let rest = rest_structure(session);
+    let mut rest = rest_structure(session);
+    let sampling = fitter.sampling();
+    if sampling.before_update {
+        // Found in the currents and followed by every fit: said, never a
+        // reason for `unexplained`.
+        rest.bench.push(BenchFinding {
+            what: "currents-read-before-update".to_string(),
+            channel: "currents".to_string(),
+            mains_hz: None,
+            strength: sampling.late_share,
+            detail: sampling.to_string(),
+        });
+    }
     let verdict = match (causes.is_empty(), at_floor && !rest.structured) {
         (true, true) => "none",
         (false, true) => "explained",

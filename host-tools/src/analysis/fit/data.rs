@@ -95,6 +95,8 @@ pub struct SessionTargets {
     pub recordings: Vec<RecordingTargets>,
     /// Noise level per sensor (median over recordings of the rest's spread).
     pub sigma: Vec<(Sensor, f64)>,
+    /// When the bench read its currents, from their steps.
+    pub sampling: super::sampling::Sampling,
 }
 
 impl SessionTargets {
@@ -152,7 +154,11 @@ impl SessionTargets {
                 t.sigma = raw.max(1e-6 * range).max(f64::MIN_POSITIVE);
             }
         }
-        SessionTargets { recordings, sigma }
+        SessionTargets {
+            recordings,
+            sigma,
+            sampling: super::sampling::detect(session),
+        }
     }
 }
 

@@ -8,6 +8,7 @@ use super::data::SessionTargets;
 use super::effect::Effect;
 use super::error::FitError;
 use super::mode_start;
+use super::sampling::Sampling;
 use super::space::Space;
 use super::stage::{descend, Problem, Stage};
 use super::start;
@@ -108,6 +109,20 @@ impl<'a> Fitter<'a> {
         }
     }
 
+    /// When the session's bench read its currents (found in the data);
+    /// every prediction of the fit follows it.
+    pub fn sampling(&self) -> Sampling {
+        self.targets.sampling
+    }
+
+    /// `spec` as this session's bench samples it.
+    fn as_sampled(&self, spec: &ModelSpec) -> ModelSpec {
+        ModelSpec {
+            sensors_before_update: self.targets.sampling.before_update,
+            ..*spec
+        }
+    }
+
     /// The session's targets and noise levels.
     pub fn targets(&self) -> &SessionTargets {
         &self.targets
@@ -126,7 +141,7 @@ impl<'a> Fitter<'a> {
         let rt = &self.targets.recordings[index];
         predict(
             &r.rec,
-            spec,
+            &self.as_sampled(spec),
             FIT_ELEMENTS,
             r.dt_s,
             r.t_start_s.unwrap_or(0.0),
@@ -175,12 +190,11 @@ impl<'a> Fitter<'a> {
                     Stage::Circuit => {
                         let r = &self.session.recordings[i];
                         Traces {
-                            currents_a: predict_currents(&r.rec, spec, r.dt_s).map_err(
-                                |source| FitError::Model {
+                            currents_a: predict_currents(&r.rec, &self.as_sampled(spec), r.dt_s)
+                                .map_err(|source| FitError::Model {
                                     recording: r.name.clone(),
                                     source,
-                                },
-                            )?,
+                                })?,
                             ..Traces::default()
                         }
                     }

@@ -19,6 +19,7 @@ pub mod modal;
 pub mod mode_start;
 pub mod normal;
 pub mod report;
+pub mod sampling;
 mod space;
 mod stage;
 mod start;

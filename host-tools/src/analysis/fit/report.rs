@@ -36,6 +36,7 @@ pub fn text(fit: &FitResult, targets: &SessionTargets) -> String {
     for (sensor, sigma) in &targets.sigma {
         let _ = writeln!(s, "  {sensor:?}: {sigma:.3e}");
     }
+    let _ = writeln!(s, "{}", targets.sampling);
     let _ = writeln!(
         s,
         "\nresiduals m = {}, weighted RSS/m = {:.3}, parameters k = {}, AIC = {:.1}, BIC = {:.1}",
