@@ -3,7 +3,7 @@
 //!
 //! - The segment outputs feed `model_core::Strip` (the example session's parameters,
 //!   blocked fixture, stepped once per sample with the voltages the
-//!   controller commanded); the load-cell ADC reads the plant's blocking
+//!   controller commanded; with `plant-damping`, a damped strip); the load-cell ADC reads the plant's blocking
 //!   force in counts ([`NEWTONS_PER_COUNT`], zero at
 //!   [`sim::LOAD_CELL_ZERO_COUNTS`]) with deterministic xorshift noise of at
 //!   most [`sim::LOAD_CELL_NOISE_COUNTS`] before the rounding; the shunts
@@ -37,7 +37,7 @@ use cortex_m_semihosting::{nr, syscall};
 use defmt_semihosting as _;
 use finrs_controller::{FrameSink, SegmentOutput, TickInput};
 use heapless::spsc::{Consumer, Producer, Queue};
-use model_core::{state_len, Fixture, Params, Strip};
+use model_core::{state_len, Extensions, Fixture, Params, Strip};
 use rtic_monotonics::systick::prelude::*;
 use stm32f4xx_hal::pac::{self, Interrupt};
 
@@ -197,8 +197,9 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
     // No clock setup: QEMU does not emulate RCC (waiting for the PLL would
     // hang); SysTick runs at 168 MHz regardless.
     Mono::start(core.SYST, SYSCLK_HZ);
-    let built = Strip::new(
+    let built = Strip::with_extensions(
         &Params::baseline_air_example(),
+        &plant_extensions(),
         Fixture::Blocked,
         1.0 / f64::from(SAMPLE_HZ),
     );
@@ -260,6 +261,19 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
         supply,
         // No flash to keep one across runs.
         stored_calibration: None,
+    }
+}
+
+/// The plant's optional terms: none, or with `plant-damping` a modal
+/// damping ratio of [`sim::PLANT_DAMPING_RATIO`].
+fn plant_extensions() -> Extensions {
+    Extensions {
+        damping_ratio: if cfg!(feature = "plant-damping") {
+            sim::PLANT_DAMPING_RATIO
+        } else {
+            0.0
+        },
+        ..Extensions::NONE
     }
 }
 
@@ -501,8 +515,9 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 /// message queue's reading end.
 #[cfg(feature = "qemu-serial")]
 fn world_parts() -> (world::World, Consumer<'static, u8>) {
-    let built = Strip::new(
+    let built = Strip::with_extensions(
         &Params::baseline_air_example(),
+        &plant_extensions(),
         Fixture::Free,
         1.0 / f64::from(SAMPLE_HZ),
     );

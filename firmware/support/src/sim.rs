@@ -23,6 +23,10 @@ pub const LOAD_CELL_NOISE_COUNTS: f32 = 2.0;
 /// fit of the currents saw that pattern as an electrochemical nonlinearity.
 pub const SHUNT_NOISE_COUNTS: f32 = 1.0;
 
+/// The modal damping ratio of the plant built with `plant-damping`: the
+/// virtual bench's hidden effect, within the 0.02 to 0.1 of real strips.
+pub const PLANT_DAMPING_RATIO: f64 = 0.05;
+
 /// Seed of the xorshift32 noise generator.
 pub const NOISE_SEED: u32 = 0x2545_F491;
 
