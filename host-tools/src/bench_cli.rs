@@ -7,7 +7,10 @@
 use finrs::bench::protocol::Protocol;
 use finrs::bench::run::{run_session, BenchOptions};
 use finrs::link::capture::{self, Firmware, Monitor};
-use finrs::link::qemu::{VirtualBoard, QEMU};
+use finrs::link::qemu::{Pace, VirtualBoard, QEMU};
+
+/// How long `bench live --qemu` waits for the virtual board's first frame.
+const LIVE_START: std::time::Duration = std::time::Duration::from_secs(10);
 
 use crate::cli::{timeout, BenchLiveArgs, BenchRunArgs, BenchWhat, DiagnoseArgs};
 use crate::commands::{capture_flags, prompt, StatusLine};
@@ -28,6 +31,15 @@ fn bench_live(args: BenchLiveArgs) -> anyhow::Result<()> {
         ))?;
         let mut replay = finrs::link::replay::Replay::read(path)?;
         return live_on(&mut replay, None, &opts);
+    }
+    if let Some(elf) = &args.qemu {
+        let opts = args.record.options(format!(
+            "the virtual bench, {} in QEMU (finrs bench live)",
+            elf.display()
+        ))?;
+        let started = VirtualBoard::start(QEMU, elf, Pace::RealTime, LIVE_START)?;
+        let mut board = started.board;
+        return live_on(&mut board, started.table.as_ref(), &opts);
     }
     let probe = args.probe.options()?;
     let opts = args.record.options(format!(
@@ -84,7 +96,7 @@ fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {
     };
     let status = StatusLine::new();
     let report = if let Some(elf) = &args.qemu {
-        let started = VirtualBoard::start(QEMU, elf, opts.timeout)?;
+        let started = VirtualBoard::start(QEMU, elf, Pace::Fast, opts.timeout)?;
         let mut board = started.board;
         // No operator at a virtual bench: the prompt is shown and passed.
         let mut show = |text: &str| {

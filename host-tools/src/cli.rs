@@ -134,6 +134,11 @@ pub struct BenchLiveArgs {
     /// journal, a QEMU run); keys that command are refused.
     #[arg(long)]
     pub from_bytes: Option<PathBuf>,
+    /// The virtual bench: run this firmware (built with `--features
+    /// qemu-serial`) in QEMU at the pace of real time, the model as the
+    /// strip (blocked), instead of a board.
+    #[arg(long, value_name = "ELF", conflicts_with_all = ["elf", "from_bytes"])]
+    pub qemu: Option<PathBuf>,
     #[command(flatten)]
     pub probe: ProbeArgs,
     #[command(flatten)]

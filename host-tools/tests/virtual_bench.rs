@@ -252,3 +252,73 @@ fn check_tip_against_the_model(path: &Path, dir: &Path) {
         path.display()
     );
 }
+
+/// `finrs bench live --qemu` under a pseudo-terminal (util-linux
+/// `script`): the live view on the virtual bench, at the pace of real
+/// time; a wave typed at its `w` key reaches the firmware in QEMU and
+/// drives the strip, `q` ends it, and the recording is whole.
+#[test]
+fn the_live_view_drives_the_virtual_bench_from_its_keys() {
+    use std::io::Write;
+    use std::time::{Duration, Instant};
+    if Command::new("script").arg("--version").output().is_err() {
+        panic!("util-linux `script` is needed for this test (Debian: bsdutils)");
+    }
+    let elf = build_firmware("qemu-serial");
+    let dir = std::env::temp_dir().join(format!("finrs-virtual-live-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("live.csv");
+    let command = format!(
+        "stty cols 100 rows 40; {} bench live --qemu {} --out {}",
+        env!("CARGO_BIN_EXE_finrs"),
+        elf.display(),
+        out.display()
+    );
+    let mut child = Command::new("script")
+        .args(["-qec", &command, "/dev/null"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let mut keys = |bytes: &[u8], wait_ms: u64| {
+        stdin.write_all(bytes).unwrap();
+        stdin.flush().unwrap();
+        std::thread::sleep(Duration::from_millis(wait_ms));
+    };
+    keys(b"", 3000);
+    keys(b"w", 500);
+    keys(b"step:1\r", 3000);
+    keys(b"q", 0);
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap();
+            panic!("finrs bench live --qemu did not end on q");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut screen = String::new();
+    std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut screen).unwrap();
+    assert!(status.success(), "{status:?}: {screen}");
+    let rec = Recording::read(&out).unwrap();
+    let notes = rec.meta.notes.clone().unwrap_or_default();
+    assert!(
+        notes.contains("no gaps") && notes.contains("firmware 0.1.0"),
+        "{notes}"
+    );
+    // The typed step reached the firmware: every segment at 1 V for a
+    // stretch (after the limiter's 5 ms ramp).
+    let held = rec
+        .v_v
+        .rows()
+        .filter(|v| v.iter().all(|&x| (x - 1.0).abs() < 1e-6))
+        .count();
+    assert!(held > 500, "{held} rows at 1 V of {}", rec.t_s.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -41,6 +41,18 @@ pub const QEMU: &str = "qemu-system-arm";
 /// 32 ns: the firmware's SIL tests run at the same).
 const ICOUNT_SHIFT: u32 = 5;
 
+/// How the guest's clock runs against the wall's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pace {
+    /// Idle time skipped (`sleep=off`): a session as fast as QEMU can run
+    /// it (times are counted in the board's samples).
+    Fast,
+    /// Idle time slept and execution held back to the wall's clock
+    /// (`sleep=on,align=on`): the board's clock keeps to the wall's where
+    /// QEMU keeps up, for a live view.
+    RealTime,
+}
+
 /// Why the virtual board could not start.
 #[derive(Debug, thiserror::Error)]
 pub enum VirtualError {
@@ -217,7 +229,12 @@ impl VirtualBoard {
     /// Starts `qemu` (see [`QEMU`]) on `elf` and waits up to `timeout`
     /// for the firmware's first bytes: until then its USART would drop
     /// what it is sent.
-    pub fn start(qemu: &str, elf: &Path, timeout: Duration) -> Result<Started, VirtualError> {
+    pub fn start(
+        qemu: &str,
+        elf: &Path,
+        pace: Pace,
+        timeout: Duration,
+    ) -> Result<Started, VirtualError> {
         let bytes = probe::read_elf(elf)?;
         let name = elf.display().to_string();
         let table = defmt_decoder::Table::parse(&bytes).map_err(|e| VirtualError::DefmtTable {
@@ -231,7 +248,13 @@ impl VirtualBoard {
         })?;
         let socket_path = dir.join("link.sock");
         let world_path = dir.join("world.sock");
-        let icount = format!("shift={ICOUNT_SHIFT},align=off,sleep=off");
+        // Real time: idle periods slept, and execution held back whenever
+        // the guest's clock runs ahead of the wall's (`align`).
+        let (align, sleep) = match pace {
+            Pace::Fast => ("off", "off"),
+            Pace::RealTime => ("on", "on"),
+        };
+        let icount = format!("shift={ICOUNT_SHIFT},align={align},sleep={sleep}");
         let chardev = |id: &str, path: &Path| {
             format!("socket,id={id},path={},server=on,wait=on", path.display())
         };
