@@ -198,7 +198,7 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
     // hang); SysTick runs at 168 MHz regardless.
     Mono::start(core.SYST, SYSCLK_HZ);
     let built = Strip::with_extensions(
-        &Params::baseline_air_example(),
+        &plant_params(),
         &plant_extensions(),
         Fixture::Blocked,
         1.0 / f64::from(SAMPLE_HZ),
@@ -261,6 +261,25 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
         supply,
         // No flash to keep one across runs.
         stored_calibration: None,
+    }
+}
+
+/// The plant's parameters: the example session's, or with `plant-creep`
+/// the same strip creeping (`z = 0.24/s > p = 0.1/s`, Table 4-2's
+/// network) with the same DC moment per volt.
+fn plant_params() -> Params {
+    let example = Params::baseline_air_example();
+    if !cfg!(feature = "plant-creep") {
+        return example;
+    }
+    let (z_per_s, p_per_s) = (0.24, 0.1);
+    let dc_nm_per_v = example.b_nm_per_c_s / example.p_per_s * example.c_f;
+    let k_nm_per_c = dc_nm_per_v / example.c_f * p_per_s / z_per_s;
+    Params {
+        a_nm_per_c: k_nm_per_c,
+        b_nm_per_c_s: k_nm_per_c * z_per_s,
+        p_per_s,
+        ..example
     }
 }
 
@@ -516,7 +535,7 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 #[cfg(feature = "qemu-serial")]
 fn world_parts() -> (world::World, Consumer<'static, u8>) {
     let built = Strip::with_extensions(
-        &Params::baseline_air_example(),
+        &plant_params(),
         &plant_extensions(),
         Fixture::Free,
         1.0 / f64::from(SAMPLE_HZ),
