@@ -128,9 +128,16 @@ fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {
     };
     drop(status);
     eprintln!(
-        "session {}: {} recordings",
+        "session {}: {} recordings{}",
         args.out.display(),
-        report.written.len()
+        report.written.len(),
+        match report.tracks.len() {
+            0 => String::new(),
+            n => format!(
+                ", {n} camera tracks in {} (finrs merge-camera each)",
+                args.out.join("tracks").display()
+            ),
+        }
     );
     if args.diagnose {
         crate::commands::diagnose(DiagnoseArgs {

@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 use finrs::recording::{Channel, Fixture, Recording};
 use finrs_frames::{encode_dropped, encode_sample, Dropped, Sample, MAX_FRAME_LEN};
 
+mod common;
+
 fn finrs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_finrs"))
 }
@@ -474,10 +476,6 @@ fn a_bad_protocol_is_refused_before_any_probe() {
 #[cfg(unix)]
 #[test]
 fn the_live_view_runs_under_a_pseudo_terminal() {
-    use std::io::Write;
-    if Command::new("script").arg("--version").output().is_err() {
-        panic!("util-linux `script` is needed for this test (Debian: bsdutils)");
-    }
     let dir = temp_dir("live-pty");
     let dump = dir.join("dump.bin");
     let out = dir.join("live.csv");
@@ -497,37 +495,15 @@ fn the_live_view_runs_under_a_pseudo_terminal() {
         bytes.extend_from_slice(&buf[..n]);
     }
     std::fs::write(&dump, &bytes).unwrap();
-    let command = format!(
-        "stty cols 100 rows 40; {} bench live --from-bytes {} --out {}",
+    let mut pty = common::pty::Pty::spawn(&format!(
+        "{} bench live --from-bytes {} --out {}",
         env!("CARGO_BIN_EXE_finrs"),
         dump.display(),
         out.display()
-    );
-    let mut child = Command::new("script")
-        .args(["-qec", &command, "/dev/null"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stdin = child.stdin.take().unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
-    stdin.write_all(b"q").unwrap();
-    stdin.flush().unwrap();
-    let started = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if started.elapsed() > Duration::from_secs(20) {
-            child.kill().unwrap();
-            panic!("finrs bench live did not end on q");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    drop(stdin);
-    let mut screen = String::new();
-    std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut screen).unwrap();
+    ));
+    pty.keys(b"", 1500);
+    pty.keys(b"q", 0);
+    let (status, screen) = pty.finish(Duration::from_secs(20), "finrs bench live did not end on q");
     assert!(status.success(), "{status:?}: {screen}");
     // The view was drawn (the terminal moves the cursor between words),
     // the terminal put back, then the report printed.

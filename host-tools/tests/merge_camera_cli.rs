@@ -10,6 +10,29 @@ fn finrs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_finrs"))
 }
 
+/// `finrs merge-camera` in `dir` of `daq.csv` and `track.csv` (50
+/// frames/s, 1e-4 m per pixel, y flipped) into `out`.
+fn merge(dir: &std::path::Path, out: &str) -> std::process::Output {
+    finrs()
+        .current_dir(dir)
+        .args([
+            "merge-camera",
+            "--daq",
+            "daq.csv",
+            "--track",
+            "track.csv",
+            "--fps",
+            "50",
+            "--m-per-px",
+            "1e-4",
+            "--flip-y",
+            "--out",
+            out,
+        ])
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn a_track_is_merged_into_the_daq_recording() {
     let dir = std::env::temp_dir().join(format!("finrs-merge-cli-{}", std::process::id()));
@@ -35,24 +58,7 @@ fn a_track_is_merged_into_the_daq_recording() {
         }
     }
     std::fs::write(dir.join("track.csv"), track).unwrap();
-    let out = finrs()
-        .current_dir(&dir)
-        .args([
-            "merge-camera",
-            "--daq",
-            "daq.csv",
-            "--track",
-            "track.csv",
-            "--fps",
-            "50",
-            "--m-per-px",
-            "1e-4",
-            "--flip-y",
-            "--out",
-            "free.csv",
-        ])
-        .output()
-        .unwrap();
+    let out = merge(&dir, "free.csv");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(
@@ -68,24 +74,7 @@ fn a_track_is_merged_into_the_daq_recording() {
     assert_eq!(tip[1001], None);
 
     // In place: the DAQ file becomes the merged one.
-    let out = finrs()
-        .current_dir(&dir)
-        .args([
-            "merge-camera",
-            "--daq",
-            "daq.csv",
-            "--track",
-            "track.csv",
-            "--fps",
-            "50",
-            "--m-per-px",
-            "1e-4",
-            "--flip-y",
-            "--out",
-            "daq.csv",
-        ])
-        .output()
-        .unwrap();
+    let out = merge(&dir, "daq.csv");
     assert!(
         out.status.success(),
         "{}",

@@ -274,52 +274,26 @@ fn a_creeping_plant_on_the_virtual_bench_names_nothing() {
 /// drives the strip, `q` ends it, and the recording is whole.
 #[test]
 fn the_live_view_drives_the_virtual_bench_from_its_keys() {
-    use std::io::Write;
-    use std::time::{Duration, Instant};
-    if Command::new("script").arg("--version").output().is_err() {
-        panic!("util-linux `script` is needed for this test (Debian: bsdutils)");
-    }
+    use std::time::Duration;
     let elf = build_firmware("qemu-serial");
     let dir = std::env::temp_dir().join(format!("finrs-virtual-live-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("live.csv");
-    let command = format!(
-        "stty cols 100 rows 40; {} bench live --qemu {} --out {}",
+    let mut pty = common::pty::Pty::spawn(&format!(
+        "{} bench live --qemu {} --out {}",
         env!("CARGO_BIN_EXE_finrs"),
         elf.display(),
         out.display()
+    ));
+    pty.keys(b"", 3000);
+    pty.keys(b"w", 500);
+    pty.keys(b"step:1\r", 3000);
+    pty.keys(b"q", 0);
+    let (status, screen) = pty.finish(
+        Duration::from_secs(30),
+        "finrs bench live --qemu did not end on q",
     );
-    let mut child = Command::new("script")
-        .args(["-qec", &command, "/dev/null"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stdin = child.stdin.take().unwrap();
-    let mut keys = |bytes: &[u8], wait_ms: u64| {
-        stdin.write_all(bytes).unwrap();
-        stdin.flush().unwrap();
-        std::thread::sleep(Duration::from_millis(wait_ms));
-    };
-    keys(b"", 3000);
-    keys(b"w", 500);
-    keys(b"step:1\r", 3000);
-    keys(b"q", 0);
-    let started = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if started.elapsed() > Duration::from_secs(30) {
-            child.kill().unwrap();
-            panic!("finrs bench live --qemu did not end on q");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let mut screen = String::new();
-    std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut screen).unwrap();
     assert!(status.success(), "{status:?}: {screen}");
     let rec = Recording::read(&out).unwrap();
     let notes = rec.meta.notes.clone().unwrap_or_default();

@@ -6,6 +6,8 @@
 
 #![allow(dead_code)]
 
+pub mod pty;
+
 use std::path::Path;
 
 use finrs::model::predict::{predict, ModelSpec};

@@ -79,12 +79,10 @@ fn the_frame_shows_the_board_the_wave_and_the_keys() {
     assert!(screen(&term).contains("Enter to send, Esc to cancel: s"));
 }
 
-/// The loop against the fake board: a wave typed and sent, a mark, the
-/// end; the recording has the wave's volts, the mark and no journal left.
-#[test]
-fn the_loop_records_commands_and_marks() {
-    let mut board = FakeBoard::new(Rc::new(Cell::new(0.0)));
-    let dir = std::env::temp_dir().join(format!("finrs-live-{}", std::process::id()));
+/// A fresh folder `name-PID` and options that record `source` into its
+/// `live.csv`, with no duration.
+fn live_options(name: &str, source: &str) -> (std::path::PathBuf, CaptureOptions) {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let opts = CaptureOptions {
         out: dir.join("live.csv"),
@@ -93,9 +91,18 @@ fn the_loop_records_commands_and_marks() {
             geometry: Geometry::THESIS_2006,
             medium: Medium::Air,
             sample: None,
-            source: "the fake board".to_string(),
+            source: source.to_string(),
         },
     };
+    (dir, opts)
+}
+
+/// The loop against the fake board: a wave typed and sent, a mark, the
+/// end; the recording has the wave's volts, the mark and no journal left.
+#[test]
+fn the_loop_records_commands_and_marks() {
+    let mut board = FakeBoard::new(Rc::new(Cell::new(0.0)));
+    let (dir, opts) = live_options("finrs-live", "the fake board");
     // One key per loop turn (50 ms of the board's time each): wait 0.5 s
     // for the power-up tare, type a wave, let it run 2 s, mark, quit.
     let mut script: VecDeque<Option<Key>> = VecDeque::new();
@@ -169,18 +176,7 @@ fn a_failing_link_ends_the_view_and_what_came_is_written() {
         board: FakeBoard::new(Rc::new(Cell::new(0.0))),
         reads: 20,
     };
-    let dir = std::env::temp_dir().join(format!("finrs-live-fail-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let opts = CaptureOptions {
-        out: dir.join("live.csv"),
-        duration_s: None,
-        setup: Setup {
-            geometry: Geometry::THESIS_2006,
-            medium: Medium::Air,
-            sample: None,
-            source: "a failing board".to_string(),
-        },
-    };
+    let (dir, opts) = live_options("finrs-live-fail", "a failing board");
     let mut term = Terminal::new(TestBackend::new(100, 40)).unwrap();
     let report = run_live(&mut board, None, &opts, &mut term, &mut || Ok(None)).unwrap();
     assert!(report.contains("1000 samples"), "{report}");

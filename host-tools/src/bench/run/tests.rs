@@ -40,6 +40,24 @@ fn out_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Runs `protocol` on `board` into `dir` with the default options, no
+/// table, no operator and no monitor.
+fn run_quietly(
+    board: &mut FakeBoard,
+    protocol: &Protocol,
+    dir: &std::path::Path,
+) -> Result<super::SessionReport, BenchError> {
+    run_session(
+        board,
+        protocol,
+        dir,
+        &BenchOptions::default(),
+        None,
+        &mut |_: &str| Ok(()),
+        &Silent,
+    )
+}
+
 #[test]
 fn a_session_is_recorded_in_order_on_the_boards_clock() {
     let protocol = Protocol::parse("p.toml", PROTOCOL).unwrap();
@@ -125,16 +143,7 @@ fn a_session_is_not_written_over_another_and_bad_waves_are_refused_first() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("02_blocked_step_2.0V.csv"), "x").unwrap();
     let mut board = FakeBoard::new(Rc::new(Cell::new(0.0)));
-    let e = run_session(
-        &mut board,
-        &protocol,
-        &dir,
-        &BenchOptions::default(),
-        None,
-        &mut |_: &str| Ok(()),
-        &Silent,
-    )
-    .unwrap_err();
+    let e = run_quietly(&mut board, &protocol, &dir).unwrap_err();
     assert!(matches!(e, BenchError::Exists { .. }), "{e}");
     assert!(
         !dir.join("01_free_step_1.0V.csv").exists(),
@@ -144,16 +153,7 @@ fn a_session_is_not_written_over_another_and_bad_waves_are_refused_first() {
     let text = PROTOCOL.replace("step:2\"", "step:5\"");
     let protocol = Protocol::parse("p.toml", &text).unwrap();
     let dir = out_dir("bad-wave");
-    let e = run_session(
-        &mut board,
-        &protocol,
-        &dir,
-        &BenchOptions::default(),
-        None,
-        &mut |_: &str| Ok(()),
-        &Silent,
-    )
-    .unwrap_err();
+    let e = run_quietly(&mut board, &protocol, &dir).unwrap_err();
     assert!(
         e.to_string()
             .starts_with("recording 2 (blocked_step_2.0V): "),
@@ -258,16 +258,7 @@ fn the_example_protocol_runs_whole() {
     let p = Protocol::read(&root.join("examples/bench/protocol.toml")).unwrap();
     let mut board = FakeBoard::new(Rc::new(Cell::new(0.0)));
     let dir = out_dir("example");
-    let report = run_session(
-        &mut board,
-        &p,
-        &dir,
-        &BenchOptions::default(),
-        None,
-        &mut |_: &str| Ok(()),
-        &Silent,
-    )
-    .unwrap();
+    let report = run_quietly(&mut board, &p, &dir).unwrap();
     assert_eq!(report.written.len(), 10);
     let mut last_end = -1.0;
     for ((path, _), step) in report.written.iter().zip(&p.recordings) {
@@ -303,16 +294,7 @@ fn a_latched_fault_stops_the_session_before_the_next_recording() {
         .c
         .fault(finrs_frames::FaultCode::Other, None, &mut Sink);
     let dir = out_dir("faulted");
-    let e = run_session(
-        &mut board,
-        &protocol,
-        &dir,
-        &BenchOptions::default(),
-        None,
-        &mut |_: &str| Ok(()),
-        &Silent,
-    )
-    .unwrap_err();
+    let e = run_quietly(&mut board, &protocol, &dir).unwrap_err();
     assert!(matches!(&e, BenchError::Faulted { k: 1, .. }), "{e}");
     assert!(!dir.join("01_free_step_1.0V.csv").exists());
 }

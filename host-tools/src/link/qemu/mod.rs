@@ -93,6 +93,14 @@ pub enum VirtualError {
         /// What it printed on standard error.
         stderr: String,
     },
+    /// QEMU did not open its socket in time.
+    #[error("QEMU did not open {} within {timeout_s} s", path.display())]
+    NoSocket {
+        /// The socket's path.
+        path: PathBuf,
+        /// The wait, s.
+        timeout_s: f64,
+    },
     /// Nothing came on the link in time.
     #[error("no frame from the firmware in QEMU within {timeout_s} s (was {elf} built with --features qemu-serial?)")]
     Silent {
@@ -113,7 +121,7 @@ pub struct VirtualBoard {
     world_log: world::WorldLog,
     /// Link bytes read before the caller asked (the first frame's, read
     /// to know the USART listens; those read while waiting on the world).
-    first: Vec<u8>,
+    pending: Vec<u8>,
     log: Receiver<Vec<u8>>,
     log_pending: Vec<u8>,
     /// How long a command may wait for room in the socket.
@@ -182,8 +190,8 @@ impl Qemu {
             }
             self.check_running()?;
             if start.elapsed() > timeout {
-                return Err(VirtualError::Silent {
-                    elf: path.display().to_string(),
+                return Err(VirtualError::NoSocket {
+                    path: path.to_path_buf(),
                     timeout_s: timeout.as_secs_f64(),
                 });
             }
@@ -298,7 +306,7 @@ impl VirtualBoard {
                 socket,
                 world,
                 world_log: world::WorldLog::default(),
-                first,
+                pending: first,
                 log,
                 log_pending: Vec::new(),
                 call_timeout: timeout,
@@ -318,9 +326,17 @@ impl VirtualBoard {
             None => TargetError::new(what),
         })
     }
-}
 
-impl VirtualBoard {
+    /// Reads what the link's socket holds now (0 when nothing came).
+    fn read_link(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
+        match self.socket.read(buf) {
+            Ok(0) if !buf.is_empty() => Err(self.link_error("QEMU closed it", None)),
+            Ok(n) => Ok(n),
+            Err(e) if e.kind() == ErrorKind::WouldBlock => Ok(0),
+            Err(e) => Err(self.link_error("reading", Some(e))),
+        }
+    }
+
     /// Reads what the world's channel holds now into the log.
     fn drain_world(&mut self) -> Result<(), ProbeError> {
         let mut buf = [0u8; 4096];
@@ -367,18 +383,13 @@ impl VirtualBoard {
 impl Link for VirtualBoard {
     fn read_force(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
         self.drain_world()?;
-        if !self.first.is_empty() {
-            let n = self.first.len().min(buf.len());
-            buf[..n].copy_from_slice(&self.first[..n]);
-            self.first.drain(..n);
+        if !self.pending.is_empty() {
+            let n = self.pending.len().min(buf.len());
+            buf[..n].copy_from_slice(&self.pending[..n]);
+            self.pending.drain(..n);
             return Ok(n);
         }
-        match self.socket.read(buf) {
-            Ok(0) if !buf.is_empty() => Err(self.link_error("QEMU closed it", None)),
-            Ok(n) => Ok(n),
-            Err(e) if e.kind() == ErrorKind::WouldBlock => Ok(0),
-            Err(e) => Err(self.link_error("reading", Some(e))),
-        }
+        self.read_link(buf)
     }
 
     fn read_log(&mut self, buf: &mut [u8]) -> Result<usize, ProbeError> {
@@ -411,13 +422,9 @@ impl Board for VirtualBoard {
                 return Err(self.link_error("the world did not take the fixture in time", None));
             }
             self.drain_world()?;
-            match self.socket.read(&mut buf) {
-                Ok(0) => return Err(self.link_error("QEMU closed it", None)),
-                Ok(n) => self.first.extend_from_slice(&buf[..n]),
-                Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                    std::thread::sleep(Duration::from_millis(1))
-                }
-                Err(e) => return Err(self.link_error("reading", Some(e))),
+            match self.read_link(&mut buf)? {
+                0 => std::thread::sleep(Duration::from_millis(1)),
+                n => self.pending.extend_from_slice(&buf[..n]),
             }
         }
         Ok(())

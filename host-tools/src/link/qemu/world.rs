@@ -7,9 +7,7 @@
 
 use std::fmt::Write as _;
 
-use finrs_firmware_support::world::{
-    encode_request, Event, EventDecoder, Request, WorldError, MAX_DOTS,
-};
+use finrs_firmware_support::world::{encode_request, Event, EventDecoder, Request, MAX_DOTS};
 
 /// The virtual camera's scale at the strip's plane, m per pixel: pass it
 /// to `finrs merge-camera --m-per-px`. Its y grows with the strip's
@@ -32,7 +30,7 @@ impl WorldLog {
             match self.decoder.push(b) {
                 Some(Ok(Event::Clamped { .. })) => self.clamped += 1,
                 Some(Ok(e)) => self.events.push(e),
-                Some(Err(WorldError::UnknownTag(_) | WorldError::BadCount(_))) => self.refused += 1,
+                Some(Err(_)) => self.refused += 1,
                 None => {}
             }
         }
