@@ -4,10 +4,10 @@
 //! diagnoses the session if asked. `finrs bench live`: the library's live
 //! view on the real terminal, its keys read from it.
 
-use finrs::bench::protocol::Protocol;
 use finrs::bench::run::{run_session, BenchOptions};
 use finrs::link::capture::{self, Firmware, Monitor};
 use finrs::link::qemu::{Pace, VirtualBoard, QEMU};
+use finrs::protocol::Protocol;
 
 /// How long `bench live --qemu` waits for the virtual board's first frame.
 const LIVE_START: std::time::Duration = std::time::Duration::from_secs(10);

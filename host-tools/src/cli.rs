@@ -35,6 +35,9 @@ pub enum Command {
     Fit(FitArgs),
     /// Find what the baseline gets wrong in a session and name the cause.
     Diagnose(DiagnoseArgs),
+    /// Propose the recordings that would let a session show the effects it
+    /// cannot show now, ranked by the information they add.
+    Plan(PlanArgs),
     /// Set the seed's own measurements beside the baseline and the extended model.
     SeedCheck {
         /// Also write the check as JSON here.
@@ -517,6 +520,26 @@ pub struct DiagnoseArgs {
     /// Folder for the human report (REPORT.md and plots).
     #[arg(long)]
     pub report: Option<PathBuf>,
+}
+
+/// `finrs plan`.
+#[derive(Args)]
+pub struct PlanArgs {
+    /// Folder of recordings of one sample (ipmc-bench/1).
+    pub session: PathBuf,
+    /// Effects the model already has beyond the baseline, comma separated
+    /// (what `finrs diagnose` named, e.g. damping,beam-stiffness).
+    #[arg(long, value_delimiter = ',')]
+    pub effects: Vec<String>,
+    /// Recording time the plan may spend, s.
+    #[arg(long, default_value_t = 60.0)]
+    pub budget_s: f64,
+    /// Where to write the chosen recordings as a protocol for `finrs bench run`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Where to write the plan as JSON: every proposal with its gain per effect.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
 }
 
 /// `finrs fit`.

@@ -23,8 +23,8 @@ use finrs_drive::MAX_SEGMENTS;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{
-    timeout, DiagnoseArgs, FirmwareWaveArgs, FitArgs, FixtureArg, LogArgs, RunArgs, SendArgs,
-    SimWaveArgs, SimulateArgs, WaveArgs,
+    timeout, DiagnoseArgs, FirmwareWaveArgs, FitArgs, FixtureArg, LogArgs, PlanArgs, RunArgs,
+    SendArgs, SimWaveArgs, SimulateArgs, WaveArgs,
 };
 
 /// `finrs simulate`.
@@ -170,19 +170,7 @@ pub fn params(preset: &str) -> anyhow::Result<()> {
 
 /// `finrs fit`.
 pub fn fit(args: FitArgs) -> anyhow::Result<()> {
-    let effects = args
-        .effects
-        .iter()
-        .map(|name| {
-            Effect::parse(name).with_context(|| {
-                let known: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
-                format!(
-                    "--effects: unknown effect {name:?}; known: {}",
-                    known.join(", ")
-                )
-            })
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    let effects = parse_effects(&args.effects)?;
     // An output that cannot be written fails before the fit, not after.
     for out in args.out.iter().chain(&args.json) {
         check_writable(out)?;
@@ -247,6 +235,60 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", dir.join("REPORT.md").display());
     }
     Ok(())
+}
+
+/// `finrs plan`.
+pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
+    if !(args.budget_s.is_finite() && args.budget_s > 0.0) {
+        bail!(
+            "--budget-s: {} must be a positive number of seconds",
+            args.budget_s
+        );
+    }
+    let effects = parse_effects(&args.effects)?;
+    for out in args.out.iter().chain(&args.json) {
+        check_writable(out)?;
+    }
+    let session = Session::read(&args.session)?;
+    let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
+    let bar = spinner("planning");
+    let started = Instant::now();
+    let plan = finrs::analysis::plan::plan(&session, fixed, &effects, args.budget_s, &|msg| {
+        bar.set_message(msg.to_string())
+    })?;
+    bar.finish_and_clear();
+    print!("{plan}");
+    eprintln!("planned in {:.1} s", started.elapsed().as_secs_f64());
+    if let Some(path) = &args.json {
+        write_json(path, &plan)?;
+    }
+    if let Some(out) = &args.out {
+        match plan.protocol(&session) {
+            Some(p) => {
+                std::fs::write(out, p.to_toml()).with_context(|| out.display().to_string())?;
+                eprintln!("wrote {} (finrs bench run reads it)", out.display());
+            }
+            None => eprintln!("nothing chosen: {} not written", out.display()),
+        }
+    }
+    Ok(())
+}
+
+/// `--effects` names as the library's effects; an unknown one is refused
+/// with the names known.
+fn parse_effects(names: &[String]) -> anyhow::Result<Vec<Effect>> {
+    names
+        .iter()
+        .map(|name| {
+            Effect::parse(name).with_context(|| {
+                let known: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+                format!(
+                    "--effects: unknown effect {name:?}; known: {}",
+                    known.join(", ")
+                )
+            })
+        })
+        .collect()
 }
 
 /// `finrs seed-check`.

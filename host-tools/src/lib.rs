@@ -10,8 +10,10 @@
 //! - [`session`] (the recordings of one sample) and [`camera`] (a
 //!   tracker's dots merged into a free recording);
 //! - [`model`] (parameters, prediction, simulation, drives from waves),
-//!   [`link`] (probe, force stream, commands to the firmware) and [`plot`];
-//! - [`analysis`] (fit, diagnosis and the seed's check) and [`bench`] (a
+//!   [`link`] (probe, force stream, commands to the firmware), [`plot`]
+//!   and [`protocol`] (the recordings a session is to hold);
+//! - [`analysis`] (fit, diagnosis, the seed's check and the plan of
+//!   further recordings) and [`bench`] (a
 //!   session's protocol run against the board), on top.
 #![deny(missing_docs)]
 
@@ -21,6 +23,7 @@ pub mod camera;
 pub mod link;
 pub mod model;
 pub mod plot;
+pub mod protocol;
 pub mod recording;
 pub mod session;
 pub mod wave;

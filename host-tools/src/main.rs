@@ -34,6 +34,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Params { preset } => commands::params(&preset),
         Command::Fit(args) => commands::fit(args),
         Command::Diagnose(args) => commands::diagnose(args),
+        Command::Plan(args) => commands::plan(args),
         Command::SeedCheck { json } => commands::seed_check(json),
         Command::Log(args) => commands::log(args),
         Command::Run(args) => commands::run(args),

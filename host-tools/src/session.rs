@@ -118,7 +118,9 @@ impl Session {
         })
     }
 
-    fn prepare(path: &Path, rec: Recording) -> Result<SessionRecording, SessionError> {
+    /// `rec`, read from `path`, as a session holds it: its sample time,
+    /// session start and opening rest found, refused without 1 s of rest.
+    pub fn prepare(path: &Path, rec: Recording) -> Result<SessionRecording, SessionError> {
         let file = path_name(path);
         let dt_s = rec.sample_time().map_err(|e| SessionError::Rule {
             file: file.clone(),

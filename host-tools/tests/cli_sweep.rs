@@ -893,6 +893,31 @@ proptest! {
     }
 
     #[test]
+    fn plan(recs in session(),
+            effects in prop::option::weighted(0.3, prop::collection::vec(prop::sample::select(vec![
+                "damping", "beam-stiffness", "dehydration", "", "bogus"]), 0..2)),
+            budget in prop::option::weighted(0.5, number()),
+            out in prop::option::of(any::<u8>()),
+            json in prop::option::of(any::<u8>())) {
+        let dir = CaseDir::new();
+        let session = write_session(&dir, &recs);
+        let mut args = vec!["plan".into(), session];
+        if let Some(e) = effects {
+            args.extend(["--effects".into(), e.join(",")]);
+        }
+        if let Some(b) = budget {
+            args.push(format!("--budget-s={b}"));
+        }
+        if let Some(kind) = out {
+            args.extend(["--out".into(), out_path(&dir, kind, "plan.toml")]);
+        }
+        if let Some(kind) = json {
+            args.extend(["--json".into(), out_path(&dir, kind, "plan.json")]);
+        }
+        run_finrs(&dir, &args)?;
+    }
+
+    #[test]
     fn diagnose(recs in session(), json in prop::option::of(any::<u8>()), report in prop::option::of(any::<u8>())) {
         let dir = CaseDir::new();
         let session = write_session(&dir, &recs);
@@ -973,14 +998,14 @@ proptest! {
     #[test]
     fn anything(tokens in prop::collection::vec(prop_oneof![
                     3 => prop::sample::select(vec![
-                        "simulate", "params", "fit", "diagnose", "seed-check", "help", "--help", "-h",
+                        "simulate", "params", "fit", "diagnose", "plan", "seed-check", "help", "--help", "-h",
                         "--version", "--input", "--wave", "--out", "--params", "--json", "--report",
-                        "--effects", "--elements", "--segments", "--plot", "--", "-", "bogus",
+                        "--effects", "--elements", "--segments", "--plot", "--budget-s", "--", "-", "bogus",
                     ]).prop_map(String::from),
                     1 => number(),
                     1 => wave_spec(),
                 ], 0..6),
-                first in prop::sample::select(vec!["simulate", "params", "fit", "diagnose", "seed-check", "", "help"])) {
+                first in prop::sample::select(vec!["simulate", "params", "fit", "diagnose", "plan", "seed-check", "", "help"])) {
         let dir = CaseDir::new();
         // Paths the tokens may name land in the case folder.
         dir.write("session/01.csv", b"t_s,v1_V\n0,0\n");
@@ -1032,7 +1057,7 @@ fn all_zero_session_shorter_than_1_s_is_refused_by_name() {
     let dir = CaseDir::new();
     let text = all_zero_recording(500);
     let file = dir.write("session/zero.csv", text.as_bytes());
-    for command in ["fit", "diagnose"] {
+    for command in ["fit", "diagnose", "plan"] {
         let out = Command::new(env!("CARGO_BIN_EXE_finrs"))
             .args([command, &dir.arg("session")])
             .output()
@@ -1056,7 +1081,7 @@ fn undriven_session_is_refused_by_the_fit() {
     let text = all_zero_recording(1500);
     dir.write("session/a.csv", text.as_bytes());
     dir.write("session/b.csv", text.as_bytes());
-    for command in ["fit", "diagnose"] {
+    for command in ["fit", "diagnose", "plan"] {
         let out = Command::new(env!("CARGO_BIN_EXE_finrs"))
             .args([command, &dir.arg("session")])
             .output()

@@ -16,13 +16,13 @@ use std::time::{Duration, Instant};
 
 use finrs_frames::{Command, Event, Info, SampleFlags};
 
-use super::protocol::{Protocol, Step};
 use crate::link::board::{request_info, Board, Frames, TrackStretch};
 use crate::link::capture::Monitor;
 use crate::link::command::wave_command;
 use crate::link::probe::ProbeError;
 use crate::link::qemu::world::VIRTUAL_M_PER_PX;
 use crate::link::stream::{Recorder, Setup};
+use crate::protocol::{Protocol, Step};
 use crate::recording::{Channel, Fixture, Recording, RecordingError};
 use crate::wave::{WaveError, WaveOptions};
 

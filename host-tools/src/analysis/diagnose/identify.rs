@@ -170,6 +170,20 @@ impl Probe {
     }
 }
 
+/// The term's own value at strength `s` of effect `e` in `session`: the
+/// drying rate, 1/s, and the cubic coefficient, 1/V², for the two effects
+/// whose strength is relative to the session (its span, its largest
+/// drive); the strength itself for the others. Two sessions' strengths
+/// compare through it.
+pub fn term_value(e: Effect, s: f64, session: &Session) -> f64 {
+    let scales = scales(session);
+    match e {
+        Effect::Dehydration => -(1.0 - s.min(1.0)).ln() / scales.span_s.max(1e-9),
+        Effect::ElectrochemicalNonlinearity => s / scales.v_max.powi(2).max(1e-12),
+        _ => s,
+    }
+}
+
 /// Which residuals each part of the fit sees.
 struct Rows {
     /// Held out, and a current (the circuit's stage), per residual.

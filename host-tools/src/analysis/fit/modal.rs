@@ -42,11 +42,20 @@ pub struct Ringing {
 
 /// The first blocked natural frequency of `spec`'s beam, Hz.
 pub fn model_blocked_hz(spec: &ModelSpec) -> Option<f64> {
+    model_first_hz(spec, Fixture::Blocked)
+}
+
+/// The first natural frequency of `spec`'s beam held as `fixture`, Hz.
+pub fn model_first_hz(spec: &ModelSpec, fixture: Fixture) -> Option<f64> {
+    let fixture = match fixture {
+        Fixture::Free => CoreFixture::Free,
+        Fixture::Blocked => CoreFixture::Blocked,
+    };
     // Any segment count gives the beam; the fit's mesh is E = 4.
     let s = Strip::<f64, 3, 4, { state_len(3, 4) }>::with_extensions(
         &spec.params,
         &spec.ext,
-        CoreFixture::Blocked,
+        fixture,
         1e-3,
     )
     .ok()?;

@@ -3,7 +3,7 @@
 //! any probe is touched; a refusal names the file, the field and the rule.
 //!
 //! ```
-//! use finrs::bench::protocol::Protocol;
+//! use finrs::protocol::Protocol;
 //!
 //! let p = Protocol::parse("p.toml", r#"
 //! format = "finrs-protocol/1"
@@ -21,7 +21,7 @@
 
 use std::path::Path;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::recording::{Fixture, Geometry, Medium};
 use crate::wave::Wave;
@@ -86,21 +86,23 @@ pub struct Protocol {
     pub recordings: Vec<Step>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawProtocol {
     format: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     sample: Option<String>,
     medium: String,
     length_m: Option<f64>,
     width_m: Option<f64>,
     thickness_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     dots_s_m: Option<Vec<f64>>,
     #[serde(default)]
     recording: Vec<RawStep>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawStep {
     name: String,
@@ -112,7 +114,9 @@ struct RawStep {
     #[serde(default = "default_off_s")]
     off_s: f64,
     tare: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     prompt: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     notes: Option<String>,
 }
 
@@ -133,6 +137,44 @@ impl Protocol {
             what: format!("cannot read: {e}"),
         })?;
         Self::parse(&file, &text)
+    }
+
+    /// The protocol as `finrs-protocol/1` text, which [`Protocol::parse`]
+    /// reads back as it is.
+    pub fn to_toml(&self) -> String {
+        let medium = match self.medium {
+            Medium::Air => "air",
+            Medium::Water => "water",
+        };
+        let raw = RawProtocol {
+            format: FORMAT.to_string(),
+            sample: self.sample.clone(),
+            medium: medium.to_string(),
+            length_m: Some(self.geometry.length_m),
+            width_m: Some(self.geometry.width_m),
+            thickness_m: Some(self.geometry.thickness_m),
+            dots_s_m: self.dots_s_m.clone(),
+            recording: self
+                .recordings
+                .iter()
+                .map(|s| RawStep {
+                    name: s.name.clone(),
+                    fixture: match s.fixture {
+                        Fixture::Free => "free",
+                        Fixture::Blocked => "blocked",
+                    }
+                    .to_string(),
+                    wave: s.wave.clone(),
+                    rest_s: s.rest_s,
+                    hold_s: s.hold_s,
+                    off_s: s.off_s,
+                    tare: Some(s.tare),
+                    prompt: s.prompt.clone(),
+                    notes: s.notes.clone(),
+                })
+                .collect(),
+        };
+        toml::to_string(&raw).expect("strings, numbers and arrays always serialise")
     }
 
     /// Checks the protocol in `text`, named `file` in refusals.
@@ -244,5 +286,20 @@ impl Protocol {
             dots_s_m: raw.dots_s_m,
             recordings,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_example_protocol_is_written_as_it_reads() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/bench/protocol.toml");
+        let p = Protocol::read(&path).unwrap();
+        let text = p.to_toml();
+        let again = Protocol::parse("again.toml", &text).unwrap();
+        assert_eq!(again, p, "{text}");
+        assert!(text.contains("[[recording]]"), "{text}");
     }
 }
