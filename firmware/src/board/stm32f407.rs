@@ -61,6 +61,7 @@ use finrs_controller::{DacOutput, DacWrite, FrameSink, HBridge, SegmentOutput, T
 use rtt_target::{rtt_init, ChannelMode, DownChannel, UpChannel};
 use stm32f4xx_hal::{
     dac::{DacOut, DacPin, C1, C2},
+    gpio::{Output, Pin, PinState, PushPull},
     pac,
     prelude::*,
     rcc::{Config as RccConfig, Enable, Reset},
@@ -76,6 +77,7 @@ use crate::{Mono, SYSCLK_HZ};
 use finrs_firmware_support::calibration_store::{self, BOARD_REGION};
 use finrs_firmware_support::reset;
 use finrs_firmware_support::supply::{self, Supplies, SupplyError};
+use finrs_firmware_support::sync::SyncMark;
 use finrs_frames::Calibration;
 use stm32f4xx_hal::flash::{FlashExt, LockedFlash};
 
@@ -278,6 +280,9 @@ pub struct Io {
     watchdog: IndependentWatchdog,
     /// The calibration's records (flash sectors 10 and 11).
     flash: LockedFlash,
+    /// The camera's sync LED (`pins::SYNC_LED`) and when to light it.
+    sync_led: Pin<'E', 7, Output<PushPull>>,
+    sync: SyncMark,
 }
 
 /// RTT up channel 1, in NoBlockSkip mode: a frame goes whole or not at all.
@@ -516,6 +521,10 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
         defmt::info!("calibration: record {} from flash", s.seq);
     }
 
+    // The camera's sync LED, dark until a drive starts.
+    const { assert!(finrs_firmware_support::pins::SYNC_LED.is(b'E', 7)) };
+    let sync_led = e.pe7.into_push_pull_output();
+
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.stop_on_debug(&dp.DBGMCU, true);
     watchdog.start(WATCHDOG_MS.millis());
@@ -535,6 +544,8 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             supply_ok: supply.is_ok(),
             watchdog,
             flash,
+            sync_led,
+            sync: SyncMark::new(),
         },
         frames,
         commands,
@@ -784,13 +795,23 @@ impl Io {
 
     /// Writes the controller's voltages to the segments, or turns them off
     /// (`None`: a bridge opened, where 0 V would brake it).
+    /// The sync LED follows what is applied: lit for a moment when a drive
+    /// starts after a rest (`finrs_firmware_support::sync`).
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        let Some(v) = v.filter(|_| self.supply_ok) else {
-            return self.off();
+        let applied = match v.filter(|_| self.supply_ok) {
+            Some(v) => {
+                for (segment, &v) in self.segments.iter_mut().zip(v) {
+                    segment.set_v(v);
+                }
+                *v
+            }
+            None => {
+                self.off();
+                [0.0; N]
+            }
         };
-        for (segment, &v) in self.segments.iter_mut().zip(v) {
-            segment.set_v(v);
-        }
+        let lit = self.sync.update(&applied).lit;
+        self.sync_led.set_state(PinState::from(lit));
     }
 
     /// Every segment off.

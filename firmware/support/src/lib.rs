@@ -15,6 +15,8 @@
 //! - [`reset`]: why the core last reset, from RCC_CSR's flags.
 //! - [`supply`]: VDDA and the bridge supply, measured at boot and
 //!   checked before anything drives.
+//! - [`sync`]: the camera's sync mark, lit when a drive starts after a
+//!   rest.
 //! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
 //!   load-cell offset and noise, the injected fault).
 //! - [`watermark`]: the stack high-water mark's paint pattern and scan.
@@ -30,5 +32,6 @@ pub mod pins;
 pub mod reset;
 pub mod sim;
 pub mod supply;
+pub mod sync;
 pub mod watermark;
 pub mod world;

@@ -132,6 +132,62 @@ pub const BRIDGE_SUPPLY_SENSE: Input = Input {
     channel: 13,
 };
 
+/// Each segment's H-bridge legs (A, B), as `BOARD.md`'s table and the
+/// board's `init` wire them (TIM1, TIM8, TIM2, TIM4 channel pairs).
+pub const BRIDGE_LEGS: [(Pin, Pin); 8] = [
+    (Pin::new(b'E', 9), Pin::new(b'E', 11)),
+    (Pin::new(b'E', 13), Pin::new(b'E', 14)),
+    (Pin::new(b'C', 6), Pin::new(b'C', 7)),
+    (Pin::new(b'C', 8), Pin::new(b'C', 9)),
+    (Pin::new(b'A', 15), Pin::new(b'B', 3)),
+    (Pin::new(b'B', 10), Pin::new(b'B', 11)),
+    (Pin::new(b'D', 12), Pin::new(b'D', 13)),
+    (Pin::new(b'D', 14), Pin::new(b'D', 15)),
+];
+
+/// DAC1 and DAC2's outputs, for the segments that use them.
+pub const DAC_OUTPUTS: [Pin; 2] = [Pin::new(b'A', 4), Pin::new(b'A', 5)];
+
+/// The camera's sync LED ([`sync`](crate::sync)): PE7, a push-pull output
+/// (RM0090 §8.3: MODER output, OTYPER push-pull) through a resistor to an
+/// LED in the camera's view.
+pub const SYNC_LED: Pin = Pin::new(b'E', 7);
+
+/// Whether `pin` is none of the drive's and sensors' pins: no bridge leg,
+/// DAC output, analogue input of `map` or the supply's sense.
+pub const fn is_free(pin: Pin, map: &[Input]) -> bool {
+    let mut i = 0;
+    while i < BRIDGE_LEGS.len() {
+        let (a, b) = BRIDGE_LEGS[i];
+        if a.is(pin.port, pin.number) || b.is(pin.port, pin.number) {
+            return false;
+        }
+        i += 1;
+    }
+    let mut i = 0;
+    while i < DAC_OUTPUTS.len() {
+        if DAC_OUTPUTS[i].is(pin.port, pin.number) {
+            return false;
+        }
+        i += 1;
+    }
+    let mut i = 0;
+    while i < map.len() {
+        if map[i].pin.is(pin.port, pin.number) {
+            return false;
+        }
+        i += 1;
+    }
+    !BRIDGE_SUPPLY_SENSE.pin.is(pin.port, pin.number)
+}
+
+/// The sync LED is on a pin nothing else uses: checked at compile time.
+pub const SYNC_LED_IS_FREE: bool = is_free(SYNC_LED, &MAP);
+const _: () = assert!(
+    SYNC_LED_IS_FREE,
+    "the sync LED's pin is used by the drive or a sensor"
+);
+
 /// The ADC whose injected group reads segment `i`'s shunt: at most four
 /// conversions a group, the load cell first in ADC1's.
 pub const fn adc_of_segment(i: usize) -> u8 {
@@ -270,6 +326,29 @@ mod tests {
             adc: 3,
             channel: 9
         }));
+    }
+
+    #[test]
+    fn the_sync_led_is_on_a_free_pin_and_a_used_one_is_refused() {
+        assert!(is_free(SYNC_LED, &MAP));
+        // A bridge leg, a DAC output, a shunt, the supply's sense.
+        for used in [
+            Pin::new(b'E', 9),
+            Pin::new(b'B', 3),
+            Pin::new(b'D', 15),
+            Pin::new(b'A', 5),
+            Pin::new(b'C', 2),
+            Pin::new(b'C', 3),
+        ] {
+            assert!(!is_free(used, &MAP), "{used:?}");
+        }
+        // No two legs share a pin.
+        for (i, (a, b)) in BRIDGE_LEGS.iter().enumerate() {
+            assert_ne!(a, b);
+            for (c, d) in &BRIDGE_LEGS[i + 1..] {
+                assert!(![c, d].contains(&a) && ![c, d].contains(&b));
+            }
+        }
     }
 
     #[test]

@@ -42,9 +42,6 @@ pub const CAMERA_PERIOD_TICKS: u32 = 33;
 /// Largest tracking error added to each mark's deflection, m (uniform in
 /// ±this): about a fifth of a pixel at 0.1 mm per pixel.
 pub const CAMERA_NOISE_M: f32 = 20e-6;
-/// A drive above this magnitude on any segment has started, V: the sync
-/// event, at the rule `finrs merge-camera` applies to the recording.
-pub const ONSET_V: f32 = 0.05;
 
 /// A camera frame's tag.
 pub const CAMERA_TAG: u8 = 0xCA;
@@ -82,7 +79,8 @@ pub enum Event {
         /// Their deflections, m.
         y_m: [f32; MAX_MARKS],
     },
-    /// The drive rose above [`ONSET_V`] at `tick`, having been below.
+    /// The sync mark's onset ([`crate::sync`]): the drive rose above
+    /// [`crate::sync::ONSET_V`] at `tick`, after a rest.
     Onset {
         /// The period.
         tick: u32,

@@ -4,9 +4,10 @@
 //! `finrs_firmware_support::world`). The firmware never sees this: it
 //! drives and samples as on a board; only the plant behind its ADC changes.
 
+use finrs_firmware_support::sync::SyncMark;
 use finrs_firmware_support::world::{
     encode_event, Event, Request, RequestDecoder, CAMERA_NOISE_M, CAMERA_PERIOD_TICKS, MAX_DOTS,
-    MAX_MARKS, ONSET_V,
+    MAX_MARKS,
 };
 use heapless::spsc::Producer;
 use model_core::Strip;
@@ -24,8 +25,9 @@ pub struct World {
     dots: usize,
     dots_s_m: [f32; MAX_DOTS],
     decoder: RequestDecoder,
-    /// The drive was above the onset at the last period.
-    driving: bool,
+    /// The sync mark, as the board's LED lights it: its onset is the
+    /// camera's sync event.
+    sync: SyncMark,
     noise: u32,
     out: Producer<'static, u8>,
 }
@@ -40,7 +42,7 @@ impl World {
             dots: 0,
             dots_s_m: [0.0; MAX_DOTS],
             decoder: RequestDecoder::new(),
-            driving: false,
+            sync: SyncMark::new(),
             noise: 0x9E37_79B9,
             out,
         }
@@ -92,11 +94,9 @@ impl World {
     /// onset event, and if free, the free strip's step (its currents
     /// returned) and the camera's frame.
     pub fn step(&mut self, applied: &[f32; N], tick: u64) -> Option<[f32; N]> {
-        let driving = applied.iter().any(|v| v.abs() > ONSET_V);
-        if driving && !self.driving {
+        if self.sync.update(applied).onset {
             self.send(&Event::Onset { tick: tick as u32 });
         }
-        self.driving = driving;
         if !self.is_free {
             return None;
         }
