@@ -9,6 +9,7 @@
 
 use serde::Serialize;
 
+use super::structure::{structure, Structure};
 use crate::analysis::fit::{ChannelFit, Score, Sensor};
 
 /// Held-out weighted RSS per residual above which structure remains: the
@@ -32,6 +33,9 @@ pub struct SensorFloor {
     pub worst_channel: String,
     /// That channel's weighted RSS per residual.
     pub worst_rss_per_residual: f64,
+    /// Above the floor: what that channel's residuals hold (frequency band,
+    /// correlation with the input).
+    pub structure: Option<Structure>,
 }
 
 /// The floor of each sensor `hold` has residuals for, in [`Sensor::ALL`]
@@ -54,11 +58,13 @@ pub fn sensor_floors(hold: &Score) -> Vec<SensorFloor> {
                 )
             });
             let rss_per_residual = sum / n as f64;
+            let at_floor = rss_per_residual < NOISE_FLOOR_RATIO;
             Some(SensorFloor {
                 sensor: sensor.name().to_string(),
                 rss_per_residual,
                 residuals: n,
-                at_floor: rss_per_residual < NOISE_FLOOR_RATIO,
+                at_floor,
+                structure: (!at_floor).then(|| structure(worst)),
                 worst_channel: format!("{}: {}", worst.recording, worst.channel.name()),
                 worst_rss_per_residual: per(worst),
             })
@@ -86,6 +92,7 @@ mod tests {
             model_is_zero: false,
             gain: 1.0,
             input_v: vec![0.0; n],
+            sample_s: 1e-3,
         }
     }
 
@@ -115,5 +122,11 @@ mod tests {
         assert_eq!(floors[1].worst_channel, "step.csv: tip_y_m");
         assert!((floors[1].worst_rss_per_residual - 4.0).abs() < 1e-12);
         assert_eq!(floors[1].residuals, 800);
+        // Above its floor, what the worst channel holds is said; at its
+        // floor, nothing.
+        assert!(floors[0].structure.is_none());
+        let st = floors[1].structure.as_ref().expect("described");
+        // ±level alternating: all its power at the top of the band.
+        assert!(st.band_percent > 90.0 && st.band_hz.1 == 500.0, "{st:?}");
     }
 }

@@ -43,11 +43,13 @@ pub mod identify;
 pub mod report;
 pub mod rests;
 mod search;
+pub mod structure;
 mod verdict;
 pub mod whiteness;
 
 pub use floors::{sensor_floors, SensorFloor, NOISE_FLOOR_RATIO};
 pub use gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
-pub use search::{diagnose, split, tested_channels, untestable, INPUT_LAGS, MAX_CAUSES};
+pub use search::{diagnose, split, tested_channels, untestable, MAX_CAUSES};
 pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
+pub use whiteness::INPUT_LAGS;

@@ -148,6 +148,18 @@ fn summary(s: &mut String, session: &Session, v: &Verdict) {
         );
     }
     let _ = writeln!(s);
+    for f in v.sensors.iter().filter(|f| !f.at_floor) {
+        if let Some(st) = &f.structure {
+            let _ = writeln!(
+                s,
+                "- {} above its floor, in {}: {st}.",
+                f.sensor, f.worst_channel
+            );
+        }
+    }
+    if v.sensors.iter().any(|f| f.structure.is_some()) {
+        let _ = writeln!(s);
+    }
     let _ = writeln!(
         s,
         "Opening rests (currents, load cell): {} of {} fail a Ljung–Box test at 99 % \

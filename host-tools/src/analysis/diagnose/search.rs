@@ -9,7 +9,7 @@ use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
 use super::identify;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
-use super::whiteness;
+use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
 use crate::analysis::fit::{ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
 use crate::model::predict::ModelSpec;
@@ -23,8 +23,6 @@ pub const MAX_CAUSES: usize = 4;
 /// The effects the blocked mode's frequency and decay speak to, tried
 /// together as well as apart.
 pub const MODE_PAIR: [Effect; 2] = [Effect::Damping, Effect::BeamStiffness];
-/// Lags of the residual–input correlation, as MATLAB's `resid` default.
-pub const INPUT_LAGS: usize = 25;
 /// Splits a session: every third recording from the second is held out,
 /// unless that would leave its fixture without a training recording.
 pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {

@@ -157,6 +157,9 @@ impl std::fmt::Display for Verdict {
                 "  above its noise floor: {} at {:.2} (worst {} at {:.2})",
                 s.sensor, s.rss_per_residual, s.worst_channel, s.worst_rss_per_residual
             )?;
+            if let Some(st) = &s.structure {
+                writeln!(f, "    there: {st}")?;
+            }
         }
         for u in &self.untestable {
             writeln!(f, "  not testable here: {}: {}", u.effect, u.why)?;

@@ -39,9 +39,18 @@ pub fn chi2_99(h: usize) -> f64 {
     h * (1.0 - a + z * a.sqrt()).powi(3)
 }
 
+/// Lags of the residual–input correlation, as MATLAB's `resid` default.
+pub const INPUT_LAGS: usize = 25;
+
 /// Largest normalised cross-correlation between `r` and `u` over lags
 /// `0..=max_lag` (`u` leading), and its 99 % band for white `r`: `2.58/√n`.
 pub fn input_correlation(r: &[f64], u: &[f64], max_lag: usize) -> (f64, f64) {
+    let (best, _, band) = input_correlation_lag(r, u, max_lag);
+    (best, band)
+}
+
+/// As [`input_correlation`], with the lag (samples) of the largest.
+pub fn input_correlation_lag(r: &[f64], u: &[f64], max_lag: usize) -> (f64, usize, f64) {
     let n = r.len().min(u.len());
     let mr = r[..n].iter().sum::<f64>() / n.max(1) as f64;
     let mu = u[..n].iter().sum::<f64>() / n.max(1) as f64;
@@ -57,15 +66,15 @@ pub fn input_correlation(r: &[f64], u: &[f64], max_lag: usize) -> (f64, f64) {
         .sqrt();
     let band = 2.58 / (n.max(1) as f64).sqrt();
     if sr == 0.0 || su == 0.0 {
-        return (0.0, band);
+        return (0.0, 0, band);
     }
-    let best = (0..=max_lag.min(n.saturating_sub(1)))
+    let (lag, best) = (0..=max_lag.min(n.saturating_sub(1)))
         .map(|k| {
             let c: f64 = (k..n).map(|i| (r[i] - mr) * (u[i - k] - mu)).sum();
-            (c / (sr * su)).abs()
+            (k, (c / (sr * su)).abs())
         })
-        .fold(0.0, f64::max);
-    (best, band)
+        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    (best, lag, band)
 }
 
 #[cfg(test)]

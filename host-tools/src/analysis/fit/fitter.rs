@@ -217,7 +217,7 @@ impl<'a> Fitter<'a> {
             let res = self.residuals_of(i, spec)?;
             for (t, r) in self.targets.recordings[i].targets.iter().zip(res) {
                 let rec = &self.session.recordings[i];
-                channels.push(ChannelFit::new(&rec.name, t, &r, &rec.rec.v_v));
+                channels.push(ChannelFit::new(&rec.name, t, &r, &rec.rec.v_v, rec.dt_s));
             }
         }
         Ok(Score::new(channels))

@@ -62,12 +62,15 @@ pub struct ChannelFit {
     /// voltage for a current, the mean over segments for the beam's
     /// channels (for the residual-input correlation test).
     pub input_v: Vec<f64>,
+    /// Time between the residuals, s: the sample period, or the camera's
+    /// frame period for its channels.
+    pub sample_s: f64,
 }
 
 impl ChannelFit {
-    /// From a target, its weighted residuals `r = (ŷ − y)/σ` and the
-    /// recording's voltages per row and segment.
-    pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &Voltages) -> ChannelFit {
+    /// From a target, its weighted residuals `r = (ŷ − y)/σ`, the
+    /// recording's voltages per row and segment and its sample time.
+    pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &Voltages, dt_s: f64) -> ChannelFit {
         let model = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
         let e = nrmse(&t.values, model.clone());
         // ŷ is rebuilt from y and the residual, so "zero" is up to rounding.
@@ -109,6 +112,13 @@ impl ChannelFit {
                     }
                 })
                 .collect(),
+            sample_s: dt_s
+                * t.rows
+                    .windows(2)
+                    .map(|w| w[1] - w[0])
+                    .min()
+                    .unwrap_or(1)
+                    .max(1) as f64,
         }
     }
 }
