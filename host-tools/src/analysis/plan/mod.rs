@@ -79,16 +79,17 @@ pub fn plan(
     let noise = fitter.targets().sigma.clone();
     let end_s = session_end_s(session);
     let all = candidates(session, &fit.spec);
-    let assessed: Vec<Proposal> = all
+    // Proposals read as this bench reads its currents.
+    let spec = ModelSpec {
+        sensors_before_update: fitter.sampling().before_update,
+        ..fit.spec
+    };
+    let mut proposals: Vec<Proposal> = all
         .iter()
         .enumerate()
         .map(|(k, c)| {
             progress(&format!("{} ({} of {})", c.step.name, k + 1, all.len()));
             let t_start_s = end_s.map(|t| t + c.later_s);
-            let spec = ModelSpec {
-                sensors_before_update: fitter.sampling().before_update,
-                ..fit.spec
-            };
             let with =
                 synthetic::recording(session, &c.step, &spec, &noise, t_start_s, k as u32 + 1)
                     .map_err(|e| error_chain(&e))
@@ -102,7 +103,6 @@ pub fn plan(
             proposal(c, session, &now, with)
         })
         .collect();
-    let mut proposals = assessed;
     proposals.sort_by(|a, b| {
         b.newly_detectable
             .len()
