@@ -93,6 +93,7 @@ mod tests {
             gain: 1.0,
             input_v: vec![0.0; n],
             sample_s: 1e-3,
+            segment_inputs_v: Vec::new(),
         }
     }
 

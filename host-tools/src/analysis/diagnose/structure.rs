@@ -23,7 +23,8 @@ pub struct Structure {
     /// half its power over the top octave, a quarter over the next).
     pub band_percent: f64,
     /// What the residual is correlated with: the segment's voltage for a
-    /// current, the mean drive for the beam's channels.
+    /// current, the segment whose voltage it follows most for the beam's
+    /// channels.
     pub input: String,
     /// The largest normalised cross-correlation with it over
     /// `0..=INPUT_LAGS` samples, the input leading.
@@ -40,15 +41,38 @@ pub struct Structure {
 /// The structure of `c`'s residuals.
 pub fn structure(c: &ChannelFit) -> Structure {
     let (band_hz, band_percent) = strongest_octave(&c.residuals, c.sample_s);
-    let (input_correlation, lag, input_band) =
-        input_correlation_lag(&c.residuals, &c.input_v, INPUT_LAGS);
+    // A current against its own segment's voltage; the beam's channels
+    // against each segment's, the strongest kept.
+    let inputs: Vec<(String, &[f64])> = match c.channel {
+        Channel::Current(k) => vec![(format!("segment {}'s voltage", k + 1), &c.input_v)],
+        _ => c
+            .segment_inputs_v
+            .iter()
+            .enumerate()
+            .map(|(k, u)| (format!("segment {}'s voltage", k + 1), u.as_slice()))
+            .collect(),
+    };
+    let (input, (input_correlation, lag, input_band)) = inputs
+        .into_iter()
+        .map(|(name, u)| (name, input_correlation_lag(&c.residuals, u, INPUT_LAGS)))
+        .fold(
+            None,
+            |best: Option<(String, (f64, usize, f64))>, x| match best {
+                Some(b) if b.1 .0 >= x.1 .0 => Some(b),
+                _ => Some(x),
+            },
+        )
+        .unwrap_or_else(|| ("the drive".to_string(), (0.0, 0, 0.0)));
+    // Below the band on every segment: none of them, not the best of none.
+    let input = if input_correlation <= input_band && c.segment_inputs_v.len() > 1 {
+        "any segment's voltage".to_string()
+    } else {
+        input
+    };
     Structure {
         band_hz,
         band_percent,
-        input: match c.channel {
-            Channel::Current(k) => format!("segment {}'s voltage", k + 1),
-            _ => "the mean drive".to_string(),
-        },
+        input,
         input_correlation,
         input_lag_s: lag as f64 * c.sample_s,
         input_band,
@@ -180,6 +204,7 @@ mod tests {
             residuals,
             model_is_zero: false,
             gain: 1.0,
+            segment_inputs_v: vec![input_v.clone()],
             input_v,
             sample_s,
         }
@@ -192,7 +217,7 @@ mod tests {
         let ring: Vec<f64> = (0..4000)
             .map(|i| (2.0 * std::f64::consts::PI * 26.0 * i as f64 * dt).sin())
             .collect();
-        let s = structure(&channel(Channel::TipY, ring.clone(), vec![0.0; 4000], dt));
+        let s = structure(&channel(Channel::TipY, ring, vec![0.0; 4000], dt));
         assert!(s.band_hz.0 <= 26.0 && 26.0 < s.band_hz.1, "{s:?}");
         assert!(s.band_percent > 90.0, "{s:?}");
         assert!(s.to_string().contains("not correlated"), "{s}");
@@ -222,6 +247,40 @@ mod tests {
             text.contains("segment 2's voltage") && text.contains("at 3 ms"),
             "{text}"
         );
+    }
+
+    #[test]
+    fn a_beam_channel_is_read_against_each_segment_not_the_flat_mean_of_a_travelling_wave() {
+        let dt = 1e-3;
+        let sine = |k: usize| -> Vec<f64> {
+            (0..4000)
+                .map(|i| {
+                    let phase = 2.0 * std::f64::consts::PI * (i as f64 * dt - k as f64 / 3.0);
+                    2.5 * phase.sin()
+                })
+                .collect()
+        };
+        let segments: Vec<Vec<f64>> = (0..3).map(sine).collect();
+        let mean: Vec<f64> = (0..4000)
+            .map(|i| segments.iter().map(|u| u[i]).sum::<f64>() / 3.0)
+            .collect();
+        assert!(mean.iter().all(|m| m.abs() < 1e-9));
+        // The residual follows segment 2's voltage, 2 samples late.
+        let r: Vec<f64> = (0..4000)
+            .map(|i| {
+                if i >= 2 {
+                    0.1 * segments[1][i - 2]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut c = channel(Channel::TipY, r, mean, dt);
+        c.segment_inputs_v = segments;
+        let s = structure(&c);
+        assert_eq!(s.input, "segment 2's voltage", "{s:?}");
+        assert!(s.input_correlation > 0.99, "{s:?}");
+        assert!((s.input_lag_s - 0.002).abs() < 1e-12, "{s:?}");
     }
 
     #[test]

@@ -65,6 +65,10 @@ pub struct ChannelFit {
     /// Time between the residuals, s: the sample period, or the camera's
     /// frame period for its channels.
     pub sample_s: f64,
+    /// For the beam's channels, each segment's voltage at the residuals'
+    /// rows, V (`[segment][i]`: a travelling wave's mean is flat, its
+    /// segments are not); empty for a current.
+    pub segment_inputs_v: Vec<Vec<f64>>,
 }
 
 impl ChannelFit {
@@ -112,6 +116,12 @@ impl ChannelFit {
                     }
                 })
                 .collect(),
+            segment_inputs_v: match t.channel {
+                Channel::Current(_) => Vec::new(),
+                _ => (0..v_v.segments())
+                    .map(|k| t.rows.iter().map(|&row| v_v[row][k]).collect())
+                    .collect(),
+            },
             sample_s: dt_s
                 * t.rows
                     .windows(2)
