@@ -40,12 +40,14 @@ pub struct ProtocolError {
     pub what: String,
 }
 
-/// One recording of the session.
-#[derive(Clone, Debug, PartialEq)]
+/// One recording of the session (serialised with the protocol's field
+/// names, for a program reading `finrs plan --json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Step {
     /// Name of the file without its number and `.csv`.
     pub name: String,
     /// How the tip is held.
+    #[serde(serialize_with = "fixture_name")]
     pub fixture: Fixture,
     /// The wave, as `finrs wave` takes it.
     pub wave: String,
@@ -59,9 +61,15 @@ pub struct Step {
     pub tare: bool,
     /// Asked of the operator before the recording (e.g. "re-clamp the
     /// strip"); the run waits for Enter.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub prompt: Option<String>,
     /// Words for the recording's notes.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub notes: Option<String>,
+}
+
+fn fixture_name<S: serde::Serializer>(f: &Fixture, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(f.name())
 }
 
 impl Step {
@@ -142,14 +150,10 @@ impl Protocol {
     /// The protocol as `finrs-protocol/1` text, which [`Protocol::parse`]
     /// reads back as it is.
     pub fn to_toml(&self) -> String {
-        let medium = match self.medium {
-            Medium::Air => "air",
-            Medium::Water => "water",
-        };
         let raw = RawProtocol {
             format: FORMAT.to_string(),
             sample: self.sample.clone(),
-            medium: medium.to_string(),
+            medium: self.medium.name().to_string(),
             length_m: Some(self.geometry.length_m),
             width_m: Some(self.geometry.width_m),
             thickness_m: Some(self.geometry.thickness_m),
@@ -159,11 +163,7 @@ impl Protocol {
                 .iter()
                 .map(|s| RawStep {
                     name: s.name.clone(),
-                    fixture: match s.fixture {
-                        Fixture::Free => "free",
-                        Fixture::Blocked => "blocked",
-                    }
-                    .to_string(),
+                    fixture: s.fixture.name().to_string(),
                     wave: s.wave.clone(),
                     rest_s: s.rest_s,
                     hold_s: s.hold_s,

@@ -23,6 +23,26 @@ pub enum Medium {
     Water,
 }
 
+impl Fixture {
+    /// As the format writes it: `free` or `blocked`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Fixture::Free => "free",
+            Fixture::Blocked => "blocked",
+        }
+    }
+}
+
+impl Medium {
+    /// As the format writes it: `air` or `water`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Medium::Air => "air",
+            Medium::Water => "water",
+        }
+    }
+}
+
 /// The metadata of a recording.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Metadata {
@@ -319,16 +339,8 @@ impl Metadata {
         if let Some(s) = &self.cation {
             out.push_str(&format!("# cation = {}\n", q(s)));
         }
-        let fixture = match self.fixture {
-            Fixture::Free => "free",
-            Fixture::Blocked => "blocked",
-        };
-        out.push_str(&format!("# fixture = {}\n", q(fixture)));
-        let medium = match self.medium {
-            Medium::Air => "air",
-            Medium::Water => "water",
-        };
-        out.push_str(&format!("# medium = {}\n", q(medium)));
+        out.push_str(&format!("# fixture = {}\n", q(self.fixture.name())));
+        out.push_str(&format!("# medium = {}\n", q(self.medium.name())));
         if let Some(d) = &self.dots_s_m {
             let items: Vec<String> = d.iter().map(|x| format!("{x:?}")).collect();
             out.push_str(&format!("# dots_s_m = [{}]\n", items.join(", ")));

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::analysis::fit::Score;
 use crate::analysis::median::median;
-use crate::recording::{Channel, Fixture};
+use crate::recording::Channel;
 use crate::session::Session;
 
 /// The baseline's misfit in one recording.
@@ -95,11 +95,7 @@ pub fn analyse(session: &Session, score: &Score) -> Analyses {
             t_session_s: r.t_start_s,
             max_abs_v,
             driven,
-            fixture: match r.rec.meta.fixture {
-                Fixture::Free => "free",
-                Fixture::Blocked => "blocked",
-            }
-            .to_string(),
+            fixture: r.rec.meta.fixture.name().to_string(),
             rss_per_residual: if n > 0 { sum / n as f64 } else { 0.0 },
             gain: median_gain(&channels),
         });

@@ -93,6 +93,20 @@ struct Scales {
     width_m: f64,
 }
 
+impl Scales {
+    /// The drying rate, 1/s, that loses `s < 1` of the gain over the
+    /// session: `e^{−r T} = 1 − s` at its end.
+    fn drying_per_s(&self, s: f64) -> f64 {
+        -(1.0 - s).ln() / self.span_s.max(1e-9)
+    }
+
+    /// The cubic coefficient, 1/V², that departs `s` from linear at the
+    /// session's largest drive.
+    fn cubic_per_v2(&self, s: f64) -> f64 {
+        s / self.v_max.powi(2).max(1e-12)
+    }
+}
+
 impl Probe {
     /// The probe of `e`. Large deflection has no strength: it is the arc
     /// itself, probed whole (`probe` and `plausible` 1).
@@ -145,7 +159,7 @@ impl Probe {
                 out.ext.added_mass_kg_per_m += s * plate;
             }
             Effect::ElectrochemicalNonlinearity => {
-                let per_v2 = s / scales.v_max.powi(2).max(1e-12);
+                let per_v2 = scales.cubic_per_v2(s);
                 out.ext.charge_cubic_per_v2 += per_v2;
                 out.ext.leak_cubic_per_v2 += per_v2;
             }
@@ -154,8 +168,7 @@ impl Probe {
                 out.params.b_nm_per_c_s = -s * out.params.a_nm_per_c * out.params.p_per_s;
             }
             Effect::Dehydration => {
-                // e^{−r T} = 1 − s at the session's end.
-                out.dehydration_per_s = -(1.0 - s).ln() / scales.span_s.max(1e-9);
+                out.dehydration_per_s = scales.drying_per_s(s);
                 out.dehydration_curvature = 0.0;
             }
             Effect::SegmentCrosstalk => out.ext.crosstalk += s,
@@ -178,8 +191,8 @@ impl Probe {
 pub fn term_value(e: Effect, s: f64, session: &Session) -> f64 {
     let scales = scales(session);
     match e {
-        Effect::Dehydration => -(1.0 - s.min(1.0)).ln() / scales.span_s.max(1e-9),
-        Effect::ElectrochemicalNonlinearity => s / scales.v_max.powi(2).max(1e-12),
+        Effect::Dehydration => scales.drying_per_s(s),
+        Effect::ElectrochemicalNonlinearity => scales.cubic_per_v2(s),
         _ => s,
     }
 }

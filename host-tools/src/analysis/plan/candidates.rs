@@ -81,7 +81,7 @@ pub fn candidates(session: &Session, spec: &ModelSpec) -> Vec<Candidate> {
             later_s,
         })
     };
-    let tag = fixture_tag(fixture);
+    let tag = fixture.name();
 
     push(
         step(
@@ -196,7 +196,7 @@ pub fn candidates(session: &Session, spec: &ModelSpec) -> Vec<Candidate> {
     if !has(other) {
         push(
             step(
-                format!("{}_step_{level_v:.1}V", fixture_tag(other)),
+                format!("{}_step_{level_v:.1}V", other.name()),
                 other,
                 format!("step:{level_v}"),
                 4.0,
@@ -225,13 +225,6 @@ pub fn candidates(session: &Session, spec: &ModelSpec) -> Vec<Candidate> {
         REPEAT_AFTER_S,
     );
     out
-}
-
-fn fixture_tag(f: Fixture) -> &'static str {
-    match f {
-        Fixture::Free => "free",
-        Fixture::Blocked => "blocked",
-    }
 }
 
 /// Volts to 0.1 V, as an operator types them.

@@ -12,7 +12,7 @@
 //! detectable at a strength a real strip plausibly has, and the bits of
 //! information on the others, `log2(before/after)` of the smallest
 //! detectable strength (an effect not detectable up to the search's
-//! ceiling counts from twice the ceiling). Candidates are ranked by the
+//! ceiling counts from twice the ceiling's value). Candidates are ranked by the
 //! first, then the second, and chosen in that order within a time budget
 //! (one that makes nothing testable only from [`MIN_BITS`]).
 //! What no recording can change (a session in air cannot show water's
@@ -117,7 +117,7 @@ pub fn plan(
         let worth = !p.newly_detectable.is_empty() || p.bits >= MIN_BITS;
         if p.refused.is_none() && worth && used_s + p.duration_s <= budget_s {
             used_s += p.duration_s;
-            chosen.push(p.name.clone());
+            chosen.push(p.step.name.clone());
         }
     }
     Ok(Plan {
@@ -158,9 +158,12 @@ fn proposal(
                     let e = Effect::parse(&b.effect)?;
                     // Compared as the term's own value: drying's strength
                     // is a loss over the session, which a later recording
-                    // lengthens.
-                    let at = |i: &Identifiability, s: &Session| {
-                        term_value(e, i.smallest_detectable.unwrap_or(2.0 * i.ceiling), s)
+                    // lengthens. None up to the ceiling counts as twice the
+                    // ceiling's value (twice a bounded strength, a 99 %
+                    // loss, would be no strength at all).
+                    let at = |i: &Identifiability, s: &Session| match i.smallest_detectable {
+                        Some(x) => term_value(e, x, s),
+                        None => 2.0 * term_value(e, i.ceiling, s),
                     };
                     Some(EffectGain {
                         effect: b.effect.clone(),
@@ -177,16 +180,7 @@ fn proposal(
         Err(why) => (Vec::new(), Some(why)),
     };
     Proposal {
-        name: c.step.name.clone(),
-        fixture: match c.step.fixture {
-            crate::recording::Fixture::Free => "free",
-            crate::recording::Fixture::Blocked => "blocked",
-        }
-        .to_string(),
-        wave: c.step.wave.clone(),
-        rest_s: c.step.rest_s,
-        hold_s: c.step.hold_s,
-        off_s: c.step.off_s,
+        step: c.step.clone(),
         later_s: c.later_s,
         purpose: c.purpose.clone(),
         duration_s: c.duration_s(),

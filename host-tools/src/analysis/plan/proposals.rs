@@ -5,7 +5,6 @@ use serde::Serialize;
 
 use crate::analysis::diagnose::identify::Identifiability;
 use crate::protocol::{Protocol, Step};
-use crate::recording::Fixture;
 use crate::session::Session;
 
 /// One effect's smallest detectable strength before and after a candidate.
@@ -21,26 +20,18 @@ pub struct EffectGain {
     pub detectable_before: bool,
     /// Detectable at the plausible strength with the candidate.
     pub detectable_after: bool,
-    /// `log2(before/after)`, an undetectable strength counted as twice the
-    /// search's ceiling.
+    /// `log2(before/after)` of the term's value, an undetectable strength
+    /// counted as twice the search's ceiling's.
     pub bits: f64,
 }
 
 /// One candidate, assessed.
 #[derive(Clone, Debug, Serialize)]
 pub struct Proposal {
-    /// The protocol step's name.
-    pub name: String,
-    /// `free` or `blocked`.
-    pub fixture: String,
-    /// The wave, as `finrs wave` and a protocol take it.
-    pub wave: String,
-    /// Rest, wave and off time, s.
-    pub rest_s: f64,
-    /// The wave's time, s.
-    pub hold_s: f64,
-    /// Time at 0 V after, s.
-    pub off_s: f64,
+    /// The recording as a protocol holds it (its fields at the top level
+    /// of the JSON: `name`, `fixture`, `wave`, `rest_s`, `hold_s`, …).
+    #[serde(flatten)]
+    pub step: Step,
     /// Pause after the session before it, s (0: none).
     pub later_s: f64,
     /// What it is for.
@@ -98,26 +89,12 @@ impl Plan {
         let recordings: Vec<Step> = self
             .chosen
             .iter()
-            .filter_map(|name| self.proposals.iter().find(|p| &p.name == name))
-            .map(|p| {
-                let fixture = if p.fixture == "free" {
-                    Fixture::Free
-                } else {
-                    Fixture::Blocked
-                };
-                Step {
-                    name: p.name.clone(),
-                    fixture,
-                    wave: p.wave.clone(),
-                    rest_s: p.rest_s,
-                    hold_s: p.hold_s,
-                    off_s: p.off_s,
-                    tare: fixture == Fixture::Blocked,
-                    prompt: (p.later_s > 0.0).then(|| {
-                        format!("wait {:.0} s after the session's last recording", p.later_s)
-                    }),
-                    notes: Some(p.purpose.clone()),
-                }
+            .filter_map(|name| self.proposals.iter().find(|p| &p.step.name == name))
+            .map(|p| Step {
+                prompt: (p.later_s > 0.0)
+                    .then(|| format!("wait {:.0} s after the session's last recording", p.later_s)),
+                notes: Some(p.purpose.clone()),
+                ..p.step.clone()
             })
             .collect();
         if recordings.is_empty() {

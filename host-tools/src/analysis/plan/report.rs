@@ -39,13 +39,13 @@ impl fmt::Display for Plan {
         }
         writeln!(f, "each recording added alone, best first:")?;
         for p in &self.proposals {
-            let chosen = if self.chosen.contains(&p.name) {
+            let chosen = if self.chosen.contains(&p.step.name) {
                 "*"
             } else {
                 " "
             };
             if let Some(why) = &p.refused {
-                writeln!(f, "{chosen} {:<32} not assessed: {why}", p.name)?;
+                writeln!(f, "{chosen} {:<32} not assessed: {why}", p.step.name)?;
                 continue;
             }
             let newly = if p.newly_detectable.is_empty() {
@@ -56,14 +56,20 @@ impl fmt::Display for Plan {
             writeln!(
                 f,
                 "{chosen} {:<32} {:>5.1} s {:>6.1} bits{newly}",
-                p.name, p.duration_s, p.bits
+                p.step.name, p.duration_s, p.bits
             )?;
-            writeln!(f, "    {} `{}`: {}", p.fixture, p.wave, p.purpose)?;
+            writeln!(
+                f,
+                "    {} `{}`: {}",
+                p.step.fixture.name(),
+                p.step.wave,
+                p.purpose
+            )?;
         }
         let used: f64 = self
             .proposals
             .iter()
-            .filter(|p| self.chosen.contains(&p.name))
+            .filter(|p| self.chosen.contains(&p.step.name))
             .map(|p| p.duration_s)
             .sum();
         if self.chosen.is_empty() {
