@@ -78,23 +78,7 @@ mod tests {
     use crate::recording::Channel;
 
     fn channel(channel: Channel, recording: &str, level: f64, n: usize) -> ChannelFit {
-        ChannelFit {
-            recording: recording.to_string(),
-            channel,
-            nrmse: 0.0,
-            fit_percent: 100.0,
-            rms_in_noise: level,
-            has_signal: true,
-            // Alternating ±level: RSS per residual level².
-            residuals: (0..n)
-                .map(|i| if i % 2 == 0 { level } else { -level })
-                .collect(),
-            model_is_zero: false,
-            gain: 1.0,
-            input_v: vec![0.0; n],
-            sample_s: 1e-3,
-            segment_inputs_v: Vec::new(),
-        }
+        ChannelFit::alternating(channel, recording, level, n)
     }
 
     #[test]

@@ -4,9 +4,10 @@
 use rayon::prelude::*;
 
 use super::covariance::{self, Block};
-use super::data::SessionTargets;
+use super::data::{Sensor, SessionTargets};
 use super::effect::Effect;
 use super::error::FitError;
+use super::inflation::{profile_cost, Inflation};
 use super::mode_start;
 use super::sampling::Sampling;
 use super::space::Space;
@@ -24,6 +25,11 @@ use crate::session::Session;
 /// first modes within 0.01 % of a finer mesh's, far below what the data
 /// resolve. The static shape does not depend on it.
 pub const FIT_ELEMENTS: usize = 4;
+
+/// Descents of the beam's stage after its first, each with every sensor
+/// weighed by the variance it showed at the end of the one before
+/// (`inflation.rs`), at most; none once no sensor's variance moves by 10 %.
+const INFLATION_ROUNDS: usize = 1;
 
 /// The fit's worker threads: the model's work arrays for the largest
 /// meshes take about 2 MiB of stack, rayon's default.
@@ -131,7 +137,7 @@ impl<'a> Fitter<'a> {
     /// Runs the model on recording `index` and returns its weighted
     /// residuals, target by target.
     fn residuals_of(&self, index: usize, spec: &ModelSpec) -> Result<Vec<Vec<f64>>, FitError> {
-        self.weighted(index, &self.traces(index, spec)?, |_| true)
+        self.weighted(index, &self.traces(index, spec)?, |_| true, &Inflation::ONE)
     }
 
     /// The model's outputs on recording `index` (the camera only where it
@@ -155,33 +161,38 @@ impl<'a> Fitter<'a> {
     }
 
     /// Weighted residuals `(ŷ − y)/σ` of the targets of recording `index`
-    /// that `keep` accepts, target by target.
+    /// that `keep` accepts, target by target, each sensor's `σ` its rests'
+    /// noise times `inflation`'s factor.
     fn weighted(
         &self,
         index: usize,
         traces: &Traces,
         keep: impl Fn(&super::data::Target) -> bool,
+        inflation: &Inflation,
     ) -> Result<Vec<Vec<f64>>, FitError> {
         Ok(self.targets.recordings[index]
             .targets
             .iter()
             .filter(|t| keep(t))
             .map(|t| {
+                let sigma = t.sigma * inflation.sigma_factor(Sensor::of(t.channel));
                 t.model(traces)
                     .zip(&t.values)
-                    .map(|(m, y)| (m - y) / t.sigma)
+                    .map(|(m, y)| (m - y) / sigma)
                     .collect()
             })
             .collect())
     }
 
     /// The weighted residuals that `stage` sees over `recordings`,
-    /// concatenated; the circuit's stage runs the circuit alone.
+    /// concatenated, each sensor's noise inflated by `inflation`; the
+    /// circuit's stage runs the circuit alone.
     fn stage_residuals(
         &self,
         stage: Stage,
         recordings: &[usize],
         spec: &ModelSpec,
+        inflation: &Inflation,
     ) -> Result<Vec<f64>, FitError> {
         let parts: Result<Vec<Vec<Vec<f64>>>, FitError> = recordings
             .par_iter()
@@ -200,7 +211,7 @@ impl<'a> Fitter<'a> {
                     }
                     Stage::Beam => self.traces(i, spec)?,
                 };
-                self.weighted(i, &traces, |t| stage.sees(t.channel))
+                self.weighted(i, &traces, |t| stage.sees(t.channel), inflation)
             })
             .collect();
         Ok(parts?.into_iter().flatten().flatten().collect())
@@ -263,11 +274,13 @@ impl<'a> Fitter<'a> {
             .iter()
             .fold(baseline.spec, |spec, &e| mode_start::start(e, &spec, modes));
         let from_modes = self.fit(recordings, effects, Some(&start), fixed)?;
-        Ok(if from_modes.score.rss < from_data.score.rss {
-            from_modes
-        } else {
-            from_data
-        })
+        Ok(
+            if profile_cost(&from_modes.score) < profile_cost(&from_data.score) {
+                from_modes
+            } else {
+                from_data
+            },
+        )
     }
 
     fn fit_here(
@@ -299,22 +312,44 @@ impl<'a> Fitter<'a> {
                 (stage, stage.knobs(&space), m)
             })
             .collect();
+        let mut inflation = Inflation::ONE;
         for (stage, free, m) in &stages {
             if free.is_empty() || *m == 0 {
                 continue;
             }
-            let run = |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec);
-            let problem = Problem::new(&run, &space, free, theta, *m);
-            let (problem, report, n) = descend(problem);
-            theta = problem.theta;
-            evaluations += n;
-            termination.push(format!("{}: {:?}", stage.name(), report.termination));
+            // The beam's sensors weighed by the variance each shows (the
+            // circuit's one sensor needs no weight of its own): first as
+            // at the start, then as at the end of the descent, once more
+            // if that moved any by 10 %. A start from a fitted model is
+            // near its end, so one descent mostly does.
+            let beam = *stage == Stage::Beam;
+            if beam {
+                inflation = self.inflation(*stage, recordings, &space.spec(&theta))?;
+            }
+            for round in 0..=INFLATION_ROUNDS {
+                let run =
+                    |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec, &inflation);
+                let problem = Problem::new(&run, &space, free, theta.clone(), *m);
+                let (problem, report, n) = descend(problem);
+                theta = problem.theta;
+                evaluations += n;
+                termination.push(format!("{}: {:?}", stage.name(), report.termination));
+                if !beam || round == INFLATION_ROUNDS {
+                    break;
+                }
+                let next = self.inflation(*stage, recordings, &space.spec(&theta))?;
+                if !next.moved(&inflation, 0.1) {
+                    break;
+                }
+                inflation = next;
+            }
         }
         // One simulation at the final point serves the score, the
         // information criteria and the beam stage's Jacobian base.
         let spec = space.spec(&theta);
         let score = self.score_here(recordings, &spec)?;
-        let (active, cov) = self.covariance(recordings, &space, &theta, &score, &stages)?;
+        let (active, cov) =
+            self.covariance(recordings, &space, &theta, &score, &stages, &inflation)?;
         let estimates = stats::estimates(&space, &theta, &cov, &active);
         let (rss, m) = (score.rss, score.m);
         let k = space.counted_parameters();
@@ -332,6 +367,23 @@ impl<'a> Fitter<'a> {
         })
     }
 
+    /// Each sensor's variance over its rests' that `stage` sees over
+    /// `recordings` under `spec`.
+    fn inflation(
+        &self,
+        stage: Stage,
+        recordings: &[usize],
+        spec: &ModelSpec,
+    ) -> Result<Inflation, FitError> {
+        let seen = self.score_here(recordings, spec)?;
+        Ok(Inflation::of(&Score::new(
+            seen.channels
+                .into_iter()
+                .filter(|c| stage.sees(c.channel))
+                .collect(),
+        )))
+    }
+
     /// The covariance of `θ` at the end of a fit whose stages were
     /// `stages` and whose score is `score` (see [`covariance::two_stage`]):
     /// the circuit's Jacobian over the currents, the beam's over its own
@@ -343,6 +395,7 @@ impl<'a> Fitter<'a> {
         theta: &[f64],
         score: &Score,
         stages: &[(Stage, Vec<usize>, usize)],
+        inflation: &Inflation,
     ) -> Result<(Vec<usize>, nalgebra::DMatrix<f64>), FitError> {
         let mut circuit = None;
         let mut beam = None;
@@ -350,14 +403,18 @@ impl<'a> Fitter<'a> {
             if *m == 0 {
                 continue;
             }
+            // The residuals as the stage weighed them at its end.
             let base: Vec<f64> = score
                 .channels
                 .iter()
                 .filter(|c| stage.sees(c.channel))
-                .flat_map(|c| c.residuals.iter().copied())
+                .flat_map(|c| {
+                    let f = inflation.sigma_factor(Sensor::of(c.channel));
+                    c.residuals.iter().map(move |r| r / f)
+                })
                 .collect();
             let clusters = self.clusters(*stage, recordings);
-            let run = |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec);
+            let run = |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec, inflation);
             match stage {
                 Stage::Circuit => {
                     let p = Problem::new(&run, space, free, theta.to_vec(), *m);

@@ -8,13 +8,17 @@
 //! Every channel is weighted by the noise of its sensor, measured on the
 //! opening rest of each recording (FORMAT.md guarantees at least 1 s), so
 //! the weighted residuals are in units of noise and their sum of squares is
-//! `m` when the model explains the data to the noise floor.
+//! `m` when the model explains the data to the noise floor. A sensor the
+//! model leaves far above its noise is then weighed by the variance it
+//! shows (`inflation.rs`), so that one sensor's misfit does not steer the
+//! knobs another one determines.
 
 mod covariance;
 mod data;
 mod effect;
 mod error;
 mod fitter;
+mod inflation;
 pub mod modal;
 pub mod mode_start;
 pub mod normal;
@@ -29,5 +33,6 @@ pub use data::{Sensor, SessionTargets, Target};
 pub use effect::Effect;
 pub use error::FitError;
 pub use fitter::{FitResult, Fitter, FIT_ELEMENTS};
+pub use inflation::{profile_cost, Inflation};
 pub use space::{Knob, Space};
 pub use stats::{nrmse, ChannelFit, Estimate, Score};

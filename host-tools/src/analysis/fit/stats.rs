@@ -72,6 +72,29 @@ pub struct ChannelFit {
 }
 
 impl ChannelFit {
+    /// A test channel of recording `recording` whose `n` residuals
+    /// alternate `±level` (RSS per residual `level²`), all power at the
+    /// top of the band, no input.
+    #[cfg(test)]
+    pub(crate) fn alternating(channel: Channel, recording: &str, level: f64, n: usize) -> Self {
+        ChannelFit {
+            recording: recording.to_string(),
+            channel,
+            nrmse: 0.0,
+            fit_percent: 100.0,
+            rms_in_noise: level,
+            has_signal: true,
+            residuals: (0..n)
+                .map(|i| if i % 2 == 0 { level } else { -level })
+                .collect(),
+            model_is_zero: false,
+            gain: 1.0,
+            input_v: vec![0.0; n],
+            sample_s: 1e-3,
+            segment_inputs_v: Vec::new(),
+        }
+    }
+
     /// From a target, its weighted residuals `r = (ŷ − y)/σ`, the
     /// recording's voltages per row and segment and its sample time.
     pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &Voltages, dt_s: f64) -> ChannelFit {
