@@ -22,6 +22,7 @@
 #![deny(missing_docs, unsafe_code)]
 
 mod beam;
+mod beam_modes;
 mod circuit;
 mod extensions;
 pub mod matrix;
@@ -32,8 +33,10 @@ mod shape;
 mod strip;
 pub mod zoh;
 
+pub use beam_modes::BeamModes;
 pub use circuit::Circuit;
 pub use extensions::{Extensions, SegmentVariation, MAX_SEGMENTS};
 pub use params::{Laminate, ParamError, Params};
 pub use real::Real;
+pub use shape::Shape;
 pub use strip::{state_len, Fixture, Strip};

@@ -31,7 +31,8 @@
 // Index loops mirror the block structure of the state (η, ζ, e).
 #![allow(clippy::needless_range_loop)]
 
-use crate::beam::{assemble, modes};
+use crate::beam::assemble;
+use crate::beam_modes::BeamModes;
 use crate::circuit::Circuit;
 use crate::extensions::Extensions;
 use crate::matrix::{dof_zeros, rows, rows_mut, DofMat, Mat, Square};
@@ -107,7 +108,7 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
 /// What the modal analysis of the beam gives, in `f64`: only what the
 /// discretisation and the outputs need, so that the beam's matrices do not
 /// stay on the stack while the model is built.
-struct Analysis<const N: usize, const E: usize, const S: usize> {
+struct Analysis<'m, const N: usize, const E: usize, const S: usize> {
     /// Element length `ℓ`, m.
     element_m: f64,
     /// The tip deflection's rows of `M` and `K` (the load cell's force).
@@ -117,8 +118,8 @@ struct Analysis<const N: usize, const E: usize, const S: usize> {
     /// of segment `i`.
     f_tip: [f64; N],
     /// Mass-normalised modes as columns (rows: freedoms).
-    psi: Square<N, E>,
-    omega2: [f64; S],
+    psi: &'m Square<N, E>,
+    omega2: &'m [f64; S],
     omega: [f64; S],
     /// `g[k][i]`: modal force of mode `k` per unit moment of segment `i`,
     /// crosstalk included.
@@ -196,6 +197,33 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         fixture: Fixture,
         dt_s: f64,
     ) -> Result<Self, ParamError> {
+        Self::check(params, ext, dt_s)?;
+        let modes = BeamModes::new(params, ext, fixture)?;
+        Ok(Self::built(&modes, params, ext, dt_s))
+    }
+
+    /// Builds the model of `params` and `ext` on a beam's kept `modes`
+    /// (see [`BeamModes`]): the strip [`Strip::with_extensions`] builds in
+    /// the modes' fixture, bit for bit, without solving the beam again.
+    /// Modes of another beam (not [`BeamModes::is_for`] these values) are
+    /// solved anew, so the strip is always the one `params` describe.
+    pub fn with_modes(
+        modes: &BeamModes<N, E, S>,
+        params: &Params,
+        ext: &Extensions,
+        dt_s: f64,
+    ) -> Result<Self, ParamError> {
+        Self::check(params, ext, dt_s)?;
+        if modes.is_for(params, ext) {
+            Ok(Self::built(modes, params, ext, dt_s))
+        } else {
+            let fresh = BeamModes::new(params, ext, modes.fixture())?;
+            Ok(Self::built(&fresh, params, ext, dt_s))
+        }
+    }
+
+    /// The sizes (at compile time) and the values a strip is built from.
+    fn check(params: &Params, ext: &Extensions, dt_s: f64) -> Result<(), ParamError> {
         const {
             assert!(N >= 1 && N <= 8, "segments N must be 1..=8");
             assert!(E >= 1 && E <= 8, "elements per segment E must be 1..=8");
@@ -204,8 +232,14 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
         ext.segment_variation.validate_for(N)?;
-        check_sample_time(dt_s)?;
-        let an = Self::analyse(params, ext, fixture)?;
+        check_sample_time(dt_s)
+    }
+
+    /// The strip on `modes`, from checked values.
+    #[inline(always)]
+    fn built(modes: &BeamModes<N, E, S>, params: &Params, ext: &Extensions, dt_s: f64) -> Self {
+        let fixture = modes.fixture();
+        let an = Self::analyse(params, ext, modes);
         let segments = Segment::all::<N>(params, ext);
         // The pieces are inlined: the board re-discretises with the same
         // stack as when they were one function.
@@ -218,7 +252,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             [T::ZERO; S]
         };
 
-        Ok(Strip {
+        Strip {
             params: *params,
             ext: *ext,
             fixture,
@@ -234,7 +268,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             lag: segments.map(|seg| T::from_f64(seg.moment(params).1)),
             crosstalk: T::from_f64(ext.crosstalk),
             moment_gain: T::from_f64(1.0),
-        })
+        }
     }
 
     /// Each mode's rotation over one step, and its columns of `Φ` and `Γ`
@@ -242,7 +276,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     #[inline(always)]
     #[allow(clippy::type_complexity)]
     fn modal_steps(
-        an: &Analysis<N, E, S>,
+        an: &Analysis<'_, N, E, S>,
         params: &Params,
         segments: &[Segment; N],
         dt_s: f64,
@@ -304,7 +338,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// The freedoms from the modal coordinates: `q = Ψ η`; odd rows are
     /// `ℓθ`, so divide by `ℓ`.
     #[inline(always)]
-    fn modal_to_dof(an: &Analysis<N, E, S>) -> DofMat<T, N, E, S> {
+    fn modal_to_dof(an: &Analysis<'_, N, E, S>) -> DofMat<T, N, E, S> {
         let mut dof_from_modal = dof_zeros(T::ZERO);
         let (rows_out, psi) = (rows_mut(&mut dof_from_modal), &an.psi);
         for d in 0..Self::DOF {
@@ -324,7 +358,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// rig's reference, `tests/rig/tests/against_model.rs`).
     #[inline(always)]
     fn blocking_force_row(
-        an: &Analysis<N, E, S>,
+        an: &Analysis<'_, N, E, S>,
         params: &Params,
         segments: &[Segment; N],
     ) -> [T; S] {
@@ -353,34 +387,25 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         force_row
     }
 
-    /// Assembles the beam for the fixture and finds its modes.
+    /// The beam's analysis on its `modes`: frequencies, modal forces per
+    /// segment (with crosstalk), damping and the load cell's rows.
     ///
-    /// Not inlined (nor is `modes`): each frame's arrays are then freed on
-    /// return instead of piling up in the caller's frame, which keeps
+    /// Not inlined: the assembled matrices are then freed on return
+    /// instead of piling up in the caller's frame, which keeps
     /// [`Strip::new`] within a Cortex-M4's RAM for N = 8.
     #[inline(never)]
-    fn analyse(
+    fn analyse<'m>(
         params: &Params,
         ext: &Extensions,
-        fixture: Fixture,
-    ) -> Result<Analysis<N, E, S>, ParamError> {
-        // The fluid's added mass moves with the strip.
+        modes: &'m BeamModes<N, E, S>,
+    ) -> Analysis<'m, N, E, S> {
+        // Assembled again for `F` and the tip's rows: cheap beside the modes.
         let loaded = Params {
             mass_per_length_kg_per_m: params.mass_per_length_kg_per_m + ext.added_mass_kg_per_m,
             ..*params
         };
         let beam = assemble::<N, E, S>(&loaded);
-        let mut active = [0usize; S];
-        let mut n_active = 0;
-        for d in 0..Self::DOF {
-            if !(fixture == Fixture::Blocked && d == Self::TIP) {
-                active[n_active] = d;
-                n_active += 1;
-            }
-        }
-        let mut psi = Square::zeros();
-        let mut omega2 = [0.0; S];
-        modes(&beam.m, &beam.k, &active[..n_active], &mut psi, &mut omega2)?;
+        let (psi, omega2, n_active) = (&modes.psi, &modes.omega2, modes.count);
         let mut omega = [0.0; S];
         for k in 0..n_active {
             omega[k] = libm::sqrt(omega2[k]);
@@ -410,7 +435,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         let (mut m_tip, mut k_tip) = ([0.0; S], [0.0; S]);
         m_tip[..Self::DOF].copy_from_slice(beam.m.row(Self::TIP));
         k_tip[..Self::DOF].copy_from_slice(beam.k.row(Self::TIP));
-        Ok(Analysis {
+        Analysis {
             element_m: beam.element_m,
             m_tip,
             k_tip,
@@ -421,7 +446,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             g,
             two_zeta_omega,
             modes: n_active,
-        })
+        }
     }
 
     /// The continuous system `ẋ = A x + B v` in the state of this model,
@@ -438,7 +463,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
         ext.segment_variation.validate_for(N)?;
-        let an = Self::analyse(params, ext, fixture)?;
+        let modes = BeamModes::new(params, ext, fixture)?;
+        let an = Self::analyse(params, ext, &modes);
         let segments = Segment::all::<N>(params, ext);
         let mut a = [[0.0; S]; S];
         let mut b = [[0.0; N]; S];

@@ -6,6 +6,7 @@ use model_core::{
     state_len, Circuit, Extensions, Fixture as CoreFixture, ParamError, Params, Strip,
 };
 
+use super::kept_modes;
 use crate::recording::{Fixture, Recording};
 
 /// Elements per segment the engine supports (the seed uses 1).
@@ -197,12 +198,9 @@ impl Run<'_> {
         progress: &mut dyn FnMut(u64),
     ) -> Result<Traces, ParamError> {
         let spec = self.spec;
-        let mut strip = Strip::<f64, N, E, S>::with_extensions(
-            &spec.params,
-            &spec.ext,
-            self.fixture,
-            self.dt_s,
-        )?;
+        let modes = kept_modes::modes_for::<N, E, S>(&spec.params, &spec.ext, self.fixture)?;
+        let mut strip =
+            Strip::<f64, N, E, S>::with_modes(&modes, &spec.params, &spec.ext, self.dt_s)?;
         let rows = self.rec.t_s.len();
         let dots: &[f64] = self.rec.meta.dots_s_m.as_deref().unwrap_or(&[]);
         let free = self.fixture == CoreFixture::Free;
@@ -248,16 +246,18 @@ impl Run<'_> {
             }
             if free {
                 if self.camera_rows.is_none_or(|c| c[row]) {
+                    // Every node read once for the tip and all the dots.
+                    let shape = strip.shape(&x);
                     let (along, across) = if tip_is_node {
                         (0.0, strip.tip_deflection_m(&x))
                     } else {
-                        strip.position_at_m(&x, length_m).unwrap_or((0.0, 0.0))
+                        shape.position_at_m(length_m).unwrap_or((0.0, 0.0))
                     };
                     t.tip_x_m[row] = along;
                     t.tip_y_m[row] = across;
                     for (j, &s) in dots.iter().enumerate() {
                         let (along, across) =
-                            strip.position_at_m(&x, s).unwrap_or((f64::NAN, f64::NAN));
+                            shape.position_at_m(s).unwrap_or((f64::NAN, f64::NAN));
                         t.dots_x_m[j][row] = along;
                         t.dots_y_m[j][row] = across;
                     }
