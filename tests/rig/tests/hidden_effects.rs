@@ -172,6 +172,16 @@ fn a_pair_is_named_both() {
         let mut want: Vec<String> = pair.iter().map(|s| s.to_string()).collect();
         want.sort();
         assert_eq!(got, want, "{v:#?}");
+        // Each cause was checked after the search, beside the other, and
+        // stayed: the last check naming it passed.
+        for cause in &v.causes {
+            let last = v
+                .candidates
+                .iter()
+                .rev()
+                .find(|c| c.backward && c.name.split('+').any(|n| n == cause));
+            assert!(last.is_some_and(|c| c.passed), "{cause}: {v:#?}");
+        }
     }
 }
 

@@ -263,7 +263,9 @@ fn candidates(s: &mut String, v: &Verdict) {
     let _ = writeln!(
         s,
         "An effect is accepted when ΔBIC < {} on the training recordings and the \
-         held-out weighted RSS falls by more than {:.0} %.\n",
+         held-out weighted RSS falls by more than {:.0} %. After the search, each \
+         accepted effect is checked (`check`) as if it joined the model of the \
+         others last; one that would not pass leaves.\n",
         super::DELTA_BIC,
         100.0 * super::HOLDOUT_RSS_GAIN
     );
@@ -278,12 +280,21 @@ fn candidates(s: &mut String, v: &Verdict) {
         let _ = writeln!(
             s,
             "| {} | {} | {:.1} | {:.2} | {:.2} | {} | {} |",
-            c.round + 1,
+            if c.backward {
+                "check".to_string()
+            } else {
+                (c.round + 1).to_string()
+            },
             c.name,
             c.delta_bic,
             c.holdout_gain_percent,
             c.holdout_rss_gain_percent,
-            if c.passed { "yes" } else { "no" },
+            match (c.backward, c.passed) {
+                (false, true) => "yes",
+                (false, false) => "no",
+                (true, true) => "stays",
+                (true, false) => "leaves",
+            },
             terms.join(", ")
         );
     }

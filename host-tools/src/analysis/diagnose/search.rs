@@ -196,6 +196,16 @@ pub fn diagnose(
     })
 }
 
+/// Which of a move's effects must show their own term (see
+/// `signature_is_significant`).
+#[derive(Clone, Copy)]
+enum Signatures {
+    /// Each: a move joining the model.
+    Every,
+    /// One: a cause checked after the search.
+    Any,
+}
+
 /// What the forward search needs: the session split in two, and the
 /// baseline's fixed values.
 struct Search<'a> {
@@ -212,8 +222,10 @@ struct Found {
     fit: FitResult,
     /// Its score on the held-out part.
     hold: Score,
-    /// Effects accepted, strongest first.
+    /// Effects accepted, in the order they joined.
     accepted: Vec<Effect>,
+    /// The moves that joined (an effect, or [`MODE_PAIR`]), in order.
+    joined: Vec<Vec<Effect>>,
     /// Every candidate tried.
     candidates: Vec<Candidate>,
 }
@@ -232,6 +244,7 @@ impl Search<'_> {
             fit: baseline.clone(),
             hold: base_hold.clone(),
             accepted: Vec::new(),
+            joined: Vec::new(),
             candidates: Vec::new(),
         };
         let mut round = 0;
@@ -259,7 +272,13 @@ impl Search<'_> {
             let mut passed: Vec<Passed<Vec<Effect>>> = Vec::new();
             // The pair comes after the single effects.
             for (m, fit, score) in self.fit_round(&moves, &found.fit)? {
-                let mut candidate = self.judge(&m, round, &fit, &score, &found);
+                let mut candidate = self.judge(
+                    &m,
+                    round,
+                    (&fit, &score),
+                    (&found.fit, &found.hold),
+                    Signatures::Every,
+                );
                 // The pair must pay, on held-out data, for its second
                 // effect over a member that passed alone, as that effect
                 // would joining a round later.
@@ -277,7 +296,8 @@ impl Search<'_> {
             else {
                 break;
             };
-            found.accepted.extend(m);
+            found.accepted.extend(&m);
+            found.joined.push(m);
             found.fit = fit;
             found.hold = score;
             // The model that joined, fitted again from the data's own
@@ -293,7 +313,78 @@ impl Search<'_> {
             }
             round += 1;
         }
+        self.prune(&mut found, round, progress)?;
         Ok(found)
+    }
+
+    /// After the search, each move that joined must still pay its way
+    /// beside those that joined after it. One that joined early can have
+    /// stood in for a later one: on the off-class rig, `segment-crosstalk`
+    /// took part of a damped, soft strip's misfit in the first round,
+    /// before the pair that fits it joined, and stayed (seeds 10003 and
+    /// 10035). Each is judged as a candidate joining the model of all the
+    /// others last, the others refitted without it from the final values,
+    /// by the search's tests, save that one term of the pair need be
+    /// significant: beside a later term that shares its work, a member's
+    /// interval can take in "off" while the pair still carries the fit
+    /// (in water, the damping's ratio beside the fluid's drag, with 99 % of
+    /// the held-out RSS on the pair; rig seed 10002). Of those that fail, the one of
+    /// least held-out gain leaves, and the rest are judged again. A move
+    /// the session's evidence calls for (the fluid it names) stays, as it
+    /// joined ([`choose`]).
+    fn prune(
+        &self,
+        found: &mut Found,
+        round: usize,
+        progress: &(dyn Fn(&str) + Sync),
+    ) -> Result<(), FitError> {
+        while found.joined.len() >= 2 {
+            progress(&format!("checking {} causes", found.joined.len()));
+            let without = |k: usize| -> Vec<Effect> {
+                let others = found.joined.iter().enumerate().filter(|&(j, _)| j != k);
+                others.flat_map(|(_, m)| m.iter().copied()).collect()
+            };
+            let trials: Vec<Result<(usize, FitResult, Score), FitError>> = (0..found.joined.len())
+                .into_par_iter()
+                .map(|k| {
+                    let fit = self.fitter.fit(
+                        self.train,
+                        &without(k),
+                        Some(&found.fit.spec),
+                        self.fixed,
+                    )?;
+                    let hold = self.fitter.score(self.hold, &fit.spec)?;
+                    Ok((k, fit, hold))
+                })
+                .collect();
+            let mut weakest: Option<(usize, f64, FitResult, Score)> = None;
+            for trial in trials {
+                let (k, fit, hold) = trial?;
+                let m = &found.joined[k];
+                let mut check = self.judge(
+                    m,
+                    round,
+                    (&found.fit, &found.hold),
+                    (&fit, &hold),
+                    Signatures::Any,
+                );
+                check.backward = true;
+                check.passed |= m.iter().any(|&e| self.expected(e));
+                let gain = check.holdout_rss_gain_percent;
+                if !check.passed && weakest.as_ref().is_none_or(|w| gain < w.1) {
+                    weakest = Some((k, gain, fit, hold));
+                }
+                found.candidates.push(check);
+            }
+            let Some((k, _, fit, hold)) = weakest else {
+                break;
+            };
+            found.joined.remove(k);
+            found.accepted = found.joined.concat();
+            found.fit = fit;
+            found.hold = hold;
+        }
+        Ok(())
     }
 
     /// Whether the session's own evidence calls for `e` (see
@@ -337,29 +428,38 @@ impl Search<'_> {
         results.into_iter().collect()
     }
 
-    /// The candidate move `m` of round `round` against the model so far: it
-    /// passes when BIC, the held-out error and each effect's own term all
-    /// say so.
+    /// The candidate move `m` of round `round`, the model with it (`with`:
+    /// its training fit and held-out score) against the model without it:
+    /// it passes when BIC and the held-out error say so and the effects'
+    /// own terms are significant, each of them or (`Signatures::Any`) one.
     fn judge(
         &self,
         m: &[Effect],
         round: usize,
-        fit: &FitResult,
-        score: &Score,
-        so_far: &Found,
+        with: (&FitResult, &Score),
+        without: (&FitResult, &Score),
+        signatures: Signatures,
     ) -> Candidate {
-        let delta_bic = fit.bic - so_far.fit.bic;
-        let rss_gain = 1.0 - score.rss / so_far.hold.rss;
+        let ((fit, score), (base_fit, base_hold)) = (with, without);
+        let delta_bic = fit.bic - base_fit.bic;
+        let rss_gain = 1.0 - score.rss / base_hold.rss;
         Candidate {
             name: m.iter().map(|e| e.name()).collect::<Vec<_>>().join("+"),
             round,
             delta_bic,
-            holdout_gain_percent: gain_percent(so_far.hold.nrmse, score.nrmse),
+            holdout_gain_percent: gain_percent(base_hold.nrmse, score.nrmse),
             holdout_rss_gain_percent: 100.0 * rss_gain,
             passed: delta_bic < DELTA_BIC
                 && rss_gain > HOLDOUT_RSS_GAIN
-                && m.iter()
-                    .all(|&e| signature_is_significant(e, fit, &self.fixed)),
+                && match signatures {
+                    Signatures::Every => m
+                        .iter()
+                        .all(|&e| signature_is_significant(e, fit, &self.fixed)),
+                    Signatures::Any => m
+                        .iter()
+                        .any(|&e| signature_is_significant(e, fit, &self.fixed)),
+                },
+            backward: false,
             params: fit
                 .estimates
                 .iter()

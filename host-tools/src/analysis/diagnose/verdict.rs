@@ -39,6 +39,10 @@ pub struct Candidate {
     pub holdout_rss_gain_percent: f64,
     /// Whether it passed both tests.
     pub passed: bool,
+    /// A check after the search, not a step of it: the effect, already in
+    /// the model, tested as if it joined the model of all the others last
+    /// (they refitted without it). `passed` then says it stays.
+    pub backward: bool,
     /// Its fitted extra parameters.
     pub params: std::collections::BTreeMap<String, f64>,
 }
@@ -142,13 +146,22 @@ impl std::fmt::Display for Verdict {
         for c in &self.candidates {
             writeln!(
                 f,
-                "  round {} {:<30} dBIC {:>12.1}  held-out RSS gain {:>8.2} %  (NRMSE {:>8.2} %)  {}",
-                c.round + 1,
+                "  {} {:<30} dBIC {:>12.1}  held-out RSS gain {:>8.2} %  (NRMSE {:>8.2} %)  {}",
+                if c.backward {
+                    "  check".to_string()
+                } else {
+                    format!("round {}", c.round + 1)
+                },
                 c.name,
                 c.delta_bic,
                 c.holdout_rss_gain_percent,
                 c.holdout_gain_percent,
-                if c.passed { "passed" } else { "-" }
+                match (c.backward, c.passed) {
+                    (false, true) => "passed",
+                    (false, false) => "-",
+                    (true, true) => "stays",
+                    (true, false) => "leaves",
+                }
             )?;
         }
         for s in self.sensors.iter().filter(|s| !s.at_floor) {
