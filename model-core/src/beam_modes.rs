@@ -59,11 +59,19 @@ impl Beam {
     fn of(params: &Params, ext: &Extensions, fixture: Fixture) -> Beam {
         Beam {
             length_m: params.length_m,
-            // The fluid's added mass moves with the strip.
-            loaded_kg_per_m: params.mass_per_length_kg_per_m + ext.added_mass_kg_per_m,
+            loaded_kg_per_m: loaded(params, ext).mass_per_length_kg_per_m,
             ei_nm2: params.ei_nm2,
             fixture,
         }
+    }
+}
+
+/// `params` as the beam is assembled from them: the fluid's added mass
+/// (`ext`) moves with the strip.
+pub(crate) fn loaded(params: &Params, ext: &Extensions) -> Params {
+    Params {
+        mass_per_length_kg_per_m: params.mass_per_length_kg_per_m + ext.added_mass_kg_per_m,
+        ..*params
     }
 }
 
@@ -76,12 +84,7 @@ impl<const N: usize, const E: usize, const S: usize> BeamModes<N, E, S> {
     /// [`Strip::new`](crate::Strip::new) within a Cortex-M4's RAM for N = 8.
     #[inline(never)]
     pub fn new(params: &Params, ext: &Extensions, fixture: Fixture) -> Result<Self, ParamError> {
-        let beam = Beam::of(params, ext, fixture);
-        let loaded = Params {
-            mass_per_length_kg_per_m: beam.loaded_kg_per_m,
-            ..*params
-        };
-        let assembly = assemble::<N, E, S>(&loaded);
+        let assembly = assemble::<N, E, S>(&loaded(params, ext));
         // Every freedom but the tip's deflection where the load cell holds it.
         let dof = 2 * N * E;
         let mut active = [0usize; S];
@@ -102,7 +105,7 @@ impl<const N: usize, const E: usize, const S: usize> BeamModes<N, E, S> {
             &mut omega2,
         )?;
         Ok(BeamModes {
-            beam,
+            beam: Beam::of(params, ext, fixture),
             psi,
             omega2,
             count,

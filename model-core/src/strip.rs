@@ -32,7 +32,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::beam::assemble;
-use crate::beam_modes::BeamModes;
+use crate::beam_modes::{loaded, BeamModes};
 use crate::circuit::Circuit;
 use crate::extensions::Extensions;
 use crate::matrix::{dof_zeros, rows, rows_mut, DofMat, Mat, Square};
@@ -197,7 +197,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         fixture: Fixture,
         dt_s: f64,
     ) -> Result<Self, ParamError> {
-        Self::check(params, ext, dt_s)?;
+        Self::check(params, ext)?;
+        check_sample_time(dt_s)?;
         let modes = BeamModes::new(params, ext, fixture)?;
         Ok(Self::built(&modes, params, ext, dt_s))
     }
@@ -213,7 +214,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         ext: &Extensions,
         dt_s: f64,
     ) -> Result<Self, ParamError> {
-        Self::check(params, ext, dt_s)?;
+        Self::check(params, ext)?;
+        check_sample_time(dt_s)?;
         if modes.is_for(params, ext) {
             Ok(Self::built(modes, params, ext, dt_s))
         } else {
@@ -222,8 +224,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
     }
 
-    /// The sizes (at compile time) and the values a strip is built from.
-    fn check(params: &Params, ext: &Extensions, dt_s: f64) -> Result<(), ParamError> {
+    /// The sizes (at compile time) and the values a model is built from.
+    fn check(params: &Params, ext: &Extensions) -> Result<(), ParamError> {
         const {
             assert!(N >= 1 && N <= 8, "segments N must be 1..=8");
             assert!(E >= 1 && E <= 8, "elements per segment E must be 1..=8");
@@ -231,8 +233,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
         params.validate_relaxation(ext.back_relaxation)?;
         ext.validate()?;
-        ext.segment_variation.validate_for(N)?;
-        check_sample_time(dt_s)
+        ext.segment_variation.validate_for(N)
     }
 
     /// The strip on `modes`, from checked values.
@@ -400,11 +401,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         modes: &'m BeamModes<N, E, S>,
     ) -> Analysis<'m, N, E, S> {
         // Assembled again for `F` and the tip's rows: cheap beside the modes.
-        let loaded = Params {
-            mass_per_length_kg_per_m: params.mass_per_length_kg_per_m + ext.added_mass_kg_per_m,
-            ..*params
-        };
-        let beam = assemble::<N, E, S>(&loaded);
+        let beam = assemble::<N, E, S>(&loaded(params, ext));
         let (psi, omega2, n_active) = (&modes.psi, &modes.omega2, modes.count);
         let mut omega = [0.0; S];
         for k in 0..n_active {
@@ -460,9 +457,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         ext: &Extensions,
         fixture: Fixture,
     ) -> Result<(Mat<S, S>, Mat<S, N>), ParamError> {
-        params.validate_relaxation(ext.back_relaxation)?;
-        ext.validate()?;
-        ext.segment_variation.validate_for(N)?;
+        Self::check(params, ext)?;
         let modes = BeamModes::new(params, ext, fixture)?;
         let an = Self::analyse(params, ext, &modes);
         let segments = Segment::all::<N>(params, ext);

@@ -246,18 +246,22 @@ impl Run<'_> {
             }
             if free {
                 if self.camera_rows.is_none_or(|c| c[row]) {
-                    // Every node read once for the tip and all the dots.
-                    let shape = strip.shape(&x);
-                    let (along, across) = if tip_is_node {
-                        (0.0, strip.tip_deflection_m(&x))
-                    } else {
-                        shape.position_at_m(length_m).unwrap_or((0.0, 0.0))
+                    // Every node read once for the tip and all the dots;
+                    // not at all for a lone tip node.
+                    let shape = (!tip_is_node || !dots.is_empty()).then(|| strip.shape(&x));
+                    let (along, across) = match &shape {
+                        Some(shape) if !tip_is_node => {
+                            shape.position_at_m(length_m).unwrap_or((0.0, 0.0))
+                        }
+                        _ => (0.0, strip.tip_deflection_m(&x)),
                     };
                     t.tip_x_m[row] = along;
                     t.tip_y_m[row] = across;
                     for (j, &s) in dots.iter().enumerate() {
-                        let (along, across) =
-                            shape.position_at_m(s).unwrap_or((f64::NAN, f64::NAN));
+                        let (along, across) = shape
+                            .as_ref()
+                            .and_then(|shape| shape.position_at_m(s))
+                            .unwrap_or((f64::NAN, f64::NAN));
                         t.dots_x_m[j][row] = along;
                         t.dots_y_m[j][row] = across;
                     }

@@ -124,7 +124,7 @@ pub fn diagnose(
     let sensors = sensor_floors(&found.hold);
     let at_floor = sensors.iter().all(|f| f.at_floor);
     let causes: Vec<String> = found
-        .accepted
+        .accepted()
         .iter()
         .map(|e| e.name().to_string())
         .collect();
@@ -196,6 +196,13 @@ pub fn diagnose(
     })
 }
 
+impl Found {
+    /// Effects accepted, in the order they joined.
+    fn accepted(&self) -> Vec<Effect> {
+        self.joined.concat()
+    }
+}
+
 /// Which of a move's effects must show their own term (see
 /// `signature_is_significant`).
 #[derive(Clone, Copy)]
@@ -222,8 +229,6 @@ struct Found {
     fit: FitResult,
     /// Its score on the held-out part.
     hold: Score,
-    /// Effects accepted, in the order they joined.
-    accepted: Vec<Effect>,
     /// The moves that joined (an effect, or [`MODE_PAIR`]), in order.
     joined: Vec<Vec<Effect>>,
     /// Every candidate tried.
@@ -243,12 +248,11 @@ impl Search<'_> {
         let mut found = Found {
             fit: baseline.clone(),
             hold: base_hold.clone(),
-            accepted: Vec::new(),
             joined: Vec::new(),
             candidates: Vec::new(),
         };
         let mut round = 0;
-        while found.accepted.len() < MAX_CAUSES {
+        while found.accepted().len() < MAX_CAUSES {
             let untried: Vec<Effect> = Effect::ALL
                 .into_iter()
                 .filter(|e| !found.fit.effects.contains(e))
@@ -261,7 +265,7 @@ impl Search<'_> {
             // trap of adding one term at a time), so the two are also
             // tried together.
             if MODE_PAIR.iter().all(|e| untried.contains(e))
-                && found.accepted.len() + MODE_PAIR.len() <= MAX_CAUSES
+                && found.accepted().len() + MODE_PAIR.len() <= MAX_CAUSES
             {
                 moves.push(MODE_PAIR.to_vec());
             }
@@ -296,7 +300,6 @@ impl Search<'_> {
             else {
                 break;
             };
-            found.accepted.extend(&m);
             found.joined.push(m);
             found.fit = fit;
             found.hold = score;
@@ -380,7 +383,6 @@ impl Search<'_> {
                 break;
             };
             found.joined.remove(k);
-            found.accepted = found.joined.concat();
             found.fit = fit;
             found.hold = hold;
         }
@@ -443,6 +445,7 @@ impl Search<'_> {
         let ((fit, score), (base_fit, base_hold)) = (with, without);
         let delta_bic = fit.bic - base_fit.bic;
         let rss_gain = 1.0 - score.rss / base_hold.rss;
+        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed);
         Candidate {
             name: m.iter().map(|e| e.name()).collect::<Vec<_>>().join("+"),
             round,
@@ -452,12 +455,8 @@ impl Search<'_> {
             passed: delta_bic < DELTA_BIC
                 && rss_gain > HOLDOUT_RSS_GAIN
                 && match signatures {
-                    Signatures::Every => m
-                        .iter()
-                        .all(|&e| signature_is_significant(e, fit, &self.fixed)),
-                    Signatures::Any => m
-                        .iter()
-                        .any(|&e| signature_is_significant(e, fit, &self.fixed)),
+                    Signatures::Every => m.iter().all(own_term),
+                    Signatures::Any => m.iter().any(own_term),
                 },
             backward: false,
             params: fit

@@ -376,12 +376,9 @@ impl<'a> Fitter<'a> {
         spec: &ModelSpec,
     ) -> Result<Inflation, FitError> {
         let seen = self.score_here(recordings, spec)?;
-        Ok(Inflation::of(&Score::new(
-            seen.channels
-                .into_iter()
-                .filter(|c| stage.sees(c.channel))
-                .collect(),
-        )))
+        Ok(Inflation::of(
+            seen.channels.iter().filter(|c| stage.sees(c.channel)),
+        ))
     }
 
     /// The covariance of `θ` at the end of a fit whose stages were

@@ -26,7 +26,7 @@
 //! variance a sensor still counts for a tenth of what its rests say.
 
 use super::data::Sensor;
-use super::stats::Score;
+use super::stats::{ChannelFit, Score};
 
 /// The most a sensor's variance is taken above its rests': every sensor
 /// keeps at least a tenth of its weight, however far off the model.
@@ -41,11 +41,11 @@ impl Inflation {
     /// The rests' noise for every sensor.
     pub const ONE: Inflation = Inflation([1.0; 4]);
 
-    /// Each sensor's RSS per residual in `score` (weighed by the rests'
-    /// noise), at least 1.
-    pub fn of(score: &Score) -> Inflation {
+    /// Each sensor's RSS per residual over `channels` (weighed by the
+    /// rests' noise), at least 1.
+    pub fn of<'c>(channels: impl IntoIterator<Item = &'c ChannelFit>) -> Inflation {
         let mut out = [1.0; 4];
-        for (k, (sum, n)) in per_sensor(score).into_iter().enumerate() {
+        for (k, (sum, n)) in per_sensor(channels).into_iter().enumerate() {
             if n > 0 {
                 out[k] = (sum / n as f64).clamp(1.0, MAX_INFLATION);
             }
@@ -77,10 +77,10 @@ fn index(sensor: Sensor) -> usize {
 }
 
 /// Per sensor in [`Sensor::ALL`] order: the sum of squared weighted
-/// residuals and their count.
-fn per_sensor(score: &Score) -> [(f64, usize); 4] {
+/// residuals over `channels` and their count.
+fn per_sensor<'c>(channels: impl IntoIterator<Item = &'c ChannelFit>) -> [(f64, usize); 4] {
     let mut out = [(0.0, 0usize); 4];
-    for c in &score.channels {
+    for c in channels {
         let k = index(Sensor::of(c.channel));
         out[k].0 += c.residuals.iter().map(|r| r * r).sum::<f64>();
         out[k].1 += c.residuals.len();
@@ -95,7 +95,7 @@ fn per_sensor(score: &Score) -> [(f64, usize); 4] {
 /// constant. Compares two fits of one session: the lower is the more
 /// likely.
 pub fn profile_cost(score: &Score) -> f64 {
-    per_sensor(score)
+    per_sensor(&score.channels)
         .into_iter()
         .filter(|&(_, n)| n > 0)
         .map(|(sum, n)| {
@@ -109,7 +109,6 @@ pub fn profile_cost(score: &Score) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::fit::ChannelFit;
     use crate::recording::Channel;
 
     fn channel(channel: Channel, level: f64, n: usize) -> ChannelFit {
@@ -124,14 +123,14 @@ mod tests {
             channel(Channel::Force, 3.0, 500),
             channel(Channel::Force, 1.0, 500),
         ]);
-        let inf = Inflation::of(&score);
+        let inf = Inflation::of(&score.channels);
         // Below its rests' noise a sensor keeps it; above, its own RSS/m.
         assert_eq!(inf.sigma_factor(Sensor::Current), 1.0);
         assert_eq!(inf.sigma_factor(Sensor::CameraY), 1.0);
         assert!((inf.0[3] - 5.0).abs() < 1e-12, "{inf:?}");
         assert!((inf.sigma_factor(Sensor::Force) - 5f64.sqrt()).abs() < 1e-12);
         // Far above, at most MAX_INFLATION.
-        let far = Inflation::of(&Score::new(vec![channel(Channel::Force, 100.0, 10)]));
+        let far = Inflation::of(&[channel(Channel::Force, 100.0, 10)]);
         assert_eq!(far.0[3], MAX_INFLATION);
         // No residuals: no inflation.
         assert_eq!(inf.sigma_factor(Sensor::CameraX), 1.0);
