@@ -8,7 +8,7 @@
 //!
 //! | effect | term | how it enters |
 //! |---|---|---|
-//! | `damping` | Rayleigh `C = α M + β K` and a constant ratio `ζ₀` | each mode's 2×2 block gets `−2ζₖωₖ`, `2ζₖωₖ = α + 2ζ₀ωₖ + β ωₖ²` |
+//! | `damping` | Rayleigh `C = α M + β K`, a constant ratio `ζ₀`, and each of the first modes' own ratio `ζ'ₖ` ([`ModalDamping`]) | each mode's 2×2 block gets `−2ζₖωₖ`, `2ζₖωₖ = α + 2(ζ₀ + ζ'ₖ)ωₖ + β ωₖ²` |
 //! | `hydrodynamic-loading` | added mass `m_a` per length, linear drag `c_d` per length | `ρA + m_a` in the mass matrix; drag `c_d/(ρA + m_a)` like `α` |
 //! | `beam-stiffness` | `EI` differs from the laminate's | a parameter ([`crate::Params::ei_nm2`]), no term |
 //! | `back-relaxation` | the relaxation network's `b = K z` may be `≤ 0` (`z ≤ 0`) | the moment relaxes past zero under a held voltage |
@@ -47,6 +47,9 @@ pub struct Extensions {
     /// independent loss factor `η = 2ζ₀` gives (structural or hysteretic
     /// damping), where Rayleigh's ratio falls and rises with frequency.
     pub damping_ratio: f64,
+    /// Each of the first modes' own damping ratio, in each fixture, added
+    /// to the law above (all 0: off).
+    pub modal_damping: ModalDamping,
     /// Added mass of the surrounding fluid per length `m_a`, kg/m (`≥ 0`).
     pub added_mass_kg_per_m: f64,
     /// Linear drag of the surrounding fluid per length `c_d`, N·s/m² (`≥ 0`).
@@ -71,6 +74,85 @@ pub struct Extensions {
 
 /// Most segments a strip has (as [`crate::Strip`] accepts).
 pub const MAX_SEGMENTS: usize = 8;
+
+/// Modes whose damping ratio [`ModalDamping`] sets one by one.
+pub const DAMPED_MODES: usize = 8;
+
+/// Each of the first [`DAMPED_MODES`] modes' own damping ratio `ζ'ₖ`, for
+/// the free strip and for the strip held by the load cell, added to the
+/// law's (`α`, `ζ₀`, `β`); the modes above take the last one's. A strip's
+/// loss changes with frequency in ways no two-term law follows (a
+/// polymer's loss peak, the clamp's friction), and a held tip's force
+/// rings in several modes at once. The two fixtures have different modes
+/// (the held tip's first rings about four times higher than the free
+/// one's), so each has its own ratios. All 0 is off.
+///
+/// ```
+/// use model_core::{Extensions, Fixture, ModalDamping, Params, Strip};
+/// let p = Params::main_m_2006();
+/// let mut modal = ModalDamping::NONE;
+/// modal.free[1] = 0.05; // the second free mode at 5 % of critical
+/// let ext = Extensions { modal_damping: modal, ..Extensions::NONE };
+/// let s = Strip::<f64, 3, 1, 18>::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap();
+/// modal.free[1] = -0.05; // a mode that gains energy
+/// let ext = Extensions { modal_damping: modal, ..Extensions::NONE };
+/// assert!(Strip::<f64, 3, 1, 18>::with_extensions(&p, &ext, Fixture::Free, 1e-3).is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModalDamping {
+    /// `ζ'ₖ` of the free strip's modes, ascending in frequency.
+    pub free: [f64; DAMPED_MODES],
+    /// `ζ'ₖ` of the held strip's modes, ascending in frequency.
+    pub blocked: [f64; DAMPED_MODES],
+}
+
+impl ModalDamping {
+    /// No mode damped on its own.
+    pub const NONE: ModalDamping = ModalDamping {
+        free: [0.0; DAMPED_MODES],
+        blocked: [0.0; DAMPED_MODES],
+    };
+
+    /// The ratios of `fixture`'s modes.
+    pub fn of(&self, fixture: crate::Fixture) -> &[f64; DAMPED_MODES] {
+        match fixture {
+            crate::Fixture::Free => &self.free,
+            crate::Fixture::Blocked => &self.blocked,
+        }
+    }
+
+    /// `ζ'` of mode `k` (from 0) of `fixture`: the last one's for the modes
+    /// above.
+    pub fn ratio(&self, fixture: crate::Fixture, k: usize) -> f64 {
+        self.of(fixture)[k.min(DAMPED_MODES - 1)]
+    }
+
+    /// Refuses a ratio outside `[0, 1)`.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        for (field, ratios) in [
+            ("modal_damping.free", &self.free),
+            ("modal_damping.blocked", &self.blocked),
+        ] {
+            for &value in ratios {
+                if !(value.is_finite() && (0.0..1.0).contains(&value)) {
+                    return Err(ParamError::OutOfRange {
+                        field,
+                        value,
+                        min: 0.0,
+                        max: 1.0,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Default for ModalDamping {
+    fn default() -> Self {
+        ModalDamping::NONE
+    }
+}
 
 /// `segment-variation`: segment `i` (index 0 at the clamp) has
 /// `R1 (1 + δᵢ)`, `C (1 + δᵢ)` and `K (1 + δᵢ)`, each with its own
@@ -186,6 +268,7 @@ impl Extensions {
         damping_mass_per_s: 0.0,
         damping_stiffness_s: 0.0,
         damping_ratio: 0.0,
+        modal_damping: ModalDamping::NONE,
         added_mass_kg_per_m: 0.0,
         drag_n_s_per_m2: 0.0,
         charge_cubic_per_v2: 0.0,
@@ -209,6 +292,7 @@ impl Extensions {
                 max: 1.0,
             });
         }
+        self.modal_damping.validate()?;
         non_negative("added_mass_kg_per_m", self.added_mass_kg_per_m)?;
         non_negative("drag_n_s_per_m2", self.drag_n_s_per_m2)?;
         within(
@@ -227,12 +311,19 @@ impl Extensions {
         self.segment_variation.validate()
     }
 
-    /// Modal damping `2ζω` of a mode at `omega_rad_s`, with `rho_a` the
-    /// strip's own mass per length, 1/s (the fit reads `ζ` off it to start
-    /// a damping term where the measured ringing decays).
-    pub fn two_zeta_omega(&self, omega_rad_s: f64, rho_a: f64) -> f64 {
+    /// Modal damping `2ζω` of mode `k` (from 0) of `fixture`, at
+    /// `omega_rad_s`, with `rho_a` the strip's own mass per length, 1/s
+    /// (the fit reads `ζ` off it to start a damping term where the
+    /// measured ringing decays).
+    pub fn two_zeta_omega(
+        &self,
+        fixture: crate::Fixture,
+        k: usize,
+        omega_rad_s: f64,
+        rho_a: f64,
+    ) -> f64 {
         self.damping_mass_per_s
-            + 2.0 * self.damping_ratio * omega_rad_s
+            + 2.0 * (self.damping_ratio + self.modal_damping.ratio(fixture, k)) * omega_rad_s
             + self.damping_stiffness_s * omega_rad_s * omega_rad_s
             + self.drag_n_s_per_m2 / (rho_a + self.added_mass_kg_per_m)
     }

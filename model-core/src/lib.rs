@@ -35,7 +35,7 @@ pub mod zoh;
 
 pub use beam_modes::BeamModes;
 pub use circuit::Circuit;
-pub use extensions::{Extensions, SegmentVariation, MAX_SEGMENTS};
+pub use extensions::{Extensions, ModalDamping, SegmentVariation, DAMPED_MODES, MAX_SEGMENTS};
 pub use params::{Laminate, ParamError, Params};
 pub use real::Real;
 pub use shape::Shape;

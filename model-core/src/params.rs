@@ -319,6 +319,15 @@ pub enum ParamError {
         /// The rule it breaks.
         rule: &'static str,
     },
+    /// A list longer than the model has entries for.
+    TooMany {
+        /// The list's field.
+        field: &'static str,
+        /// Entries given.
+        count: usize,
+        /// Entries the model has.
+        max: usize,
+    },
 }
 
 impl fmt::Display for ParamError {
@@ -347,6 +356,9 @@ impl fmt::Display for ParamError {
                 value,
                 rule,
             } => write!(f, "{field} of segment {segment} is {value}: {rule}"),
+            ParamError::TooMany { field, count, max } => {
+                write!(f, "{field} lists {count} values, the model has {max}")
+            }
         }
     }
 }

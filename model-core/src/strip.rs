@@ -427,7 +427,12 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
         let mut two_zeta_omega = [0.0; S];
         for k in 0..n_active {
-            two_zeta_omega[k] = ext.two_zeta_omega(omega[k], params.mass_per_length_kg_per_m);
+            two_zeta_omega[k] = ext.two_zeta_omega(
+                modes.fixture(),
+                k,
+                omega[k],
+                params.mass_per_length_kg_per_m,
+            );
         }
         let (mut m_tip, mut k_tip) = ([0.0; S], [0.0; S]);
         m_tip[..Self::DOF].copy_from_slice(beam.m.row(Self::TIP));

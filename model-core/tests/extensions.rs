@@ -465,3 +465,62 @@ fn segment_deviations_are_refused_by_segment_and_rule() {
     )
     .is_ok());
 }
+
+/// Every mode's own ratio the same is the constant ratio; a fixture's
+/// ratios are that fixture's alone; a mode's own ratio damps that mode.
+#[test]
+fn each_modes_own_ratio_damps_that_mode_in_its_fixture() {
+    use model_core::{ModalDamping, DAMPED_MODES};
+    let mut own = Extensions::NONE;
+    own.modal_damping.free = [0.02; DAMPED_MODES];
+    let law = Extensions {
+        damping_ratio: 0.02,
+        ..Extensions::NONE
+    };
+    assert_eq!(
+        tips(&strip(&own, Fixture::Free), [2.5; 3], 3000),
+        tips(&strip(&law, Fixture::Free), [2.5; 3], 3000)
+    );
+    // The held strip's ratios leave the free strip alone, bit for bit.
+    let mut held_only = law;
+    held_only.modal_damping.blocked = [0.05; DAMPED_MODES];
+    assert_eq!(
+        tips(&strip(&held_only, Fixture::Free), [2.5; 3], 3000),
+        tips(&strip(&law, Fixture::Free), [2.5; 3], 3000)
+    );
+    // Only a higher mode damped more: the first mode's slow ringing is the
+    // law's, so the tip after its higher modes have died out is nearly
+    // the law's; damping the first mode instead changes it.
+    let mut second = law;
+    second.modal_damping.free[1] = 0.06;
+    let mut first = law;
+    first.modal_damping.free[0] = 0.06;
+    let base = tips(&strip(&law, Fixture::Free), [2.5; 3], 400);
+    let off = |e: &Extensions| {
+        let t = tips(&strip(e, Fixture::Free), [2.5; 3], 400);
+        (t[399] - base[399]).abs() / base[399].abs()
+    };
+    assert!(
+        off(&second) < 0.2 * off(&first),
+        "{} {}",
+        off(&second),
+        off(&first)
+    );
+    // A ratio outside [0, 1) is refused, by field.
+    let mut bad = law;
+    bad.modal_damping = ModalDamping {
+        blocked: [1.0; DAMPED_MODES],
+        ..ModalDamping::NONE
+    };
+    let err = S3::with_extensions(&Params::main_m_2006(), &bad, Fixture::Free, 1e-3).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ParamError::OutOfRange {
+                field: "modal_damping.blocked",
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+}

@@ -9,7 +9,9 @@
 
 use std::path::Path;
 
-use model_core::{Laminate, ParamError, Params, SegmentVariation, MAX_SEGMENTS};
+use model_core::{
+    Laminate, ModalDamping, ParamError, Params, SegmentVariation, DAMPED_MODES, MAX_SEGMENTS,
+};
 
 use crate::model::predict::ModelSpec;
 use crate::recording::Geometry;
@@ -44,6 +46,14 @@ pub struct ExtensionsFile {
     pub damping_stiffness_s: f64,
     /// Constant modal damping ratio `ζ₀` (`0 ≤ ζ₀ < 1`).
     pub damping_ratio: f64,
+    /// Each of the free strip's first modes' own damping ratio, ascending
+    /// in frequency, added to the law above; the modes above the list take
+    /// its last ([`model_core::ModalDamping`]). None listed: off.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub modal_damping_free: Vec<f64>,
+    /// As `modal_damping_free`, for the strip held by the load cell.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub modal_damping_blocked: Vec<f64>,
     /// Added fluid mass per length, kg/m.
     pub added_mass_kg_per_m: f64,
     /// Linear fluid drag per length, N·s/m².
@@ -108,10 +118,38 @@ impl ExtensionsFile {
             }
             out[..list.len()].copy_from_slice(list);
         }
+        let mut modal = ModalDamping::NONE;
+        for (field, list, out) in [
+            (
+                "modal_damping_free",
+                &self.modal_damping_free,
+                &mut modal.free,
+            ),
+            (
+                "modal_damping_blocked",
+                &self.modal_damping_blocked,
+                &mut modal.blocked,
+            ),
+        ] {
+            if list.len() > DAMPED_MODES {
+                return Err(ParamError::TooMany {
+                    field,
+                    count: list.len(),
+                    max: DAMPED_MODES,
+                });
+            }
+            out[..list.len()].copy_from_slice(list);
+            // Unlisted modes take the last listed ratio, as the core's
+            // modes above its last do.
+            if let Some(&last) = list.last() {
+                out[list.len()..].fill(last);
+            }
+        }
         Ok(model_core::Extensions {
             damping_mass_per_s: self.damping_mass_per_s,
             damping_stiffness_s: self.damping_stiffness_s,
             damping_ratio: self.damping_ratio,
+            modal_damping: modal,
             added_mass_kg_per_m: self.added_mass_kg_per_m,
             drag_n_s_per_m2: self.drag_n_s_per_m2,
             charge_cubic_per_v2: self.charge_cubic_per_v2,
@@ -133,6 +171,8 @@ impl ExtensionsFile {
             damping_mass_per_s: ext.damping_mass_per_s,
             damping_stiffness_s: ext.damping_stiffness_s,
             damping_ratio: ext.damping_ratio,
+            modal_damping_free: modal_listed(&ext.modal_damping.free),
+            modal_damping_blocked: modal_listed(&ext.modal_damping.blocked),
             added_mass_kg_per_m: ext.added_mass_kg_per_m,
             drag_n_s_per_m2: ext.drag_n_s_per_m2,
             charge_cubic_per_v2: ext.charge_cubic_per_v2,
@@ -156,6 +196,20 @@ fn listed(deviations: &[f64; MAX_SEGMENTS]) -> Vec<f64> {
         .rposition(|&d| d != 0.0)
         .map_or(0, |last| last + 1);
     deviations[..len].to_vec()
+}
+
+/// Modal ratios up to the last that differs from the one after it (the
+/// modes above take the last listed); none when all are 0.
+fn modal_listed(ratios: &[f64; DAMPED_MODES]) -> Vec<f64> {
+    if ratios.iter().all(|&z| z == 0.0) {
+        return Vec::new();
+    }
+    let last = ratios[DAMPED_MODES - 1];
+    let len = ratios
+        .iter()
+        .rposition(|&z| z != last)
+        .map_or(1, |differs| differs + 2);
+    ratios[..len].to_vec()
 }
 
 /// `R1`, `R2`, `C`.
@@ -561,5 +615,33 @@ mod tests {
             err.contains("segment_k_deviation of segment 9") && err.contains("at most 8"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn modal_damping_round_trips_and_a_long_list_is_refused() {
+        let mut ext = model_core::Extensions::NONE;
+        // The held strip's first mode undamped, the second and every one
+        // above it at 5 %; the free strip undamped.
+        ext.modal_damping.blocked[1..].fill(0.05);
+        let mut f = ModelFile::main_m_2006();
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        let text = f.to_toml();
+        assert!(
+            text.contains("modal_damping_blocked = [0.0, 0.05]")
+                && !text.contains("modal_damping_free"),
+            "{text}"
+        );
+        let back = ModelFile::parse("p.toml", &text).unwrap();
+        assert_eq!(back.spec_for(&Geometry::THESIS_2006).unwrap().ext, ext);
+        let long = format!("{:?}", [0.0; model_core::DAMPED_MODES + 1]);
+        let err = ModelFile::parse("p.toml", &text.replace("[0.0, 0.05]", &long)).unwrap_err();
+        let err = said(&err);
+        assert!(
+            err.contains("modal_damping_blocked lists 9 values, the model has 8"),
+            "{err}"
+        );
+        let err = ModelFile::parse("p.toml", &text.replace("0.05]", "-0.05]")).unwrap_err();
+        let err = said(&err);
+        assert!(err.contains("modal_damping.blocked"), "{err}");
     }
 }

@@ -68,9 +68,12 @@ pub fn model_first_hz(spec: &ModelSpec, fixture: Fixture) -> Option<f64> {
 pub fn model_blocked_ringing(spec: &ModelSpec) -> Option<Ringing> {
     let hz = model_blocked_hz(spec)?;
     let w = 2.0 * PI * hz;
-    let two_zeta_omega = spec
-        .ext
-        .two_zeta_omega(w, spec.params.mass_per_length_kg_per_m);
+    let two_zeta_omega = spec.ext.two_zeta_omega(
+        model_core::Fixture::Blocked,
+        0,
+        w,
+        spec.params.mass_per_length_kg_per_m,
+    );
     Some(Ringing {
         hz,
         damping_ratio: two_zeta_omega / (2.0 * w),
