@@ -594,9 +594,10 @@ pub struct SimulateArgs {
     /// Parameter file (TOML); default: the main_m_2006 preset.
     #[arg(long)]
     pub params: Option<PathBuf>,
-    /// Finite elements per segment (1, 2 or 4).
-    #[arg(long, default_value_t = 1)]
-    pub elements: usize,
+    /// Finite elements per segment (1, 2 or 4); default: the parameter
+    /// file's `[mesh]` (a fit's own), else 1 (the seed's).
+    #[arg(long)]
+    pub elements: Option<usize>,
     /// Where to write the simulated recording (CSV).
     #[arg(long)]
     pub out: PathBuf,

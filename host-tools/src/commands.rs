@@ -58,9 +58,12 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
             .progress_chars("=> "),
     );
     bar.set_message("simulating");
-    let sim = predict_recording(&name, &input, &spec, args.elements, &mut |n| {
-        bar.set_position(n)
-    })?;
+    // A fitted file predicts what its fit saw on the fit's own mesh.
+    let elements = args
+        .elements
+        .or(model.mesh.map(|m| m.elements_per_segment))
+        .unwrap_or(1);
+    let sim = predict_recording(&name, &input, &spec, elements, &mut |n| bar.set_position(n))?;
     bar.finish_and_clear();
 
     create_parent(&args.out)?;

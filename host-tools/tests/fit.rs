@@ -271,3 +271,70 @@ fn fit_json_holds_what_the_text_prints_for_a_program_to_read() {
     assert!(!v["channels"].as_array().unwrap().is_empty());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A fitted file says the mesh its fit simulated on, and `simulate` with
+/// that file uses it: the same prediction as asking for it, not the
+/// seed's one element per segment.
+#[test]
+fn a_fitted_file_simulates_on_its_fits_mesh() {
+    use std::ffi::OsString;
+    let truth = sample();
+    let dir = std::env::temp_dir().join(format!("finrs-fit-mesh-{}", std::process::id()));
+    common::write_session(&dir, &truth, &common::short_protocol(), 13);
+    let finrs = |args: &[OsString]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_finrs"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let toml = dir.join("fit.toml");
+    finrs(&[
+        "fit".into(),
+        dir.clone().into(),
+        "--out".into(),
+        toml.clone().into(),
+    ]);
+    let text = std::fs::read_to_string(&toml).unwrap();
+    assert!(text.contains("[mesh]\nelements_per_segment = 4"), "{text}");
+    let mut inputs: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .collect();
+    inputs.sort();
+    let input = inputs.last().unwrap().clone();
+    let simulate = |name: &str, elements: Option<&str>| {
+        let out = dir.join(name);
+        let mut args: Vec<OsString> = vec![
+            "simulate".into(),
+            "--input".into(),
+            input.clone().into(),
+            "--params".into(),
+            toml.clone().into(),
+            "--out".into(),
+            out.clone().into(),
+        ];
+        if let Some(e) = elements {
+            args.push("--elements".into());
+            args.push(e.into());
+        }
+        finrs(&args);
+        std::fs::read_to_string(&out).unwrap()
+    };
+    let own = simulate("own.csv", None);
+    let four = simulate("four.csv", Some("4"));
+    let one = simulate("one.csv", Some("1"));
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        own.contains("(4 element(s) per segment)"),
+        "{}",
+        &own[..400]
+    );
+    assert_ne!(own, one);
+    assert_eq!(own, four);
+}

@@ -13,7 +13,7 @@ use model_core::{
     Laminate, ModalDamping, ParamError, Params, SegmentVariation, DAMPED_MODES, MAX_SEGMENTS,
 };
 
-use crate::model::predict::ModelSpec;
+use crate::model::predict::{ModelSpec, ELEMENTS};
 use crate::recording::Geometry;
 use serde::{Deserialize, Serialize};
 
@@ -33,6 +33,21 @@ pub struct ModelFile {
     /// Optional model terms beyond the seed's (all off when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extensions: Option<ExtensionsFile>,
+    /// The mesh the parameters were fitted on (absent: none stated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<Mesh>,
+}
+
+/// The `[mesh]` section: the finite elements per segment a fit simulated
+/// with. A fitted file predicts what the fit saw only on the same mesh (a
+/// held strip's ringing moves with it: the blocked force of a soft strip
+/// fitted on four elements, simulated on one, is off by several times the
+/// load cell's noise), so `finrs simulate` uses it unless told otherwise.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    /// Elements per segment, one of [`ELEMENTS`].
+    pub elements_per_segment: usize,
 }
 
 /// The `[extensions]` section: the terms of [`model_core::Extensions`] and
@@ -319,6 +334,14 @@ pub enum ParamsError {
         /// The parser's message, with line and column.
         message: String,
     },
+    /// The mesh is not one the model has.
+    #[error("{path}: [mesh] elements_per_segment must be one of {ELEMENTS:?}, got {value}")]
+    Mesh {
+        /// The file.
+        path: String,
+        /// The value given.
+        value: usize,
+    },
     /// A value is not physical.
     #[error("{context}")]
     Invalid {
@@ -362,6 +385,7 @@ impl ModelFile {
             },
             beam: None,
             extensions: None,
+            mesh: None,
         }
     }
 
@@ -391,6 +415,14 @@ impl ModelFile {
                 },
                 other => other,
             })?;
+        if let Some(m) = file.mesh {
+            if !ELEMENTS.contains(&m.elements_per_segment) {
+                return Err(ParamsError::Mesh {
+                    path: name.to_string(),
+                    value: m.elements_per_segment,
+                });
+            }
+        }
         Ok(file)
     }
 
@@ -643,5 +675,22 @@ mod tests {
         let err = ModelFile::parse("p.toml", &text.replace("0.05]", "-0.05]")).unwrap_err();
         let err = said(&err);
         assert!(err.contains("modal_damping.blocked"), "{err}");
+    }
+
+    #[test]
+    fn the_mesh_round_trips_and_one_the_model_lacks_is_refused() {
+        let mut f = ModelFile::main_m_2006();
+        assert!(!f.to_toml().contains("[mesh]"));
+        f.mesh = Some(Mesh {
+            elements_per_segment: 4,
+        });
+        let text = f.to_toml();
+        assert!(text.contains("[mesh]\nelements_per_segment = 4"), "{text}");
+        assert_eq!(ModelFile::parse("p.toml", &text).unwrap(), f);
+        let err = ModelFile::parse("p.toml", &text.replace("= 4", "= 3")).unwrap_err();
+        assert_eq!(
+            said(&err),
+            "p.toml: [mesh] elements_per_segment must be one of [1, 2, 4], got 3"
+        );
     }
 }

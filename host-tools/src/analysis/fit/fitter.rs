@@ -14,7 +14,7 @@ use super::space::Space;
 use super::stage::{descend, Problem, Stage};
 use super::start;
 use super::stats::{self, ChannelFit, Estimate, Score};
-use crate::model::params::{Beam, Electrical, ExtensionsFile, ModelFile, Relaxation};
+use crate::model::params::{Beam, Electrical, ExtensionsFile, Mesh, ModelFile, Relaxation};
 use crate::model::predict::{predict, predict_currents, ModelSpec, Traces};
 use crate::session::Session;
 
@@ -96,6 +96,9 @@ impl FitResult {
                 self.spec.dehydration_curvature,
             ));
         }
+        f.mesh = Some(Mesh {
+            elements_per_segment: FIT_ELEMENTS,
+        });
         f
     }
 }
