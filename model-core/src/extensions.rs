@@ -134,14 +134,7 @@ impl ModalDamping {
             ("modal_damping.blocked", &self.blocked),
         ] {
             for &value in ratios {
-                if !(value.is_finite() && (0.0..1.0).contains(&value)) {
-                    return Err(ParamError::OutOfRange {
-                        field,
-                        value,
-                        min: 0.0,
-                        max: 1.0,
-                    });
-                }
+                damping_ratio(field, value)?;
             }
         }
         Ok(())
@@ -283,15 +276,7 @@ impl Extensions {
     pub fn validate(&self) -> Result<(), ParamError> {
         non_negative("damping_mass_per_s", self.damping_mass_per_s)?;
         non_negative("damping_stiffness_s", self.damping_stiffness_s)?;
-        non_negative("damping_ratio", self.damping_ratio)?;
-        if self.damping_ratio >= 1.0 {
-            return Err(ParamError::OutOfRange {
-                field: "damping_ratio",
-                value: self.damping_ratio,
-                min: 0.0,
-                max: 1.0,
-            });
-        }
+        damping_ratio("damping_ratio", self.damping_ratio)?;
         self.modal_damping.validate()?;
         non_negative("added_mass_kg_per_m", self.added_mass_kg_per_m)?;
         non_negative("drag_n_s_per_m2", self.drag_n_s_per_m2)?;
@@ -333,6 +318,21 @@ impl Default for Extensions {
     fn default() -> Self {
         Extensions::NONE
     }
+}
+
+/// Refuses a damping ratio outside `[0, 1)`: a mode that gains energy, or
+/// one past critical, which the terms are not for.
+fn damping_ratio(field: &'static str, value: f64) -> Result<(), ParamError> {
+    non_negative(field, value)?;
+    if value >= 1.0 {
+        return Err(ParamError::OutOfRange {
+            field,
+            value,
+            min: 0.0,
+            max: 1.0,
+        });
+    }
+    Ok(())
 }
 
 fn within(field: &'static str, value: f64, min: f64, max: f64) -> Result<(), ParamError> {

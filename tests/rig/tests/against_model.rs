@@ -31,38 +31,63 @@ fn spec(s: &Sample) -> ModelSpec {
     })
 }
 
-fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::model::predict::Traces) {
-    let s = sample();
-    let drive = Drive {
+/// The load cell's noise on the example's bench (the rig's sensors draw
+/// it at 0.7 to 1.5 times this), N rms.
+const LOAD_CELL_NOISE_N: f64 = 2e-5;
+
+/// 0.5 s at rest, 3 s of the wave, 1 s off, in `fixture`.
+fn drive(fixture: Fixture) -> Drive {
+    Drive {
         segments: 3,
         fixture,
         rest_s: 0.5,
         duration_s: 3.0,
         off_s: 1.0,
         rate_hz: 1000.0,
+    }
+}
+
+/// `wave` on `drive`, through the rig's strip `s` with `hidden` (its own
+/// mesh for the fixture) and through the model `spec` on four elements a
+/// segment; the camera on every row, at the tip.
+fn run_both(
+    s: &Sample,
+    drive: &Drive,
+    wave: &str,
+    hidden: &Hidden,
+    spec: &ModelSpec,
+) -> (Truth, finrs::model::predict::Traces) {
+    let mut rec = drive_recording(&Wave::parse(wave).unwrap(), drive).unwrap();
+    let camera = vec![true; rec.t_s.len()];
+    let mesh = if drive.fixture == Fixture::Blocked {
+        BLOCKED_MESH
+    } else {
+        MESH
     };
-    let rec = drive_recording(&Wave::parse(wave).unwrap(), &drive).unwrap();
-    let rows = rec.t_s.len();
-    let camera = vec![true; rows];
     let truth = run(
-        &s,
+        s,
         hidden,
-        if fixture == Fixture::Blocked {
-            BLOCKED_MESH
-        } else {
-            MESH
-        },
-        tip(fixture),
+        mesh,
+        tip(drive.fixture),
         &rec.v_v,
         1e-3,
         0.0,
         &camera,
         &[0.05],
     );
-    let mut rec = rec;
     rec.meta.dots_s_m = None;
-    let model = predict(&rec, &spec(&s), 4, 1e-3, 0.0, None, &mut |_| {}).unwrap();
+    let model = predict(&rec, spec, 4, 1e-3, 0.0, None, &mut |_| {}).unwrap();
     (truth, model)
+}
+
+fn both(wave: &str, fixture: Fixture, hidden: &Hidden) -> (Truth, finrs::model::predict::Traces) {
+    let s = sample();
+    run_both(&s, &drive(fixture), wave, hidden, &spec(&s))
+}
+
+/// The rms of `a − b`.
+fn rms_difference(a: &[f64], b: &[f64]) -> f64 {
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
 }
 
 fn tip(fixture: Fixture) -> Tip {
@@ -136,12 +161,12 @@ fn the_undamped_blocked_force_has_no_converged_mesh() {
             Fixture::Free => t.points_m[0].iter().map(|p| p.1).collect(),
         }
     };
-    let rms = |a: &[f64], b: &[f64]| {
-        (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
-    };
-    let force = rms(&go(Fixture::Blocked, 8), &go(Fixture::Blocked, 16));
-    assert!(force > 10.0 * 2e-5, "blocked force moved {force} N");
-    let tip = rms(&go(Fixture::Free, 8), &go(Fixture::Free, 16));
+    let force = rms_difference(&go(Fixture::Blocked, 8), &go(Fixture::Blocked, 16));
+    assert!(
+        force > 10.0 * LOAD_CELL_NOISE_N,
+        "blocked force moved {force} N"
+    );
+    let tip = rms_difference(&go(Fixture::Free, 8), &go(Fixture::Free, 16));
     assert!(tip < 1.09e-5, "free tip moved {tip} m");
 }
 
@@ -159,36 +184,7 @@ fn damped(fixture: Fixture, wave: &str) -> (Truth, finrs::model::predict::Traces
     let s = sample();
     let mut spec = spec(&s);
     spec.ext.damping_ratio = ZETA;
-    let drive = Drive {
-        segments: 3,
-        fixture,
-        rest_s: 0.5,
-        duration_s: 3.0,
-        off_s: 1.0,
-        rate_hz: 1000.0,
-    };
-    let rec = drive_recording(&Wave::parse(wave).unwrap(), &drive).unwrap();
-    let camera = vec![true; rec.t_s.len()];
-    let mesh = if fixture == Fixture::Blocked {
-        BLOCKED_MESH
-    } else {
-        MESH
-    };
-    let truth = run(
-        &s,
-        &hidden,
-        mesh,
-        tip(fixture),
-        &rec.v_v,
-        1e-3,
-        0.0,
-        &camera,
-        &[0.05],
-    );
-    let mut rec = rec;
-    rec.meta.dots_s_m = None;
-    let model = predict(&rec, &spec, 4, 1e-3, 0.0, None, &mut |_| {}).unwrap();
-    (truth, model)
+    run_both(&s, &drive(fixture), wave, &hidden, &spec)
 }
 
 #[test]
@@ -212,10 +208,10 @@ fn a_damped_free_tip_agrees_with_the_model() {
 
 /// A soft strip whose every mode has its own damping ratio (as the
 /// off-class rig draws them), held, under a 4 V step: its force as the rig
-/// integrates it, and as the model predicts it with `damped_modes` of the
-/// ratios its own (the modes above taking the last one's): the rms
-/// difference, and the load cell's typical noise.
-fn per_mode_force_error(damped_modes: usize) -> (f64, f64) {
+/// integrates it against the model's with `damped_modes` of the ratios its
+/// own (the modes above taking the last one's), rms, in the load cell's
+/// noise.
+fn per_mode_force_error(damped_modes: usize) -> f64 {
     const RATIOS: [f64; 8] = [0.048, 0.025, 0.035, 0.025, 0.066, 0.082, 0.049, 0.080];
     let hidden = Hidden {
         modal_damping: Some(RATIOS.to_vec()),
@@ -228,36 +224,14 @@ fn per_mode_force_error(damped_modes: usize) -> (f64, f64) {
     for k in 0..model_core::DAMPED_MODES {
         spec.ext.modal_damping.blocked[k] = RATIOS[k.min(damped_modes - 1)];
     }
-    let drive = Drive {
-        segments: 3,
-        fixture: Fixture::Blocked,
+    let step = Drive {
         rest_s: 0.2,
         duration_s: 0.3,
         off_s: 0.3,
-        rate_hz: 1000.0,
+        ..drive(Fixture::Blocked)
     };
-    let rec = drive_recording(&Wave::parse("step:4").unwrap(), &drive).unwrap();
-    let camera = vec![false; rec.t_s.len()];
-    let truth = run(
-        &s,
-        &hidden,
-        BLOCKED_MESH,
-        Tip::Pinned,
-        &rec.v_v,
-        1e-3,
-        0.0,
-        &camera,
-        &[],
-    );
-    let model = predict(&rec, &spec, 4, 1e-3, 0.0, None, &mut |_| {}).unwrap();
-    let n = truth.force_n.len() as f64;
-    let rss: f64 = truth
-        .force_n
-        .iter()
-        .zip(&model.force_n)
-        .map(|(a, b)| (a - b) * (a - b))
-        .sum();
-    (rss.sqrt() / n.sqrt(), 2e-5)
+    let (truth, model) = run_both(&s, &step, "step:4", &hidden, &spec);
+    rms_difference(&truth.force_n, &model.force_n) / LOAD_CELL_NOISE_N
 }
 
 #[test]
@@ -268,13 +242,7 @@ fn each_held_modes_own_damping_is_the_rigs() {
     // the load cell's noise, and each further mode's own ratio closes
     // most of the rest. Measured on this strip: 23, 4.4, 2.3, 2.2 and
     // 0.07 times the noise for 1, 2, 3, 4 and 8 modes.
-    let errors: Vec<f64> = [1, 2, 3, 4, 8]
-        .iter()
-        .map(|&k| {
-            let (rms, noise) = per_mode_force_error(k);
-            rms / noise
-        })
-        .collect();
+    let errors: Vec<f64> = [1, 2, 3, 4, 8].map(per_mode_force_error).to_vec();
     assert!(errors[0] > 5.0, "{errors:?}");
     assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
     assert!(errors[3] < 3.0 && errors[4] < 0.2, "{errors:?}");
