@@ -11,7 +11,9 @@ use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
-use crate::analysis::fit::{ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score};
+use crate::analysis::fit::{
+    profile_cost, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score,
+};
 use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
 use crate::session::Session;
@@ -306,11 +308,15 @@ impl Search<'_> {
             // The model that joined, fitted again from the data's own
             // start: the next round's candidates start from it, and a
             // candidate that only finished its descent would gain for
-            // nothing of its own.
+            // nothing of its own. The lower of the two by the cost both
+            // descents minimised (each sensor at its most likely
+            // variance), as `Fitter::fit_from_either_start` keeps its
+            // lower: by the RSS at the rests' noise, the load cell's
+            // thousand residuals a second outvote the camera's thirty.
             let again = self
                 .fitter
                 .fit(self.train, &found.fit.effects, None, self.fixed)?;
-            if again.score.rss < found.fit.score.rss {
+            if profile_cost(&again.score) < profile_cost(&found.fit.score) {
                 found.hold = self.fitter.score(self.hold, &again.spec)?;
                 found.fit = again;
             }
