@@ -301,13 +301,7 @@ fn a_fitted_file_simulates_on_its_fits_mesh() {
     ]);
     let text = std::fs::read_to_string(&toml).unwrap();
     assert!(text.contains("[mesh]\nelements_per_segment = 4"), "{text}");
-    let mut inputs: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
-        .collect();
-    inputs.sort();
-    let input = inputs.last().unwrap().clone();
+    let input = common::recordings_in(&dir).pop().unwrap();
     let simulate = |name: &str, elements: Option<&str>| {
         let out = dir.join(name);
         let mut args: Vec<OsString> = vec![

@@ -97,12 +97,7 @@ fn run_chain(features: &str) -> Chain {
     let log = run_ok(run, "finrs bench run --qemu");
     assert!(log.contains("session"), "{log}");
 
-    let mut recordings: Vec<PathBuf> = std::fs::read_dir(&session)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
-        .collect();
-    recordings.sort();
+    let recordings = common::recordings_in(&session);
     assert_eq!(recordings.len(), 10, "{recordings:?}");
     let mut free = 0;
     for path in &recordings {

@@ -45,12 +45,23 @@ pub fn baseline_air_files() -> Vec<std::path::PathBuf> {
             dir.display()
         )
     });
+    csv_files(entries)
+}
+
+/// The `.csv` files of a folder's `entries`, in name order.
+fn csv_files(entries: std::fs::ReadDir) -> Vec<std::path::PathBuf> {
     let mut files: Vec<_> = entries
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "csv"))
         .collect();
     files.sort();
     files
+}
+
+/// The `.csv` files (recordings) of the session folder `dir`, in name
+/// order.
+pub fn recordings_in(dir: &Path) -> Vec<std::path::PathBuf> {
+    csv_files(std::fs::read_dir(dir).unwrap())
 }
 
 /// Sensor noise of the example session's README.
