@@ -526,14 +526,21 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bo
             .iter()
             .any(|est| est.knob == knob && (est.low > off || est.high < off))
     };
+    // The joint test alone would lose a term that stands out on its own
+    // beside one that does nothing (its two degrees of freedom ask more).
+    let either_or_both =
+        |off: &[(Knob, f64)]| off.iter().any(|&(k, o)| excludes(k, o)) || fit.jointly_excludes(off);
     match e {
         Effect::LargeDeflection => true,
         Effect::BeamStiffness => excludes(Knob::Ei, fixed.params.ei_nm2),
-        Effect::Damping => excludes(Knob::Zeta, 0.0) || excludes(Knob::Beta, 0.0),
+        // Either term, or the two jointly: ζ₀ and β both damp the first
+        // mode, so each alone can be unsure while together they are not
+        // (sweep seed 10054).
+        Effect::Damping => either_or_both(&[(Knob::Zeta, 0.0), (Knob::Beta, 0.0)]),
         // Added mass is what water adds; its drag alone is damping.
         Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
         Effect::ElectrochemicalNonlinearity => {
-            excludes(Knob::ChargeCubic, 0.0) || excludes(Knob::LeakCubic, 0.0)
+            either_or_both(&[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)])
         }
         // b = K z below zero is what makes the bending relax past the
         // start; any z > 0 (a creep too) is the baseline's.

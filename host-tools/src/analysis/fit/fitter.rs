@@ -10,7 +10,7 @@ use super::error::FitError;
 use super::inflation::{profile_cost, Inflation};
 use super::mode_start;
 use super::sampling::Sampling;
-use super::space::Space;
+use super::space::{Knob, Space};
 use super::stage::{descend, Problem, Stage};
 use super::start;
 use super::stats::{self, ChannelFit, Estimate, Score};
@@ -52,6 +52,9 @@ pub struct FitResult {
     pub spec: ModelSpec,
     /// Fitted parameters with 95 % confidence intervals.
     pub estimates: Vec<Estimate>,
+    /// The covariance of the estimates' values, in `estimates`' order
+    /// (see [`stats::value_covariance`]).
+    pub value_covariance: nalgebra::DMatrix<f64>,
     /// How well it fits the recordings it was fitted on.
     pub score: Score,
     /// Parameters counted by AIC and BIC.
@@ -67,6 +70,26 @@ pub struct FitResult {
 }
 
 impl FitResult {
+    /// Whether the knobs in `off` differ from their "off" values jointly
+    /// at 95 % (see [`stats::wald_excludes`]): those of them the fit had
+    /// and bounded (a knob with an unbounded interval says nothing either
+    /// way); false when there are none.
+    pub fn jointly_excludes(&self, off: &[(Knob, f64)]) -> bool {
+        let (at, d): (Vec<usize>, Vec<f64>) = off
+            .iter()
+            .filter_map(|(knob, o)| {
+                let i = self.estimates.iter().position(|e| e.knob == *knob)?;
+                self.value_covariance[(i, i)]
+                    .is_finite()
+                    .then(|| (i, self.estimates[i].value - o))
+            })
+            .unzip();
+        let sigma = nalgebra::DMatrix::from_fn(at.len(), at.len(), |a, b| {
+            self.value_covariance[(at[a], at[b])]
+        });
+        stats::wald_excludes(&d, &sigma)
+    }
+
     /// The parameter file for this fit: the seed's material; `[beam]` when
     /// the fit freed `EI` (its `ρA` from the laminate of the fitted
     /// strip); `[extensions]` when any effect is on.
@@ -353,7 +376,9 @@ impl<'a> Fitter<'a> {
         let score = self.score_here(recordings, &spec)?;
         let (active, cov) =
             self.covariance(recordings, &space, &theta, &score, &stages, &inflation)?;
-        let estimates = stats::estimates(&space, &theta, &cov, &active);
+        let grads = stats::value_gradients(&space, &theta);
+        let estimates = stats::estimates(&space, &theta, &cov, &active, &grads);
+        let value_covariance = stats::value_covariance(&cov, &active, &grads);
         let (rss, m) = (score.rss, score.m);
         let k = space.counted_parameters();
         let (aic, bic) = stats::information(rss, m, k);
@@ -361,6 +386,7 @@ impl<'a> Fitter<'a> {
             effects: space.effects.clone(),
             spec,
             estimates,
+            value_covariance,
             score,
             parameters: k,
             aic,

@@ -204,19 +204,41 @@ pub fn information(rss: f64, m: usize, k: usize) -> (f64, f64) {
     (fit + 2.0 * k as f64, fit + k as f64 * m_f.ln())
 }
 
+/// Each knob's value's gradient with respect to all of `θ`, by forward
+/// differences: a row per knob of `space`, in its order.
+pub fn value_gradients(space: &Space, theta: &[f64]) -> Vec<Vec<f64>> {
+    let here = space.spec(theta);
+    space
+        .knobs
+        .iter()
+        .map(|&knob| {
+            let value = Space::value(knob, &here);
+            (0..theta.len())
+                .map(|i| {
+                    let h = 1e-6 * theta[i].abs().max(1.0);
+                    let mut t = theta.to_vec();
+                    t[i] += h;
+                    (Space::value(knob, &space.spec(&t)) - value) / h
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// 95 % intervals by the delta method from `cov`, the covariance of `θ`
 /// (see [`covariance`](super::covariance)), carried to each parameter
-/// through the gradient of its value with respect to all of `θ` (so `z`,
-/// which is fitted relative to `p`, carries `p`'s uncertainty too). A
-/// parameter that must be positive gets its interval on a log scale, so it
-/// stays positive. A knob not in `active` gets an unbounded interval.
+/// through `grads`, the gradient of its value with respect to all of `θ`
+/// (see [`value_gradients`]; so `z`, which is fitted relative to `p`,
+/// carries `p`'s uncertainty too). A parameter that must be positive gets
+/// its interval on a log scale, so it stays positive. A knob not in
+/// `active` gets an unbounded interval.
 pub fn estimates(
     space: &Space,
     theta: &[f64],
     cov: &DMatrix<f64>,
     active: &[usize],
+    grads: &[Vec<f64>],
 ) -> Vec<Estimate> {
-    let k = theta.len();
     let here = space.spec(theta);
     space
         .knobs
@@ -232,15 +254,7 @@ pub fn estimates(
                     high: f64::INFINITY,
                 };
             }
-            let grad: Vec<f64> = (0..k)
-                .map(|i| {
-                    let h = 1e-6 * theta[i].abs().max(1.0);
-                    let mut t = theta.to_vec();
-                    t[i] += h;
-                    (Space::value(knob, &space.spec(&t)) - value) / h
-                })
-                .collect();
-            let se = standard_error(&grad, cov);
+            let se = standard_error(&grads[j], cov);
             let se = if se.is_finite() { se } else { f64::INFINITY };
             let (low, high) = interval(knob.positive(), value, se);
             Estimate {
@@ -253,20 +267,106 @@ pub fn estimates(
         .collect()
 }
 
+/// The covariance of the knobs' values, `G C Gᵀ` with `G` the rows of
+/// `grads`: what a joint test of several knobs needs, since knobs that do
+/// the same work (two dampings of the first mode) can each be unsure
+/// while together they are not. A knob not in `active` has an infinite
+/// variance and no covariance.
+pub fn value_covariance(cov: &DMatrix<f64>, active: &[usize], grads: &[Vec<f64>]) -> DMatrix<f64> {
+    let n = grads.len();
+    let mut out = DMatrix::zeros(n, n);
+    for a in 0..n {
+        for b in 0..n {
+            out[(a, b)] = if !active.contains(&a) || !active.contains(&b) {
+                if a == b {
+                    f64::INFINITY
+                } else {
+                    0.0
+                }
+            } else {
+                quadratic(&grads[a], cov, &grads[b])
+            };
+        }
+    }
+    out
+}
+
+/// The 95 % quantile of `χ²(q)` for the few degrees of freedom a joint
+/// test of one effect's knobs has (exact to four figures), else by
+/// Wilson–Hilferty.
+pub fn chi2_95(q: usize) -> f64 {
+    match q {
+        1 => 3.841_5,
+        2 => 5.991_5,
+        3 => 7.814_7,
+        4 => 9.487_7,
+        5 => 11.070_5,
+        6 => 12.591_6,
+        7 => 14.067_1,
+        8 => 15.507_3,
+        _ => {
+            let h = q as f64;
+            let a = 2.0 / (9.0 * h);
+            h * (1.0 - a + 1.644_853_6 * a.sqrt()).powi(3)
+        }
+    }
+}
+
+/// Whether the values `d` (each knob's value less its "off") differ from
+/// zero jointly at 95 %, by Wald's test `dᵀ Σ⁺ d > χ²₉₅(r)`: `Σ⁺` the
+/// pseudo-inverse of their covariance `sigma` and `r` its rank, so two
+/// knobs that are one direction in the data count as one. False when a
+/// variance is not finite.
+pub fn wald_excludes(d: &[f64], sigma: &DMatrix<f64>) -> bool {
+    let n = d.len();
+    if n == 0 || (0..n).any(|i| !sigma[(i, i)].is_finite() || !d[i].is_finite()) {
+        return false;
+    }
+    // A knob with no spread at all (held at a bound) differs exactly when
+    // it differs, and at "off" leaves the test to the others.
+    let s: Vec<f64> = (0..n).map(|i| sigma[(i, i)].max(0.0).sqrt()).collect();
+    if (0..n).any(|i| s[i] == 0.0 && d[i] != 0.0) {
+        return true;
+    }
+    let keep: Vec<usize> = (0..n).filter(|&i| s[i] > 0.0).collect();
+    let n = keep.len();
+    if n == 0 {
+        return false;
+    }
+    // Scaled to unit variances first, so the rank's tolerance is relative.
+    let r = DMatrix::from_fn(n, n, |a, b| {
+        let (i, j) = (keep[a], keep[b]);
+        sigma[(i, j)] / (s[i] * s[j])
+    });
+    let z = nalgebra::DVector::from_fn(n, |a, _| d[keep[a]] / s[keep[a]]);
+    let svd = r.svd(true, true);
+    let tol = 1e-9 * svd.singular_values.max();
+    let rank = svd.singular_values.iter().filter(|&&x| x > tol).count();
+    let Ok(inv) = svd.pseudo_inverse(tol) else {
+        return false;
+    };
+    rank > 0 && (z.transpose() * inv * &z)[(0, 0)] > chi2_95(rank)
+}
+
 /// The standard error of a value with gradient `grad` over the knobs,
 /// `sqrt(gᵀ C g)`.
 fn standard_error(grad: &[f64], cov: &DMatrix<f64>) -> f64 {
-    let k = grad.len();
+    quadratic(grad, cov, grad).max(0.0).sqrt()
+}
+
+/// `gᵀ C h`.
+fn quadratic(g: &[f64], cov: &DMatrix<f64>, h: &[f64]) -> f64 {
+    let k = g.len();
     let mut v = 0.0;
     for a in 0..k {
         for b in 0..k {
             // 0 · ∞ from an inactive knob the value does not depend on.
-            if grad[a] != 0.0 && grad[b] != 0.0 {
-                v += grad[a] * cov[(a, b)] * grad[b];
+            if g[a] != 0.0 && h[b] != 0.0 {
+                v += g[a] * cov[(a, b)] * h[b];
             }
         }
     }
-    v.max(0.0).sqrt()
+    v
 }
 
 /// The 95 % interval of `value` with standard error `se`: unbounded for an
@@ -279,5 +379,62 @@ fn interval(positive: bool, value: f64, se: f64) -> (f64, f64) {
         (value / f, value * f)
     } else {
         (value - 1.96 * se, value + 1.96 * se)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Unit variances with correlation `rho`.
+    fn corr(rho: f64) -> DMatrix<f64> {
+        DMatrix::from_row_slice(2, 2, &[1.0, rho, rho, 1.0])
+    }
+
+    #[test]
+    fn two_unsure_knobs_that_trade_off_can_differ_from_off_together() {
+        // Each 1 σ from zero alone (inside its 95 % interval); along the
+        // direction they share, far out.
+        assert!(wald_excludes(&[1.0, 1.0], &corr(-0.95)));
+        // The same values along the direction they trade: no evidence.
+        assert!(!wald_excludes(&[1.0, 1.0], &corr(0.95)));
+        assert!(!wald_excludes(&[1.0, -1.0], &corr(-0.95)));
+    }
+
+    #[test]
+    fn knobs_that_are_one_direction_count_as_one_degree_of_freedom() {
+        // Rank one: the statistic is (z₁ + z₂)²/4 against χ²₉₅(1).
+        assert!(wald_excludes(&[2.0, 2.0], &corr(1.0)));
+        assert!(!wald_excludes(&[1.9, 1.9], &corr(1.0)));
+    }
+
+    #[test]
+    fn a_lone_knob_is_its_interval() {
+        let one = |d: f64, var: f64| wald_excludes(&[d], &DMatrix::from_element(1, 1, var));
+        assert!(one(2.0, 1.0));
+        assert!(!one(1.9, 1.0));
+        assert!(one(-2.0 * 3.0, 9.0));
+        assert!(!one(5.0, f64::INFINITY));
+        assert!(!one(f64::NAN, 1.0));
+        assert!(!wald_excludes(&[], &DMatrix::zeros(0, 0)));
+    }
+
+    #[test]
+    fn a_knob_held_at_off_leaves_the_test_to_the_others() {
+        // ζ₀ at its bound 0 with no spread, β 3 σ from zero.
+        let sigma = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 0.0, 1.0]);
+        assert!(wald_excludes(&[0.0, 3.0], &sigma));
+        assert!(!wald_excludes(&[0.0, 1.0], &sigma));
+        // Held away from off: it differs.
+        assert!(wald_excludes(&[0.5, 0.0], &sigma));
+        assert!(!wald_excludes(&[0.0, 0.0], &DMatrix::zeros(2, 2)));
+    }
+
+    #[test]
+    fn the_chi_square_quantiles_join_up() {
+        // Wilson–Hilferty's first against the exact 95 % quantile of
+        // χ²(9), 16.9190, within 0.2 %.
+        assert!((chi2_95(9) / 16.9190 - 1.0).abs() < 2e-3);
+        assert!((1..12).all(|q| chi2_95(q) < chi2_95(q + 1)));
     }
 }
