@@ -33,10 +33,7 @@ pub fn ljung_box(r: &[f64], h: usize) -> f64 {
 
 /// The 99 % quantile of `χ²(h)` (Wilson–Hilferty), the Ljung–Box threshold.
 pub fn chi2_99(h: usize) -> f64 {
-    let h = h as f64;
-    let z = 2.326_347_874;
-    let a = 2.0 / (9.0 * h);
-    h * (1.0 - a + z * a.sqrt()).powi(3)
+    crate::analysis::fit::wilson_hilferty(h, 2.326_347_874)
 }
 
 /// Lags of the residual–input correlation, as MATLAB's `resid` default.

@@ -376,9 +376,9 @@ impl<'a> Fitter<'a> {
         let score = self.score_here(recordings, &spec)?;
         let (active, cov) =
             self.covariance(recordings, &space, &theta, &score, &stages, &inflation)?;
-        let grads = stats::value_gradients(&space, &theta);
-        let estimates = stats::estimates(&space, &theta, &cov, &active, &grads);
+        let grads = stats::value_gradients(&space, &theta, &active);
         let value_covariance = stats::value_covariance(&cov, &active, &grads);
+        let estimates = stats::estimates(&space, &theta, &value_covariance, &active);
         let (rss, m) = (score.rss, score.m);
         let k = space.counted_parameters();
         let (aic, bic) = stats::information(rss, m, k);

@@ -35,4 +35,4 @@ pub use error::FitError;
 pub use fitter::{FitResult, Fitter, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
 pub use space::{Knob, Space};
-pub use stats::{nrmse, ChannelFit, Estimate, Score};
+pub use stats::{nrmse, wilson_hilferty, ChannelFit, Estimate, Score};

@@ -205,13 +205,18 @@ pub fn information(rss: f64, m: usize, k: usize) -> (f64, f64) {
 }
 
 /// Each knob's value's gradient with respect to all of `θ`, by forward
-/// differences: a row per knob of `space`, in its order.
-pub fn value_gradients(space: &Space, theta: &[f64]) -> Vec<Vec<f64>> {
+/// differences: a row per knob of `space`, in its order, empty for a knob
+/// not in `active` (nothing reads it).
+pub fn value_gradients(space: &Space, theta: &[f64], active: &[usize]) -> Vec<Vec<f64>> {
     let here = space.spec(theta);
     space
         .knobs
         .iter()
-        .map(|&knob| {
+        .enumerate()
+        .map(|(j, &knob)| {
+            if !active.contains(&j) {
+                return Vec::new();
+            }
             let value = Space::value(knob, &here);
             (0..theta.len())
                 .map(|i| {
@@ -225,19 +230,17 @@ pub fn value_gradients(space: &Space, theta: &[f64]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// 95 % intervals by the delta method from `cov`, the covariance of `θ`
-/// (see [`covariance`](super::covariance)), carried to each parameter
-/// through `grads`, the gradient of its value with respect to all of `θ`
-/// (see [`value_gradients`]; so `z`, which is fitted relative to `p`,
-/// carries `p`'s uncertainty too). A parameter that must be positive gets
-/// its interval on a log scale, so it stays positive. A knob not in
-/// `active` gets an unbounded interval.
+/// 95 % intervals by the delta method: each knob's variance is the
+/// diagonal of `value_cov`, the covariance of the values (see
+/// [`value_covariance`]; so `z`, which is fitted relative to `p`, carries
+/// `p`'s uncertainty too). A parameter that must be positive gets its
+/// interval on a log scale, so it stays positive. A knob not in `active`
+/// gets an unbounded interval.
 pub fn estimates(
     space: &Space,
     theta: &[f64],
-    cov: &DMatrix<f64>,
+    value_cov: &DMatrix<f64>,
     active: &[usize],
-    grads: &[Vec<f64>],
 ) -> Vec<Estimate> {
     let here = space.spec(theta);
     space
@@ -254,7 +257,7 @@ pub fn estimates(
                     high: f64::INFINITY,
                 };
             }
-            let se = standard_error(&grads[j], cov);
+            let se = value_cov[(j, j)].max(0.0).sqrt();
             let se = if se.is_finite() { se } else { f64::INFINITY };
             let (low, high) = interval(knob.positive(), value, se);
             Estimate {
@@ -304,12 +307,16 @@ pub fn chi2_95(q: usize) -> f64 {
         6 => 12.591_6,
         7 => 14.067_1,
         8 => 15.507_3,
-        _ => {
-            let h = q as f64;
-            let a = 2.0 / (9.0 * h);
-            h * (1.0 - a + 1.644_853_6 * a.sqrt()).powi(3)
-        }
+        _ => wilson_hilferty(q, 1.644_853_6),
     }
+}
+
+/// Wilson and Hilferty's approximation to the quantile of `χ²(h)` whose
+/// normal deviate is `z`: `h (1 − a + z √a)³`, `a = 2/(9h)`.
+pub fn wilson_hilferty(h: usize, z: f64) -> f64 {
+    let h = h as f64;
+    let a = 2.0 / (9.0 * h);
+    h * (1.0 - a + z * a.sqrt()).powi(3)
 }
 
 /// Whether the values `d` (each knob's value less its "off") differ from
@@ -346,12 +353,6 @@ pub fn wald_excludes(d: &[f64], sigma: &DMatrix<f64>) -> bool {
         return false;
     };
     rank > 0 && (z.transpose() * inv * &z)[(0, 0)] > chi2_95(rank)
-}
-
-/// The standard error of a value with gradient `grad` over the knobs,
-/// `sqrt(gᵀ C g)`.
-fn standard_error(grad: &[f64], cov: &DMatrix<f64>) -> f64 {
-    quadratic(grad, cov, grad).max(0.0).sqrt()
 }
 
 /// `gᵀ C h`.
