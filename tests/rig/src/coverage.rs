@@ -111,12 +111,22 @@ pub fn score(
                 .as_f64()
                 .ok_or_else(|| anyhow::anyhow!("estimate {knob}: `{field}` is not a number"))
         };
+        // JSON has no infinity: `finrs fit` writes an unbounded side of an
+        // interval (a knob the data cannot pin, such as `p` once `b` has
+        // gone to zero) as null. It covers every value on its side.
+        let bound = |field: &str, unbounded: f64| {
+            if e[field].is_null() {
+                Ok(unbounded)
+            } else {
+                number(field)
+            }
+        };
         out.push(Scored {
             knob: knob.to_string(),
             truth: t,
             value: number("value")?,
-            low: number("low")?,
-            high: number("high")?,
+            low: bound("low", f64::NEG_INFINITY)?,
+            high: bound("high", f64::INFINITY)?,
         });
     }
     Ok(out)
@@ -267,5 +277,22 @@ mod tests {
         // A document without estimates is refused, naming what is missing.
         let err = score(&serde_json::json!({}), &t).unwrap_err();
         assert!(err.to_string().contains("estimates"), "{err}");
+    }
+
+    #[test]
+    fn a_null_bound_is_unbounded_and_a_missing_value_refused() {
+        let t = truth(&sample(), &Hidden::default());
+        let fit = serde_json::json!({"estimates": [
+            {"knob": "p_per_s", "value": 0.002, "low": 0.0, "high": null},
+        ]});
+        let s = score(&fit, &t).unwrap();
+        assert_eq!(s[0].high, f64::INFINITY);
+        assert!(s[0].covered());
+        assert_eq!(s[0].error_in_half_widths(), 0.0);
+        let fit = serde_json::json!({"estimates": [
+            {"knob": "p_per_s", "value": null, "low": 0.0, "high": 1.0},
+        ]});
+        let err = score(&fit, &t).unwrap_err();
+        assert!(err.to_string().contains("`value`"), "{err}");
     }
 }

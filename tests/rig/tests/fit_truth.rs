@@ -3,7 +3,7 @@
 //! `scripts/rig-coverage` (seeds from 10 000); this seed (504) was fixed
 //! before it was run, and no other seed was tried in its place.
 
-use finrs::analysis::fit::{Effect, Fitter};
+use finrs::analysis::fit::{profile_cost, Effect, Fitter};
 use finrs::model::params::ModelFile;
 use finrs::session::Session;
 use finrs_rig::sweep::{structure_of, truth_of, write_scenario, Scenario};
@@ -40,7 +40,8 @@ fn a_large_deflection_fit_finds_the_strips_stiffness_and_circuit() {
     let from_data = fitter.fit(&all, &effects, None, fixed).unwrap();
     let either = fitter.fit_from_either_start(&all, &effects, fixed).unwrap();
     std::fs::remove_dir_all(&dir).ok();
-    assert!(either.score.rss <= from_data.score.rss);
+    // The lower of the two by the cost both descents minimised.
+    assert!(profile_cost(&either.score) <= profile_cost(&from_data.score));
     let truth = truth_of(&s).unwrap();
     let off = |knob: &str, value: f64| (value - truth[knob]).abs() / truth[knob];
     let p = &either.spec.params;

@@ -329,7 +329,7 @@ impl<'a> Fitter<'a> {
                 &|i, spec| self.residuals_of(i, spec),
             )?,
         };
-        let mut theta = space.theta(&start);
+        let mut theta = space.start_theta(&start);
         let (mut evaluations, mut termination) = (0, Vec::new());
         let stages: Vec<(Stage, Vec<usize>, usize)> = Stage::ALL
             .iter()

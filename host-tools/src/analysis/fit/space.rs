@@ -188,6 +188,18 @@ const B_FLOOR: f64 = 1e-15;
 /// Lowest `θ` a start gives `b/p` (`θ²` = 1e-6 of the unit): at `θ = 0`
 /// its gradient vanishes.
 const B_START_MIN: f64 = 1e-3;
+/// Lowest relaxation rate `p` a fit starts from, 1/s: a lag of 1000 s,
+/// off for every recording, whose terms still move the moment. At the
+/// logarithm's floor (1e-9) the lag's part of the moment is `b/(s + p)`
+/// with `b ∝ p`, a saddle where `p`'s and `b`'s gradients both vanish.
+const P_START_MIN: f64 = 1e-3;
+/// Lowest instant gain `a` a back-relaxed fit starts from, in units of
+/// the fixed model's DC moment per charge: there `a` is a logarithm, and a
+/// gain near zero moves the moment by next to nothing per step. A board
+/// strip that relaxes back had its baseline collapse to no moment at all
+/// (`a` 8e-6 of the unit), and the back-relaxation started there stopped
+/// at once (rig seed 10084).
+const A_START_MIN: f64 = 1e-3;
 
 /// A non-negative term: `s θ` above zero, zero below (the optimiser sees
 /// a flat floor, and steps back from it).
@@ -343,6 +355,23 @@ impl Space {
             }
         }
         spec
+    }
+
+    /// `θ` to start a fit from `spec`: [`Space::theta`], with a collapsed
+    /// relaxation lifted to [`P_START_MIN`] and, back-relaxed,
+    /// [`A_START_MIN`] (the lag's `z` kept).
+    pub fn start_theta(&self, spec: &ModelSpec) -> Vec<f64> {
+        let mut lifted = *spec;
+        let p = &mut lifted.params;
+        p.p_per_s = p.p_per_s.max(P_START_MIN);
+        if self.has(Effect::BackRelaxation) {
+            let a = p.a_nm_per_c.max(A_START_MIN * self.instant_unit());
+            if p.a_nm_per_c > 0.0 {
+                p.b_nm_per_c_s *= a / p.a_nm_per_c;
+            }
+            p.a_nm_per_c = a;
+        }
+        self.theta(&lifted)
     }
 
     /// `θ` for a model (values outside a knob's range are pulled inside).
