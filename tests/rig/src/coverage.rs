@@ -167,7 +167,9 @@ pub fn tally<'a>(scored: impl IntoIterator<Item = &'a [Scored]>) -> BTreeMap<Str
     out
 }
 
-fn median(x: &[f64]) -> f64 {
+/// The median of `x` (for an even count the mean of the two middle
+/// values), NaN when empty.
+pub fn median(x: &[f64]) -> f64 {
     let mut v = x.to_vec();
     v.sort_by(f64::total_cmp);
     match v.len() {

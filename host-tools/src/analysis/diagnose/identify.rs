@@ -27,7 +27,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
-use crate::analysis::fit::{normal, Effect, FitError, FitResult, Fitter, Knob, Space};
+use crate::analysis::fit::{
+    difference_step, normal, Effect, FitError, FitResult, Fitter, Knob, Space,
+};
 use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
 use crate::session::Session;
@@ -269,7 +271,7 @@ pub fn identify(
     let columns: Result<Vec<Vec<f64>>, FitError> = (0..theta.len())
         .into_par_iter()
         .map(|j| {
-            let h = 1e-6 * theta[j].abs().max(1.0);
+            let h = difference_step(theta[j]);
             let mut t = theta.clone();
             t[j] += h;
             let r = flat(&space.spec(&t))?;

@@ -34,5 +34,5 @@ pub use effect::Effect;
 pub use error::FitError;
 pub use fitter::{FitResult, Fitter, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
-pub use space::{Knob, Space};
+pub use space::{difference_step, Knob, Space};
 pub use stats::{nrmse, wilson_hilferty, ChannelFit, Estimate, Score};

@@ -201,6 +201,14 @@ const P_START_MIN: f64 = 1e-3;
 /// at once (rig seed 10084).
 const A_START_MIN: f64 = 1e-3;
 
+/// The forward-difference step for `θ`'s entry `t`: `θ` is a logarithm or
+/// similar, so a fixed step is a relative one. Every derivative the fit
+/// and the diagnosis take in `θ` (the Jacobian, the values' gradients, the
+/// identifiability's Jacobian) steps by it.
+pub fn difference_step(t: f64) -> f64 {
+    1e-6 * t.abs().max(1.0)
+}
+
 /// A non-negative term: `s θ` above zero, zero below (the optimiser sees
 /// a flat floor, and steps back from it).
 fn ramp(t: f64, scale: f64) -> f64 {

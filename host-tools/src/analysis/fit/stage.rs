@@ -18,7 +18,7 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 
 use super::error::FitError;
-use super::space::{Knob, Space};
+use super::space::{difference_step, Knob, Space};
 use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
 
@@ -137,8 +137,7 @@ impl<'b> Problem<'b> {
             .free
             .par_iter()
             .map(|&j| {
-                // θ is a logarithm or similar: a fixed step is a relative one.
-                let h = 1e-6 * theta[j].abs().max(1.0);
+                let h = difference_step(theta[j]);
                 let mut t = theta.to_vec();
                 t[j] += h;
                 let r = self.residuals_at(&t)?;

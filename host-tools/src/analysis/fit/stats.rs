@@ -4,7 +4,7 @@
 use nalgebra::DMatrix;
 
 use super::data::Target;
-use super::space::{Knob, Space};
+use super::space::{difference_step, Knob, Space};
 use crate::recording::{Channel, Voltages};
 
 /// A fitted parameter with its 95 % confidence interval.
@@ -220,7 +220,7 @@ pub fn value_gradients(space: &Space, theta: &[f64], active: &[usize]) -> Vec<Ve
             let value = Space::value(knob, &here);
             (0..theta.len())
                 .map(|i| {
-                    let h = 1e-6 * theta[i].abs().max(1.0);
+                    let h = difference_step(theta[i]);
                     let mut t = theta.to_vec();
                     t[i] += h;
                     (Space::value(knob, &space.spec(&t)) - value) / h

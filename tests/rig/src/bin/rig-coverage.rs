@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use finrs_rig::coverage::{markdown, score, tally, Scored};
+use finrs_rig::coverage::{markdown, median, score, tally, Scored};
 use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::sweep::{plan, structure_of, truth_of, write_scenario, Scenario};
 
@@ -102,11 +102,7 @@ fn times(results: &[(Scenario, Fitted)]) -> String {
             continue;
         };
         let n = t.len();
-        let median = if n % 2 == 1 {
-            t[n / 2].0
-        } else {
-            0.5 * (t[n / 2 - 1].0 + t[n / 2].0)
-        };
+        let median = median(&t.iter().map(|x| x.0).collect::<Vec<_>>());
         let over = t.iter().filter(|x| x.0 > 10.0).count();
         out.push_str(&format!(
             "| {label} | {n} | {median:.1} | {max:.1} ({slowest}) | {over} |\n"
