@@ -345,6 +345,15 @@ fn identifiability(s: &mut String, v: &Verdict) {
 /// The final model's estimates with their intervals.
 fn parameters(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(s, "\n## Final model's parameters (95 % intervals)\n");
+    if let Some(form) = &d.final_fit.form {
+        let _ = writeln!(
+            s,
+            "Each interval spans the model's fit with each mode's own damping ratio in place \
+             of its damping law (cost {:.1} with the law, {:.1} with each mode's own; lower \
+             is better; see docs/model.md).\n",
+            form.cost_law, form.cost_each_mode
+        );
+    }
     let _ = writeln!(s, "| parameter | estimate | interval |");
     let _ = writeln!(s, "|---|---|---|");
     for e in &d.final_fit.estimates {

@@ -189,10 +189,15 @@ pub fn diagnose(
         identifiability,
         identifiability_refused,
     };
+    // The final model's intervals span its fit with each mode's own
+    // damping, as `finrs fit`'s do; after the search, which it does not
+    // steer.
+    progress("the damping law's form");
+    let final_fit = fitter.with_form_check(&train, found.fit, fixed)?;
     Ok(Diagnosis {
         verdict,
         baseline,
-        final_fit: found.fit,
+        final_fit,
         holdout_scores: (base_hold, found.hold),
         holdout: hold,
     })

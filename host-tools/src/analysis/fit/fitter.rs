@@ -11,7 +11,7 @@ use super::inflation::{profile_cost, Inflation};
 use super::mode_start;
 use super::sampling::Sampling;
 use super::space::{Knob, Space};
-use super::stage::{descend, Problem, Stage};
+use super::stage::{descend, Problem, Stage, PATIENCE};
 use super::start;
 use super::stats::{self, ChannelFit, Estimate, Score};
 use crate::model::params::{Beam, Electrical, ExtensionsFile, Mesh, ModelFile, Relaxation};
@@ -67,6 +67,22 @@ pub struct FitResult {
     pub evaluations: usize,
     /// Why the optimiser stopped.
     pub termination: String,
+    /// The same structure fitted with each mode's own damping, whose
+    /// intervals `estimates`' span ([`Fitter::with_form_check`]); `None`
+    /// where not checked.
+    pub form: Option<FormCheck>,
+}
+
+/// The fit again with each mode's own damping, beside the one reported.
+#[derive(Clone, Debug)]
+pub struct FormCheck {
+    /// The structure's estimates with each mode's own damping ratio in
+    /// place of its law, with their own 95 % intervals.
+    pub each_mode: Vec<Estimate>,
+    /// The cost both fits minimise ([`profile_cost`]) at the law's fit.
+    pub cost_law: f64,
+    /// The same at the fit with each mode's own ratio.
+    pub cost_each_mode: f64,
 }
 
 impl FitResult {
@@ -128,7 +144,7 @@ impl FitResult {
 
 /// A session prepared for fitting: its targets and noise levels.
 pub struct Fitter<'a> {
-    session: &'a Session,
+    pub(super) session: &'a Session,
     targets: SessionTargets,
 }
 
@@ -329,7 +345,32 @@ impl<'a> Fitter<'a> {
                 &|i, spec| self.residuals_of(i, spec),
             )?,
         };
-        let mut theta = space.start_theta(&start);
+        // Already in the pool.
+        self.fit_space_here(recordings, space, &start, PATIENCE)
+    }
+
+    /// Fits `space` on `recordings` from `start`: the descents stage by
+    /// stage (each at most `patience` evaluations per free knob and one),
+    /// then the intervals and the criteria at the end.
+    pub(super) fn fit_space(
+        &self,
+        recordings: &[usize],
+        space: Space,
+        start: &ModelSpec,
+        patience: usize,
+    ) -> Result<FitResult, FitError> {
+        pool().install(|| self.fit_space_here(recordings, space, start, patience))
+    }
+
+    fn fit_space_here(
+        &self,
+        recordings: &[usize],
+        space: Space,
+        start: &ModelSpec,
+        patience: usize,
+    ) -> Result<FitResult, FitError> {
+        self.data_to_fit(recordings)?;
+        let mut theta = space.start_theta(start);
         let (mut evaluations, mut termination) = (0, Vec::new());
         let stages: Vec<(Stage, Vec<usize>, usize)> = Stage::ALL
             .iter()
@@ -356,7 +397,7 @@ impl<'a> Fitter<'a> {
                 let run =
                     |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec, &inflation);
                 let problem = Problem::new(&run, &space, free, theta.clone(), *m);
-                let (problem, report, n) = descend(problem);
+                let (problem, report, n) = descend(problem, patience);
                 theta = problem.theta;
                 evaluations += n;
                 termination.push(format!("{}: {:?}", stage.name(), report.termination));
@@ -393,6 +434,7 @@ impl<'a> Fitter<'a> {
             bic,
             evaluations,
             termination: termination.join(", "),
+            form: None,
         })
     }
 

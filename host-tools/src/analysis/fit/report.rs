@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use super::data::SessionTargets;
 use super::fitter::FitResult;
+use super::stats::Estimate;
 
 /// Parameters with intervals, information criteria, and fit per channel.
 pub fn text(fit: &FitResult, targets: &SessionTargets) -> String {
@@ -22,15 +23,15 @@ pub fn text(fit: &FitResult, targets: &SessionTargets) -> String {
         s,
         "\nparameter                    estimate      95 % interval"
     );
-    for e in &fit.estimates {
+    estimate_lines(&mut s, &fit.estimates);
+    if let Some(form) = &fit.form {
         let _ = writeln!(
             s,
-            "{:<26} {:>12.5e}   [{:.4e}, {:.4e}]",
-            e.knob.name(),
-            e.value,
-            e.low,
-            e.high
+            "\nintervals span the fit with each mode's own damping ratio in place of the law \
+             (cost {:.1} with the law, {:.1} with each mode's own; lower is better):",
+            form.cost_law, form.cost_each_mode
         );
+        estimate_lines(&mut s, &form.each_mode);
     }
     let _ = writeln!(s, "\nnoise per sensor (from the opening rests):");
     for (sensor, sigma) in &targets.sigma {
@@ -93,6 +94,23 @@ pub struct FitSummary {
     /// Every channel with signal: recording, channel, fit % and RMS in
     /// noise units.
     pub channels: Vec<ChannelSummary>,
+    /// The structure fitted again with each mode's own damping ratio in
+    /// place of the law, whose intervals `estimates`' span; absent where
+    /// not checked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping_form: Option<FormSummary>,
+}
+
+/// The form check of a [`FitSummary`].
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct FormSummary {
+    /// The cost both fits minimise, at the law's fit.
+    pub cost_law: f64,
+    /// The same with each mode's own ratio.
+    pub cost_each_mode: f64,
+    /// The estimates with each mode's own ratio, each with its own 95 %
+    /// interval.
+    pub estimates: Vec<EstimateSummary>,
 }
 
 /// One parameter of a [`FitSummary`].
@@ -126,16 +144,7 @@ impl FitSummary {
     pub fn new(fit: &FitResult, targets: &SessionTargets) -> FitSummary {
         FitSummary {
             effects: fit.effects.iter().map(|e| e.name().to_string()).collect(),
-            estimates: fit
-                .estimates
-                .iter()
-                .map(|e| EstimateSummary {
-                    knob: e.knob.name().to_string(),
-                    value: e.value,
-                    low: e.low,
-                    high: e.high,
-                })
-                .collect(),
+            estimates: summaries(&fit.estimates),
             noise: targets
                 .sigma
                 .iter()
@@ -159,6 +168,37 @@ impl FitSummary {
                     rms_in_noise: c.rms_in_noise,
                 })
                 .collect(),
+            damping_form: fit.form.as_ref().map(|f| FormSummary {
+                cost_law: f.cost_law,
+                cost_each_mode: f.cost_each_mode,
+                estimates: summaries(&f.each_mode),
+            }),
         }
     }
+}
+
+/// A line per estimate: name, value and interval.
+fn estimate_lines(s: &mut String, estimates: &[Estimate]) {
+    for e in estimates {
+        let _ = writeln!(
+            s,
+            "{:<26} {:>12.5e}   [{:.4e}, {:.4e}]",
+            e.knob.name(),
+            e.value,
+            e.low,
+            e.high
+        );
+    }
+}
+
+fn summaries(estimates: &[Estimate]) -> Vec<EstimateSummary> {
+    estimates
+        .iter()
+        .map(|e| EstimateSummary {
+            knob: e.knob.name().to_string(),
+            value: e.value,
+            low: e.low,
+            high: e.high,
+        })
+        .collect()
 }

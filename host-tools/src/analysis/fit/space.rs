@@ -54,7 +54,30 @@ pub enum Knob {
     /// Segment `i`'s relative departure of the moment gain `K` (segment
     /// variation).
     SegmentK(usize),
+    /// The free strip's mode `k`'s (from 0) own damping ratio, the modes
+    /// above taking the last freed one's (the form check's damping, see
+    /// [`Space::with_each_modes_damping`]).
+    FreeMode(usize),
+    /// The held strip's mode `k`'s own damping ratio, as
+    /// [`Knob::FreeMode`].
+    BlockedMode(usize),
 }
+
+/// Modes of the free strip whose own damping ratio the form check frees:
+/// the camera's 30 frames a second see the first alone.
+pub const OWN_FREE_MODES: usize = 1;
+/// Modes of the held strip whose own damping ratio the form check frees:
+/// the load cell's thousand samples a second see a held tip ring in
+/// several at once (the rig's soft strip: 2.2 times its noise with four
+/// modes' own ratios against 23 with one for all, `tests/rig/tests/against_model.rs`).
+pub const OWN_BLOCKED_MODES: usize = 4;
+const FREE_MODE_NAMES: [&str; OWN_FREE_MODES] = ["modal_damping_free_1"];
+const BLOCKED_MODE_NAMES: [&str; OWN_BLOCKED_MODES] = [
+    "modal_damping_blocked_1",
+    "modal_damping_blocked_2",
+    "modal_damping_blocked_3",
+    "modal_damping_blocked_4",
+];
 
 /// The per-segment knobs' names, by segment index.
 const SEGMENT_R1_NAMES: [&str; MAX_SEGMENTS] = [
@@ -122,6 +145,8 @@ impl Knob {
             Knob::SegmentR1(i) => SEGMENT_R1_NAMES[*i],
             Knob::SegmentC(i) => SEGMENT_C_NAMES[*i],
             Knob::SegmentK(i) => SEGMENT_K_NAMES[*i],
+            Knob::FreeMode(k) => FREE_MODE_NAMES[*k],
+            Knob::BlockedMode(k) => BLOCKED_MODE_NAMES[*k],
         }
     }
 
@@ -240,6 +265,9 @@ pub struct Space {
     pub effects: Vec<Effect>,
     /// Parameters held fixed (geometry, beam unless freed).
     pub fixed: ModelSpec,
+    /// Whether the damping is each mode's own ratio
+    /// ([`Space::with_each_modes_damping`]) rather than the structure's.
+    pub each_modes_damping: bool,
 }
 
 impl Space {
@@ -272,7 +300,23 @@ impl Space {
             knobs,
             effects,
             fixed,
+            each_modes_damping: false,
         }
+    }
+
+    /// The same structure with each mode's own damping ratio in place of
+    /// its damping law (`damping`'s `ζ₀` and `β`; none without it): the
+    /// first [`OWN_FREE_MODES`] modes of the free strip and
+    /// [`OWN_BLOCKED_MODES`] of the held one, the modes above each taking
+    /// the last one's. Not a catalogue effect: the fit's check of how far
+    /// its estimates lean on the law's form ([`super::form`]).
+    pub fn with_each_modes_damping(mut self) -> Space {
+        self.knobs.retain(|k| !matches!(k, Knob::Zeta | Knob::Beta));
+        self.knobs.extend((0..OWN_FREE_MODES).map(Knob::FreeMode));
+        self.knobs
+            .extend((0..OWN_BLOCKED_MODES).map(Knob::BlockedMode));
+        self.each_modes_damping = true;
+        self
     }
 
     /// Whether the structure includes `e`.
@@ -335,6 +379,14 @@ impl Space {
                 }
                 Knob::SegmentK(i) => {
                     spec.ext.segment_variation.k_deviation[*i] = (t * SEGMENT_SCALE).exp_m1()
+                }
+                // In ascending order: each sets its mode and those above,
+                // until the next one's knob.
+                Knob::FreeMode(k) => {
+                    spec.ext.modal_damping.free[*k..].fill(ramp(t, ZETA_SCALE).min(ZETA_MAX))
+                }
+                Knob::BlockedMode(k) => {
+                    spec.ext.modal_damping.blocked[*k..].fill(ramp(t, ZETA_SCALE).min(ZETA_MAX))
                 }
             }
         }
@@ -424,6 +476,7 @@ impl Space {
                 Knob::SegmentR1(_) | Knob::SegmentC(_) | Knob::SegmentK(_) => {
                     Space::value(*knob, spec).max(-1.0 + 1e-9).ln_1p() / SEGMENT_SCALE
                 }
+                Knob::FreeMode(_) | Knob::BlockedMode(_) => Space::value(*knob, spec) / ZETA_SCALE,
             })
             .collect()
     }
@@ -451,6 +504,8 @@ impl Space {
             Knob::SegmentR1(i) => spec.ext.segment_variation.r1_deviation[i],
             Knob::SegmentC(i) => spec.ext.segment_variation.c_deviation[i],
             Knob::SegmentK(i) => spec.ext.segment_variation.k_deviation[i],
+            Knob::FreeMode(k) => spec.ext.modal_damping.free[k],
+            Knob::BlockedMode(k) => spec.ext.modal_damping.blocked[k],
         }
     }
 }

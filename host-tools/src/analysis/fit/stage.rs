@@ -202,11 +202,16 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 /// valley, and three more crawls cost four times the evaluations for
 /// little (on an off-class session every candidate on top of dehydration
 /// ran 1454 evaluations so, and the session took 490 s). Returns the
-/// problem at the end, the last report and the evaluations in all.
-pub fn descend(mut problem: Problem<'_>) -> (Problem<'_>, MinimizationReport<f64>, usize) {
+/// problem at the end, the last report and the evaluations in all. Each
+/// descent takes at most `patience` evaluations per free knob and one
+/// ([`PATIENCE`] for a fit).
+pub fn descend(
+    mut problem: Problem<'_>,
+    patience: usize,
+) -> (Problem<'_>, MinimizationReport<f64>, usize) {
     let start = problem.params();
     problem.set_params(&start);
-    let (mut problem, mut report) = optimiser().minimize(problem);
+    let (mut problem, mut report) = optimiser(patience).minimize(problem);
     let mut evaluations = report.number_of_evaluations;
     for _ in 0..MAX_RESTARTS {
         if matches!(report.termination, TerminationReason::LostPatience) {
@@ -215,7 +220,7 @@ pub fn descend(mut problem: Problem<'_>) -> (Problem<'_>, MinimizationReport<f64
         let before = report.objective_function;
         let edge = problem.edge();
         problem.set_params(&edge);
-        let (p, r) = optimiser().minimize(problem);
+        let (p, r) = optimiser(patience).minimize(problem);
         evaluations += r.number_of_evaluations;
         problem = p;
         let gained = before - r.objective_function;
@@ -227,15 +232,18 @@ pub fn descend(mut problem: Problem<'_>) -> (Problem<'_>, MinimizationReport<f64
     (problem, report, evaluations)
 }
 
+/// Evaluations a fit's descent may take per free knob and one.
+pub const PATIENCE: usize = 40;
+
 /// One descent's optimiser: [`TOLERANCE`] on the cost and the gradient,
-/// the crate's own on the step, and at most 40 evaluations per free knob
-/// and one. Not the step at a millionth: in a stiff valley the steps are
-/// small while the cost still falls, and a descent so stopped left the
-/// virtual bench's soft beam (`tests/diagnose.rs`) at 1.04 times the
-/// noise held out, `unexplained`.
-fn optimiser() -> LevenbergMarquardt<f64> {
+/// the crate's own on the step, and at most `patience` evaluations per
+/// free knob and one. Not the step at a millionth: in a stiff valley the
+/// steps are small while the cost still falls, and a descent so stopped
+/// left the virtual bench's soft beam (`tests/diagnose.rs`) at 1.04 times
+/// the noise held out, `unexplained`.
+fn optimiser(patience: usize) -> LevenbergMarquardt<f64> {
     LevenbergMarquardt::new()
-        .with_patience(40)
+        .with_patience(patience)
         .with_ftol(TOLERANCE)
         .with_gtol(TOLERANCE)
 }
