@@ -346,11 +346,17 @@ fn identifiability(s: &mut String, v: &Verdict) {
 fn parameters(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(s, "\n## Final model's parameters (95 % intervals)\n");
     if let Some(form) = &d.final_fit.form {
+        let which = if form.each_mode_final {
+            "each mode's own damping ratio, which gained on the held-out part; each interval \
+             spans it and the model with the damping law"
+        } else {
+            "the damping law; each interval spans it and the model with each mode's own \
+             damping ratio in place of the law"
+        };
         let _ = writeln!(
             s,
-            "Each interval spans the model's fit with each mode's own damping ratio in place \
-             of its damping law (cost {:.1} with the law, {:.1} with each mode's own; lower \
-             is better; see docs/model.md).\n",
+            "The final model has {which} (cost {:.1} with the law, {:.1} with each mode's own; \
+             lower is better; see docs/model.md).\n",
             form.cost_law, form.cost_each_mode
         );
     }

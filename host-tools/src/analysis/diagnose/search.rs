@@ -12,7 +12,7 @@ use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable,
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
 use crate::analysis::fit::{
-    profile_cost, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score,
+    form, profile_cost, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score,
 };
 use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
@@ -121,9 +121,28 @@ pub fn diagnose(
     };
     let untestable = untestable(session);
     let found = search.run(&baseline, &base_hold, &untestable, progress)?;
+    // The damping's form: the final model fitted again with each mode's
+    // own ratio in place of the law. Where the model has `damping` and the
+    // second fit gains on the held-out part as a candidate must, it is the
+    // final model: a form of the damping, not a name, chosen after the
+    // search, which it does not steer. Either way the intervals span both.
+    progress("the damping law's form");
+    let each_mode = fitter.each_modes_damping(&train, &found.fit, fixed)?;
+    let each_hold = fitter.score(&hold, &each_mode.spec)?;
+    let each_mode_gain_percent = found
+        .fit
+        .effects
+        .contains(&Effect::Damping)
+        .then(|| 100.0 * (1.0 - each_hold.rss / found.hold.rss));
+    let each_mode_final = each_mode_gain_percent.is_some_and(|g| g >= 100.0 * HOLDOUT_RSS_GAIN);
+    let final_hold = if each_mode_final {
+        each_hold
+    } else {
+        found.hold.clone()
+    };
     let per = |s: &Score| s.rss / s.m.max(1) as f64;
     // Each sensor on its own: pooled, the currents would hide the rest.
-    let sensors = sensor_floors(&found.hold);
+    let sensors = sensor_floors(&final_hold);
     let at_floor = sensors.iter().all(|f| f.at_floor);
     let causes: Vec<String> = found
         .accepted()
@@ -159,6 +178,7 @@ pub fn diagnose(
             Ok(v) => (v, None),
             Err(e) => (Vec::new(), Some(identify::error_chain(&e))),
         };
+    let final_fit = form::spanning(found.fit, each_mode, each_mode_final);
     let score_of = |fit: &FitResult, hold: &Score| ModelScore {
         holdout_nrmse: hold.nrmse,
         holdout_rss_per_residual: per(hold),
@@ -170,18 +190,18 @@ pub fn diagnose(
         causes,
         verdict: verdict.to_string(),
         baseline: score_of(&baseline, &base_hold),
-        extended: score_of(&found.fit, &found.hold),
-        gain_percent: gain_percent(base_hold.nrmse, found.hold.nrmse),
+        extended: score_of(&final_fit, &final_hold),
+        gain_percent: gain_percent(base_hold.nrmse, final_hold.nrmse),
+        each_mode_damping_gain_percent: each_mode_gain_percent,
         candidates: found.candidates,
-        params: found
-            .fit
+        params: final_fit
             .estimates
             .iter()
             .map(|e| (e.knob.name().to_string(), e.value))
             .collect(),
         training: train.iter().map(name).collect(),
         holdout: hold.iter().map(name).collect(),
-        residual_tests: residual_tests(&base_hold, &found.hold),
+        residual_tests: residual_tests(&base_hold, &final_hold),
         sensors,
         untestable,
         rest,
@@ -189,16 +209,11 @@ pub fn diagnose(
         identifiability,
         identifiability_refused,
     };
-    // The final model's intervals span its fit with each mode's own
-    // damping, as `finrs fit`'s do; after the search, which it does not
-    // steer.
-    progress("the damping law's form");
-    let final_fit = fitter.with_form_check(&train, found.fit, fixed)?;
     Ok(Diagnosis {
         verdict,
         baseline,
         final_fit,
-        holdout_scores: (base_hold, found.hold),
+        holdout_scores: (base_hold, final_hold),
         holdout: hold,
     })
 }

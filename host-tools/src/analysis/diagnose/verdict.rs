@@ -83,6 +83,11 @@ pub struct Verdict {
     pub extended: ModelScore,
     /// Reduction of held-out NRMSE from baseline to final model, percent.
     pub gain_percent: f64,
+    /// Where the final model has `damping`: how much lower, percent, the
+    /// held-out RSS is with each mode's own damping ratio in place of the
+    /// law. From [`HOLDOUT_RSS_GAIN`](super::gates::HOLDOUT_RSS_GAIN) up,
+    /// the final model is the one with each mode's own ratio.
+    pub each_mode_damping_gain_percent: Option<f64>,
     /// Every candidate tried.
     pub candidates: Vec<Candidate>,
     /// The final model's parameters.
@@ -143,6 +148,21 @@ impl std::fmt::Display for Verdict {
             self.baseline.holdout_rss_per_residual,
             self.extended.holdout_rss_per_residual
         )?;
+        if let Some(g) = self.each_mode_damping_gain_percent {
+            if g >= 100.0 * super::gates::HOLDOUT_RSS_GAIN {
+                writeln!(
+                    f,
+                    "damping: each mode's own ratio (held-out RSS {g:.2} % below the law's)"
+                )?;
+            } else {
+                writeln!(
+                    f,
+                    "damping: the law (with each mode's own ratio the held-out RSS {:.2} % {})",
+                    g.abs(),
+                    if g >= 0.0 { "lower" } else { "higher" }
+                )?;
+            }
+        }
         for c in &self.candidates {
             writeln!(
                 f,

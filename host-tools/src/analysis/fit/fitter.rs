@@ -67,18 +67,24 @@ pub struct FitResult {
     pub evaluations: usize,
     /// Why the optimiser stopped.
     pub termination: String,
-    /// The same structure fitted with each mode's own damping, whose
-    /// intervals `estimates`' span ([`Fitter::with_form_check`]); `None`
-    /// where not checked.
+    /// The same structure fitted with its damping law and with each
+    /// mode's own ratio, whose intervals `estimates`' span
+    /// ([`Fitter::with_form_check`]); `None` where not checked.
     pub form: Option<FormCheck>,
 }
 
-/// The fit again with each mode's own damping, beside the one reported.
+/// A structure fitted with its damping law and with each mode's own
+/// damping ratio in its place (`form.rs`): the two fits' own estimates,
+/// each with its own 95 % interval, and their costs.
 #[derive(Clone, Debug)]
 pub struct FormCheck {
-    /// The structure's estimates with each mode's own damping ratio in
-    /// place of its law, with their own 95 % intervals.
+    /// The estimates with the law.
+    pub law: Vec<Estimate>,
+    /// The estimates with each mode's own ratio.
     pub each_mode: Vec<Estimate>,
+    /// Whether the result is the fit with each mode's own ratio (else the
+    /// law's).
+    pub each_mode_final: bool,
     /// The cost both fits minimise ([`profile_cost`]) at the law's fit.
     pub cost_law: f64,
     /// The same at the fit with each mode's own ratio.

@@ -48,7 +48,20 @@ impl Fitter<'_> {
     pub fn with_form_check(
         &self,
         recordings: &[usize],
-        mut fit: FitResult,
+        fit: FitResult,
+        fixed: ModelSpec,
+    ) -> Result<FitResult, FitError> {
+        let each_mode = self.each_modes_damping(recordings, &fit, fixed)?;
+        Ok(spanning(fit, each_mode, false))
+    }
+
+    /// The structure of `fit` fitted again on `recordings` with each
+    /// mode's own damping ratio in place of its damping law
+    /// ([`Space::with_each_modes_damping`]), from where `fit` ended.
+    pub fn each_modes_damping(
+        &self,
+        recordings: &[usize],
+        fit: &FitResult,
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
         let segments = self.session.recordings[0].rec.meta.segments;
@@ -83,15 +96,31 @@ impl Fitter<'_> {
         }
         start.ext.damping_ratio = 0.0;
         start.ext.damping_stiffness_s = 0.0;
-        let each_mode = self.fit_space(recordings, space, &start, CHECK_PATIENCE)?;
-        widen(&mut fit.estimates, &each_mode.estimates);
-        fit.form = Some(FormCheck {
-            cost_law: profile_cost(&fit.score),
-            cost_each_mode: profile_cost(&each_mode.score),
-            each_mode: each_mode.estimates,
-        });
-        Ok(fit)
+        self.fit_space(recordings, space, &start, CHECK_PATIENCE)
     }
+}
+
+/// The fit with the damping law and the same structure's fit with each
+/// mode's own ratio ([`Fitter::each_modes_damping`]) as one result: the
+/// model and estimates of the second if `each_mode_final`, else of the
+/// first, every interval spanning both fits' intervals, and both fits'
+/// own estimates in [`FitResult::form`].
+pub fn spanning(law: FitResult, each_mode: FitResult, each_mode_final: bool) -> FitResult {
+    let form = FormCheck {
+        law: law.estimates.clone(),
+        each_mode: each_mode.estimates.clone(),
+        cost_law: profile_cost(&law.score),
+        cost_each_mode: profile_cost(&each_mode.score),
+        each_mode_final,
+    };
+    let (mut out, other) = if each_mode_final {
+        (each_mode, law)
+    } else {
+        (law, each_mode)
+    };
+    widen(&mut out.estimates, &other.estimates);
+    out.form = Some(form);
+    out
 }
 
 /// Each of `estimates`' intervals widened to hold `other`'s interval for

@@ -18,7 +18,7 @@ mod data;
 mod effect;
 mod error;
 mod fitter;
-mod form;
+pub mod form;
 mod inflation;
 pub mod modal;
 pub mod mode_start;
