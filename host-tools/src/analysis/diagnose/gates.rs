@@ -7,3 +7,10 @@ pub const DELTA_BIC: f64 = -10.0;
 
 /// Relative drop of held-out weighted RSS an effect must reach.
 pub const HOLDOUT_RSS_GAIN: f64 = 0.01;
+
+/// Whether the final model takes each mode's own damping ratio in place
+/// of the law: its held-out RSS lower by `gain_percent`, at least
+/// [`HOLDOUT_RSS_GAIN`].
+pub fn each_mode_damping_kept(gain_percent: f64) -> bool {
+    gain_percent >= 100.0 * HOLDOUT_RSS_GAIN
+}

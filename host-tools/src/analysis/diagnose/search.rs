@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
-use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
+use super::gates::{each_mode_damping_kept, DELTA_BIC, HOLDOUT_RSS_GAIN};
 use super::identify;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
@@ -134,7 +134,7 @@ pub fn diagnose(
         .effects
         .contains(&Effect::Damping)
         .then(|| 100.0 * (1.0 - each_hold.rss / found.hold.rss));
-    let each_mode_final = each_mode_gain_percent.is_some_and(|g| g >= 100.0 * HOLDOUT_RSS_GAIN);
+    let each_mode_final = each_mode_gain_percent.is_some_and(each_mode_damping_kept);
     let final_hold = if each_mode_final {
         each_hold
     } else {

@@ -85,7 +85,7 @@ pub struct Verdict {
     pub gain_percent: f64,
     /// Where the final model has `damping`: how much lower, percent, the
     /// held-out RSS is with each mode's own damping ratio in place of the
-    /// law. From [`HOLDOUT_RSS_GAIN`](super::gates::HOLDOUT_RSS_GAIN) up,
+    /// law. Where [`each_mode_damping_kept`](super::gates::each_mode_damping_kept),
     /// the final model is the one with each mode's own ratio.
     pub each_mode_damping_gain_percent: Option<f64>,
     /// Every candidate tried.
@@ -149,7 +149,7 @@ impl std::fmt::Display for Verdict {
             self.extended.holdout_rss_per_residual
         )?;
         if let Some(g) = self.each_mode_damping_gain_percent {
-            if g >= 100.0 * super::gates::HOLDOUT_RSS_GAIN {
+            if super::gates::each_mode_damping_kept(g) {
                 writeln!(
                     f,
                     "damping: each mode's own ratio (held-out RSS {g:.2} % below the law's)"

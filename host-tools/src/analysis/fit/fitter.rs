@@ -351,7 +351,7 @@ impl<'a> Fitter<'a> {
                 &|i, spec| self.residuals_of(i, spec),
             )?,
         };
-        // Already in the pool.
+        // Already in the pool, and the data checked.
         self.fit_space_here(recordings, space, &start, PATIENCE)
     }
 
@@ -365,6 +365,7 @@ impl<'a> Fitter<'a> {
         start: &ModelSpec,
         patience: usize,
     ) -> Result<FitResult, FitError> {
+        self.data_to_fit(recordings)?;
         pool().install(|| self.fit_space_here(recordings, space, start, patience))
     }
 
@@ -375,7 +376,6 @@ impl<'a> Fitter<'a> {
         start: &ModelSpec,
         patience: usize,
     ) -> Result<FitResult, FitError> {
-        self.data_to_fit(recordings)?;
         let mut theta = space.start_theta(start);
         let (mut evaluations, mut termination) = (0, Vec::new());
         let stages: Vec<(Stage, Vec<usize>, usize)> = Stage::ALL

@@ -240,6 +240,12 @@ fn ramp(t: f64, scale: f64) -> f64 {
     (t * scale).max(0.0)
 }
 
+/// A damping ratio (the law's constant one, or a mode's own) at `θ`:
+/// [`ZETA_SCALE`] a unit, from 0 up to [`ZETA_MAX`].
+fn damping_ratio(t: f64) -> f64 {
+    ramp(t, ZETA_SCALE).min(ZETA_MAX)
+}
+
 /// The DC moment per charge `b/p`, N·m/C, floored above zero (a
 /// back-relaxed start has none).
 fn dc_per_charge(p: &model_core::Params) -> f64 {
@@ -265,9 +271,6 @@ pub struct Space {
     pub effects: Vec<Effect>,
     /// Parameters held fixed (geometry, beam unless freed).
     pub fixed: ModelSpec,
-    /// Whether the damping is each mode's own ratio
-    /// ([`Space::with_each_modes_damping`]) rather than the structure's.
-    pub each_modes_damping: bool,
 }
 
 impl Space {
@@ -300,7 +303,6 @@ impl Space {
             knobs,
             effects,
             fixed,
-            each_modes_damping: false,
         }
     }
 
@@ -315,7 +317,6 @@ impl Space {
         self.knobs.extend((0..OWN_FREE_MODES).map(Knob::FreeMode));
         self.knobs
             .extend((0..OWN_BLOCKED_MODES).map(Knob::BlockedMode));
-        self.each_modes_damping = true;
         self
     }
 
@@ -358,7 +359,7 @@ impl Space {
                 Knob::B => b_theta = Some(t),
                 Knob::P => p.p_per_s = t.exp(),
                 Knob::Ei => p.ei_nm2 = t.exp(),
-                Knob::Zeta => spec.ext.damping_ratio = ramp(t, ZETA_SCALE).min(ZETA_MAX),
+                Knob::Zeta => spec.ext.damping_ratio = damping_ratio(t),
                 Knob::Beta => spec.ext.damping_stiffness_s = ramp(t, BETA_SCALE),
                 Knob::AddedMass => spec.ext.added_mass_kg_per_m = ramp(t, ADDED_MASS_SCALE),
                 Knob::Drag => spec.ext.drag_n_s_per_m2 = ramp(t, DRAG_SCALE),
@@ -382,12 +383,8 @@ impl Space {
                 }
                 // In ascending order: each sets its mode and those above,
                 // until the next one's knob.
-                Knob::FreeMode(k) => {
-                    spec.ext.modal_damping.free[*k..].fill(ramp(t, ZETA_SCALE).min(ZETA_MAX))
-                }
-                Knob::BlockedMode(k) => {
-                    spec.ext.modal_damping.blocked[*k..].fill(ramp(t, ZETA_SCALE).min(ZETA_MAX))
-                }
+                Knob::FreeMode(k) => spec.ext.modal_damping.free[*k..].fill(damping_ratio(t)),
+                Knob::BlockedMode(k) => spec.ext.modal_damping.blocked[*k..].fill(damping_ratio(t)),
             }
         }
         if let (Some(ta), Some(tb)) = (a_theta, b_theta) {
