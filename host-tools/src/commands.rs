@@ -26,6 +26,7 @@ use crate::cli::{
     timeout, DiagnoseArgs, FirmwareWaveArgs, FitArgs, FixtureArg, LogArgs, PlanArgs, RunArgs,
     SendArgs, SimWaveArgs, SimulateArgs, WaveArgs,
 };
+use crate::stages::Stages;
 
 /// `finrs simulate`.
 pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
@@ -228,13 +229,18 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let bar = spinner("diagnosing");
-    let started = Instant::now();
+    let stages = Stages::new();
     let d = finrs::analysis::diagnose::diagnose(&session, fixed, &|msg| {
+        stages.begin(msg);
         bar.set_message(msg.to_string())
     })?;
     bar.finish_and_clear();
     print!("{}", d.verdict);
-    eprintln!("diagnosed in {:.1} s", started.elapsed().as_secs_f64());
+    eprintln!(
+        "diagnosed in {:.1} s ({})",
+        stages.total().as_secs_f64(),
+        stages.summary()
+    );
     if let Some(path) = &args.json {
         write_json(path, &d.verdict)?;
     }
@@ -260,13 +266,18 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let bar = spinner("planning");
-    let started = Instant::now();
+    let stages = Stages::new();
     let plan = finrs::analysis::plan::plan(&session, fixed, &effects, args.budget_s, &|msg| {
+        stages.begin(msg);
         bar.set_message(msg.to_string())
     })?;
     bar.finish_and_clear();
     print!("{plan}");
-    eprintln!("planned in {:.1} s", started.elapsed().as_secs_f64());
+    eprintln!(
+        "planned in {:.1} s ({})",
+        stages.total().as_secs_f64(),
+        stages.summary()
+    );
     if let Some(path) = &args.json {
         write_json(path, &plan)?;
     }

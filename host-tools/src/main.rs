@@ -2,13 +2,15 @@
 //!
 //! [`cli`] declares the commands and options, [`commands`] runs each one
 //! (progress bars, Ctrl-C and the files it writes), [`calibrate`] the
-//! board's calibration, [`bench_cli`] a session by protocol; this file
+//! board's calibration, [`bench_cli`] a session by protocol, [`stages`]
+//! a long run's time per stage; this file
 //! only parses and dispatches.
 
 mod bench_cli;
 mod calibrate;
 mod cli;
 mod commands;
+mod stages;
 
 use std::process::ExitCode;
 

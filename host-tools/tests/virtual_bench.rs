@@ -153,7 +153,14 @@ fn run_chain(features: &str) -> Chain {
         .arg(&session)
         .arg("--json")
         .arg(&json);
-    run_ok(diagnose, "finrs diagnose");
+    let log = run_ok(diagnose, "finrs diagnose");
+    // One line times the run and each stage, the baseline first.
+    let timing = log
+        .lines()
+        .find(|l| l.starts_with("diagnosed in "))
+        .unwrap_or_else(|| panic!("no timing line:\n{log}"));
+    assert!(timing.contains(" s (baseline "), "{timing}");
+    assert!(timing.contains("; round 1: "), "{timing}");
     let verdict: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     eprintln!(

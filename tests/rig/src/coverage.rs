@@ -167,16 +167,10 @@ pub fn tally<'a>(scored: impl IntoIterator<Item = &'a [Scored]>) -> BTreeMap<Str
     out
 }
 
-/// The median of `x` (for an even count the mean of the two middle
-/// values), NaN when empty.
+/// The median of `x` (finrs's: the upper of two middle values), NaN
+/// when empty.
 pub fn median(x: &[f64]) -> f64 {
-    let mut v = x.to_vec();
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
+    finrs::analysis::median::median(x.to_vec()).unwrap_or(f64::NAN)
 }
 
 /// A Markdown table of `tallies`, one per model structure (its label).

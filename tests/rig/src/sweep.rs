@@ -244,13 +244,10 @@ pub fn matrix(outcomes: &[Outcome]) -> Vec<(String, Row)> {
     rows
 }
 
+/// The median of the finite values of `x`, NaN when none.
 fn median(x: &[f64]) -> f64 {
-    let mut v: Vec<f64> = x.iter().copied().filter(|g| g.is_finite()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    let finite = x.iter().copied().filter(|g| g.is_finite()).collect();
+    finrs::analysis::median::median(finite).unwrap_or(f64::NAN)
 }
 
 /// The matrix as Markdown: shares of the row's sessions naming each

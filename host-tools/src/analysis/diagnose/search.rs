@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
-use super::gates::{each_mode_damping_kept, DELTA_BIC, HOLDOUT_RSS_GAIN};
+use super::gates::{each_mode_damping_kept, holdout_gain_passes, DELTA_BIC};
 use super::identify;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
@@ -311,7 +311,7 @@ impl Search<'_> {
                 candidate.passed &= passed
                     .iter()
                     .filter(|p| p.0.len() == 1 && m.contains(&p.0[0]))
-                    .all(|p| score.rss < (1.0 - HOLDOUT_RSS_GAIN) * p.2.rss);
+                    .all(|p| holdout_gain_passes(1.0 - score.rss / p.2.rss));
                 if candidate.passed {
                     passed.push((m, fit, score));
                 }
@@ -479,7 +479,7 @@ impl Search<'_> {
             holdout_gain_percent: gain_percent(base_hold.nrmse, score.nrmse),
             holdout_rss_gain_percent: 100.0 * rss_gain,
             passed: delta_bic < DELTA_BIC
-                && rss_gain > HOLDOUT_RSS_GAIN
+                && holdout_gain_passes(rss_gain)
                 && match signatures {
                     Signatures::Every => m.iter().all(own_term),
                     Signatures::Any => m.iter().any(own_term),

