@@ -2,6 +2,7 @@
 //! traces for a recording's drive ([`predict`]), those traces as a
 //! recording ([`simulate`]) and drives made from waves ([`synth`]).
 
+mod drying;
 mod kept_modes;
 pub mod params;
 pub mod predict;

@@ -9,6 +9,7 @@ use super::effect::Effect;
 use super::error::FitError;
 use super::inflation::{profile_cost, Inflation};
 use super::mode_start;
+use super::race::{Lane, Progress};
 use super::sampling::Sampling;
 use super::space::{Knob, Space};
 use super::stage::{descend, Problem, Stage, PATIENCE};
@@ -291,7 +292,10 @@ impl<'a> Fitter<'a> {
         start: Option<&ModelSpec>,
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
-        pool().install(|| self.fit_here(recordings, effects, start, fixed))
+        pool().install(|| {
+            let d = self.descend_here(recordings, effects, start, fixed, None)?;
+            self.finish(recordings, d)
+        })
     }
 
     /// `effects` fitted on `recordings` from two starts, the lower cost
@@ -310,46 +314,75 @@ impl<'a> Fitter<'a> {
         if effects.is_empty() {
             return self.fit(recordings, effects, None, fixed);
         }
+        let (data_progress, modes_progress) = (Progress::default(), Progress::default());
+        let cost = |spec: &ModelSpec| {
+            self.score_here(recordings, spec)
+                .ok()
+                .map(|s| profile_cost(&s))
+        };
+        let data_lane = Lane::new(&data_progress, &modes_progress, &cost);
+        let modes_lane = Lane::new(&modes_progress, &data_progress, &cost);
+        let from_data = || {
+            let d = self.descend_here(recordings, effects, None, fixed, Some(&data_lane))?;
+            if !d.given_up {
+                data_lane.finish(profile_cost(&d.score));
+            }
+            Ok::<_, FitError>(d)
+        };
         let from_modes = || {
-            let baseline = self.fit_here(recordings, &[], None, fixed)?;
-            let modes = mode_start::modes(
-                self.session,
-                recordings,
-                &baseline.spec,
-                &[effects.to_vec()],
-            );
+            // The baseline's point alone: its intervals are not needed.
+            let baseline = self.descend_here(recordings, &[], None, fixed, Some(&modes_lane))?;
+            if baseline.given_up {
+                return Ok(baseline);
+            }
+            let baseline = baseline.space.spec(&baseline.theta);
+            let modes = mode_start::modes(self.session, recordings, &baseline, &[effects.to_vec()]);
             let start = effects
                 .iter()
-                .fold(baseline.spec, |spec, &e| mode_start::start(e, &spec, modes));
-            self.fit_here(recordings, effects, Some(&start), fixed)
+                .fold(baseline, |spec, &e| mode_start::start(e, &spec, modes));
+            let d =
+                self.descend_here(recordings, effects, Some(&start), fixed, Some(&modes_lane))?;
+            if !d.given_up {
+                modes_lane.finish(profile_cost(&d.score));
+            }
+            Ok(d)
         };
         // The two starts side by side: a descent's serial part (the
         // optimiser's factorisation of the tall Jacobian, its copies)
         // leaves a core that the other's simulations fill. 10036's water
-        // fit: 16.6 s against 19.5 s, every estimate as before.
-        let (from_data, from_modes) = pool().install(|| {
-            rayon::join(
-                || self.fit_here(recordings, effects, None, fixed),
-                from_modes,
-            )
-        });
+        // fit: 16.6 s against 19.5 s, every estimate as before. A start
+        // that falls behind is given up by `race.rs`'s rule, and only the
+        // kept one's intervals are computed.
+        let (from_data, from_modes) = pool().install(|| rayon::join(from_data, from_modes));
         let (from_data, from_modes) = (from_data?, from_modes?);
-        Ok(
-            if profile_cost(&from_modes.score) < profile_cost(&from_data.score) {
-                from_modes
-            } else {
-                from_data
-            },
-        )
+        let lower = match (data_lane.end(), modes_lane.end()) {
+            (None, _) => from_modes,
+            (_, None) => from_data,
+            (Some(data_end), Some(modes_end)) => {
+                if data_lane.gives_up(modes_end) {
+                    from_modes
+                } else if modes_lane.gives_up(data_end) {
+                    from_data
+                } else if modes_end.1 < data_end.1 {
+                    from_modes
+                } else {
+                    from_data
+                }
+            }
+        };
+        pool().install(|| self.finish(recordings, lower))
     }
 
-    fn fit_here(
+    /// The descents of `effects` on `recordings` from `start` (or from
+    /// estimates read off the data), in the pool.
+    fn descend_here(
         &self,
         recordings: &[usize],
         effects: &[Effect],
         start: Option<&ModelSpec>,
         fixed: ModelSpec,
-    ) -> Result<FitResult, FitError> {
+        lane: Option<&Lane<'_>>,
+    ) -> Result<Descended, FitError> {
         self.data_to_fit(recordings)?;
         let segments = self.session.recordings[0].rec.meta.segments;
         let space = Space::new(effects, segments, fixed);
@@ -364,7 +397,7 @@ impl<'a> Fitter<'a> {
             )?,
         };
         // Already in the pool, and the data checked.
-        self.fit_space_here(recordings, space, &start, PATIENCE)
+        self.descend_space_here(recordings, space, &start, PATIENCE, lane)
     }
 
     /// Fits `space` on `recordings` from `start`: the descents stage by
@@ -378,16 +411,22 @@ impl<'a> Fitter<'a> {
         patience: usize,
     ) -> Result<FitResult, FitError> {
         self.data_to_fit(recordings)?;
-        pool().install(|| self.fit_space_here(recordings, space, start, patience))
+        pool().install(|| {
+            let d = self.descend_space_here(recordings, space, start, patience, None)?;
+            self.finish(recordings, d)
+        })
     }
 
-    fn fit_space_here(
+    /// The descents of `space` on `recordings` from `start`, in the pool,
+    /// and the score at their end.
+    fn descend_space_here(
         &self,
         recordings: &[usize],
         space: Space,
         start: &ModelSpec,
         patience: usize,
-    ) -> Result<FitResult, FitError> {
+        lane: Option<&Lane<'_>>,
+    ) -> Result<Descended, FitError> {
         let mut theta = space.start_theta(start);
         let (mut evaluations, mut termination) = (0, Vec::new());
         let stages: Vec<(Stage, Vec<usize>, usize)> = Stage::ALL
@@ -398,7 +437,8 @@ impl<'a> Fitter<'a> {
             })
             .collect();
         let mut inflation = Inflation::ONE;
-        for (stage, free, m) in &stages {
+        let mut given_up = false;
+        'stages: for (stage, free, m) in &stages {
             if free.is_empty() || *m == 0 {
                 continue;
             }
@@ -414,10 +454,14 @@ impl<'a> Fitter<'a> {
             for round in 0..=INFLATION_ROUNDS {
                 let run =
                     |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec, &inflation);
-                let problem = Problem::new(&run, &space, free, theta.clone(), *m);
+                let problem = Problem::new(&run, &space, free, theta.clone(), *m).racing(lane);
                 let (problem, report, n) = descend(problem, patience);
+                given_up = problem.given_up();
                 theta = problem.theta;
                 evaluations += n;
+                if given_up {
+                    break 'stages;
+                }
                 termination.push(format!("{}: {:?}", stage.name(), report.termination));
                 if !beam || round == INFLATION_ROUNDS {
                     break;
@@ -430,9 +474,39 @@ impl<'a> Fitter<'a> {
             }
         }
         // One simulation at the final point serves the score, the
-        // information criteria and the beam stage's Jacobian base.
+        // information criteria and the beam stage's Jacobian base; none
+        // for a start given up.
+        let score = if given_up {
+            Score::new(Vec::new())
+        } else {
+            self.score_here(recordings, &space.spec(&theta))?
+        };
+        Ok(Descended {
+            space,
+            theta,
+            stages,
+            inflation,
+            score,
+            evaluations,
+            termination,
+            given_up,
+        })
+    }
+
+    /// The intervals and the criteria at the end of descents `d`, in the
+    /// pool.
+    fn finish(&self, recordings: &[usize], d: Descended) -> Result<FitResult, FitError> {
+        let Descended {
+            space,
+            theta,
+            stages,
+            inflation,
+            score,
+            evaluations,
+            termination,
+            given_up: _,
+        } = d;
         let spec = space.spec(&theta);
-        let score = self.score_here(recordings, &spec)?;
         let (active, cov) =
             self.covariance(recordings, &space, &theta, &score, &stages, &inflation)?;
         let grads = stats::value_gradients(&space, &theta, &active);
@@ -590,4 +664,24 @@ impl<'a> Fitter<'a> {
         }
         Ok(())
     }
+}
+
+/// A fit's descents done, its intervals not yet computed: what picks the
+/// lower of two starts before either's intervals are paid for.
+struct Descended {
+    space: Space,
+    /// The point the descents ended at.
+    theta: Vec<f64>,
+    /// Each stage, its free knobs and its residual count.
+    stages: Vec<(Stage, Vec<usize>, usize)>,
+    /// The sensors' weights at the end of the beam's descents.
+    inflation: Inflation,
+    /// The score at `theta` on the fitted recordings.
+    score: Score,
+    evaluations: usize,
+    /// How each descent stopped.
+    termination: Vec<String>,
+    /// Whether a race gave this start up (`race.rs`): then `score` is
+    /// empty and nothing else is to be read.
+    given_up: bool,
 }

@@ -23,6 +23,7 @@ mod inflation;
 pub mod modal;
 pub mod mode_start;
 pub mod normal;
+mod race;
 pub mod report;
 pub mod sampling;
 mod space;

@@ -18,6 +18,7 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 
 use super::error::FitError;
+use super::race::Lane;
 use super::space::{difference_step, Knob, Space};
 use crate::model::predict::ModelSpec;
 use crate::recording::Channel;
@@ -93,6 +94,8 @@ pub struct Problem<'b> {
     residuals: Option<DVector<f64>>,
     /// Residual count.
     m: usize,
+    /// The start's lane when two starts race (`race.rs`).
+    lane: Option<&'b Lane<'b>>,
 }
 
 impl<'b> Problem<'b> {
@@ -112,7 +115,19 @@ impl<'b> Problem<'b> {
             theta,
             residuals: None,
             m,
+            lane: None,
         }
+    }
+
+    /// The problem in a start's `lane`: its evaluations counted, and given
+    /// up at a Jacobian where the race's rule says so.
+    pub fn racing(self, lane: Option<&'b Lane<'b>>) -> Self {
+        Problem { lane, ..self }
+    }
+
+    /// Whether the race gave this start up.
+    pub fn given_up(&self) -> bool {
+        self.lane.is_some_and(Lane::dropped)
     }
 
     /// `θ` with the free entries `x`.
@@ -164,6 +179,9 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     type ParameterStorage = Owned<f64, Dyn>;
 
     fn set_params(&mut self, x: &DVector<f64>) {
+        if let Some(lane) = self.lane {
+            lane.evaluated();
+        }
         self.theta = self.with_free(x.as_slice());
         self.residuals = self
             .residuals_at(&self.theta)
@@ -187,6 +205,12 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
+        // Given up, the optimiser stops here (`User("jacobian")`).
+        if let Some(lane) = self.lane {
+            if !lane.goes_on(&self.space.spec(&self.theta)) {
+                return None;
+            }
+        }
         // The cached residuals are the base: no second simulation here.
         let base = self.residuals.as_ref()?;
         self.jacobian_at(&self.theta, base.as_slice()).ok()
@@ -214,7 +238,7 @@ pub fn descend(
     let (mut problem, mut report) = optimiser(patience).minimize(problem);
     let mut evaluations = report.number_of_evaluations;
     for _ in 0..MAX_RESTARTS {
-        if matches!(report.termination, TerminationReason::LostPatience) {
+        if matches!(report.termination, TerminationReason::LostPatience) || problem.given_up() {
             break;
         }
         let before = report.objective_function;

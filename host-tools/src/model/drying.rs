@@ -1,0 +1,113 @@
+//! The dehydration's moment gain over a recording's rows, kept: a fit
+//! runs each recording again and again with the same drying (every
+//! Jacobian column but the drying's own), and the gain's `ln_1p` and `exp`
+//! on every row were a tenth of a fit with dehydration (perf of rig seed
+//! 10013, 2026-11-27). Kept gains are the very numbers computed afresh,
+//! so keeping them changes no number.
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Mutex, PoisonError};
+
+/// Gain vectors kept at most, the newest first: a session's recordings
+/// under the drying of the current point and of a trial or two.
+const KEPT: usize = 32;
+
+/// What a gain vector depends on: the rate, the curvature, the session
+/// time of the recording's start and the recording's own times (hashed,
+/// with their count).
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct Key {
+    rate: u64,
+    curvature: u64,
+    t_start: u64,
+    rows: usize,
+    times: u64,
+}
+
+static KEPT_GAINS: Mutex<Vec<(Key, Arc<[f64]>)>> = Mutex::new(Vec::new());
+
+/// The moment gain after drying for `t_s` at initial rate `r` with
+/// curvature `c`: `(1 + c r t)^(−1/c)`, which is `e^{−r t}` at `c = 0` and
+/// `1/(1 + r t)` at `c = 1` (a loss that slows as the water goes).
+pub fn drying_gain(rate_per_s: f64, curvature: f64, t_s: f64) -> f64 {
+    let x = rate_per_s * t_s;
+    if curvature * x < 1e-9 {
+        (-x).exp()
+    } else {
+        (-(curvature * x).ln_1p() / curvature).exp()
+    }
+}
+
+/// [`drying_gain`] at session time `t_start_s + t` for every `t` of
+/// `times_s`: kept ones if there are, else computed and kept.
+pub(super) fn gains(
+    rate_per_s: f64,
+    curvature: f64,
+    t_start_s: f64,
+    times_s: &[f64],
+) -> Arc<[f64]> {
+    let mut hasher = DefaultHasher::new();
+    for t in times_s {
+        t.to_bits().hash(&mut hasher);
+    }
+    let key = Key {
+        rate: rate_per_s.to_bits(),
+        curvature: curvature.to_bits(),
+        t_start: t_start_s.to_bits(),
+        rows: times_s.len(),
+        times: hasher.finish(),
+    };
+    if let Some((_, g)) = kept().iter().find(|(k, _)| *k == key) {
+        return Arc::clone(g);
+    }
+    // Computed outside the lock: two threads may compute one vector at
+    // once, which costs the work twice, never a wrong answer.
+    let g: Arc<[f64]> = times_s
+        .iter()
+        .map(|&t| drying_gain(rate_per_s, curvature, t_start_s + t))
+        .collect();
+    let mut kept = kept();
+    kept.insert(0, (key, Arc::clone(&g)));
+    kept.truncate(KEPT);
+    g
+}
+
+/// The kept gains; a thread that panicked holding them left them whole
+/// (each entry is immutable), so a poisoned lock is still usable.
+fn kept() -> std::sync::MutexGuard<'static, Vec<(Key, Arc<[f64]>)>> {
+    KEPT_GAINS.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kept_gains_are_the_gains_computed_afresh_and_another_drying_is_computed_anew() {
+        let times: Vec<f64> = (0..500).map(|i| i as f64 * 1e-3).collect();
+        let first = gains(2e-3, 0.5, 40.0, &times);
+        for (g, &t) in first.iter().zip(&times) {
+            assert_eq!(g.to_bits(), drying_gain(2e-3, 0.5, 40.0 + t).to_bits());
+        }
+        let again = gains(2e-3, 0.5, 40.0, &times);
+        assert!(Arc::ptr_eq(&first, &again), "the same drying is kept");
+        // Another rate, start or set of times is another vector.
+        let faster = gains(3e-3, 0.5, 40.0, &times);
+        assert!(!Arc::ptr_eq(&first, &faster));
+        assert!(faster[499] < first[499]);
+        let later = gains(2e-3, 0.5, 41.0, &times);
+        assert!(later[0] < first[0]);
+        let mut shifted = times.clone();
+        shifted[250] += 1e-4;
+        let other = gains(2e-3, 0.5, 40.0, &shifted);
+        assert!(!Arc::ptr_eq(&first, &other));
+    }
+
+    #[test]
+    fn the_drying_gain_is_exponential_at_zero_curvature_and_hyperbolic_at_one() {
+        let (r, t) = (1e-2, 30.0);
+        assert!((drying_gain(r, 0.0, t) - (-r * t).exp()).abs() < 1e-15);
+        assert!((drying_gain(r, 1.0, t) - 1.0 / (1.0 + r * t)).abs() < 1e-15);
+    }
+}
