@@ -183,25 +183,22 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let fitter = Fitter::new(&session);
     let all: Vec<usize> = (0..session.recordings.len()).collect();
-    let bar = spinner("fitting");
+    let bar = spinner("fitting, then each mode's own damping");
     let started = Instant::now();
-    let fit = fitter.fit_from_either_start(&all, &effects, fixed)?;
-    let fitted_s = started.elapsed().as_secs_f64();
     // The intervals carry how far the estimates lean on the damping law.
-    bar.set_message("fitting each mode's own damping");
-    let fit = fitter.with_form_check(&all, fit, fixed)?;
+    let fit = fitter.fit_with_form_check(&all, &effects, fixed)?;
     bar.finish_and_clear();
     print!(
         "{}",
         finrs::analysis::fit::report::text(&fit, fitter.targets())
     );
     eprintln!(
-        "fitted {} recordings in {fitted_s:.1} s ({} model evaluations, {}); \
-         each mode's own damping in {:.1} s",
+        "fitted {} recordings in {:.1} s with each mode's own damping beside \
+         ({} model evaluations, {})",
         all.len(),
+        started.elapsed().as_secs_f64(),
         fit.evaluations,
         fit.termination,
-        started.elapsed().as_secs_f64() - fitted_s
     );
     if let Some(out) = &args.out {
         let file = fit.model_file();

@@ -333,7 +333,7 @@ fn a_fitted_file_simulates_on_its_fits_mesh() {
     assert_eq!(own, four);
 }
 
-/// The check of the damping law's form (`Fitter::with_form_check`). A
+/// The check of the damping law's form (`Fitter::fit_with_form_check`). A
 /// sample whose modes each have their own damping ratio (the form the
 /// check fits) is fitted with the law (`damping`: one `ζ₀` and `β` for all
 /// modes); every interval then spans the check's, which the sample's own
@@ -359,7 +359,7 @@ fn intervals_carry_the_damping_laws_form() {
     let fitter = Fitter::new(&session);
     let effects = [Effect::Damping, Effect::BeamStiffness];
     let law = fitter.fit_from_either_start(&all, &effects, fixed).unwrap();
-    let checked = fitter.with_form_check(&all, law.clone(), fixed).unwrap();
+    let checked = fitter.fit_with_form_check(&all, &effects, fixed).unwrap();
     let form = checked.form.as_ref().unwrap();
     // The sample's form fits better than the law.
     assert!(form.cost_each_mode < form.cost_law, "{form:?}");

@@ -34,7 +34,7 @@ const INFLATION_ROUNDS: usize = 1;
 
 /// The fit's worker threads: the model's work arrays for the largest
 /// meshes take about 2 MiB of stack, rayon's default.
-fn pool() -> &'static rayon::ThreadPool {
+pub(super) fn pool() -> &'static rayon::ThreadPool {
     static POOL: std::sync::OnceLock<rayon::ThreadPool> = std::sync::OnceLock::new();
     POOL.get_or_init(|| {
         rayon::ThreadPoolBuilder::new()
@@ -70,7 +70,7 @@ pub struct FitResult {
     pub termination: String,
     /// The same structure fitted with its damping law and with each
     /// mode's own ratio, whose intervals `estimates`' span
-    /// ([`Fitter::with_form_check`]); `None` where not checked.
+    /// ([`Fitter::fit_with_form_check`]); `None` where not checked.
     pub form: Option<FormCheck>,
 }
 
@@ -315,8 +315,22 @@ impl<'a> Fitter<'a> {
         effects: &[Effect],
         fixed: ModelSpec,
     ) -> Result<FitResult, FitError> {
+        pool().install(|| {
+            let kept = self.race_starts(recordings, effects, fixed)?;
+            self.finish(recordings, kept)
+        })
+    }
+
+    /// The descents of [`Self::fit_from_either_start`]: the start kept,
+    /// its intervals not yet computed. In the pool.
+    pub(super) fn race_starts(
+        &self,
+        recordings: &[usize],
+        effects: &[Effect],
+        fixed: ModelSpec,
+    ) -> Result<Descended, FitError> {
         if effects.is_empty() {
-            return self.fit(recordings, effects, None, fixed);
+            return self.descend_here(recordings, effects, None, fixed, None);
         }
         let (data_progress, modes_progress) = (Progress::default(), Progress::default());
         let cost = |spec: &ModelSpec| {
@@ -357,7 +371,7 @@ impl<'a> Fitter<'a> {
         // fit: 16.6 s against 19.5 s, every estimate as before. A start
         // that falls behind is given up by `race.rs`'s rule, and only the
         // kept one's intervals are computed.
-        let (from_data, from_modes) = pool().install(|| rayon::join(from_data, from_modes));
+        let (from_data, from_modes) = rayon::join(from_data, from_modes);
         let (from_data, from_modes) = (from_data?, from_modes?);
         let lower = match (data_lane.end(), modes_lane.end()) {
             (None, _) => from_modes,
@@ -374,7 +388,7 @@ impl<'a> Fitter<'a> {
                 }
             }
         };
-        pool().install(|| self.finish(recordings, lower))
+        Ok(lower)
     }
 
     /// The descents of `effects` on `recordings` from `start` (or from
@@ -499,7 +513,7 @@ impl<'a> Fitter<'a> {
 
     /// The intervals and the criteria at the end of descents `d`, in the
     /// pool.
-    fn finish(&self, recordings: &[usize], d: Descended) -> Result<FitResult, FitError> {
+    pub(super) fn finish(&self, recordings: &[usize], d: Descended) -> Result<FitResult, FitError> {
         let Descended {
             space,
             theta,
@@ -672,10 +686,11 @@ impl<'a> Fitter<'a> {
 
 /// A fit's descents done, its intervals not yet computed: what picks the
 /// lower of two starts before either's intervals are paid for.
-struct Descended {
-    space: Space,
+pub(super) struct Descended {
+    /// The structure fitted and its knobs.
+    pub(super) space: Space,
     /// The point the descents ended at.
-    theta: Vec<f64>,
+    pub(super) theta: Vec<f64>,
     /// Each stage, its free knobs and its residual count.
     stages: Vec<(Stage, Vec<usize>, usize)>,
     /// The sensors' weights at the end of the beam's descents.
