@@ -183,7 +183,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
     let fitter = Fitter::new(&session);
     let all: Vec<usize> = (0..session.recordings.len()).collect();
-    let bar = spinner("fitting, then each mode's own damping");
+    let bar = spinner("fitting, with each mode's own damping");
     let started = Instant::now();
     // The intervals carry how far the estimates lean on the damping law.
     let fit = fitter.fit_with_form_check(&all, &effects, fixed)?;

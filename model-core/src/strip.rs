@@ -502,8 +502,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// `Φ` is sparse in a fixed pattern: a mode sees its own pair and the
     /// electrical states; electrical states see only their own segment's.
     /// The step walks the stored blocks (147 multiply-adds for N = 3 instead
-    /// of the dense 378), mode by mode along contiguous arrays, so that it
-    /// vectorises on the host and pipelines on the Cortex-M4F.
+    /// of the dense 378), each loop running along a contiguous column so
+    /// that it vectorises on the host and pipelines on the Cortex-M4F.
+    /// Always inlined, so that a caller compiled for wider vectors (the
+    /// host's AVX2 run) compiles it for them too.
     #[inline(always)]
     pub fn step(&self, x: &mut [T; S], v: &[T; N]) {
         let dof = Self::DOF;
@@ -598,7 +600,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         core::array::from_fn(|i| self.circuit.current(i, v[i], x[Self::ELEC + 2 * i]))
     }
 
-    /// Force on the load cell, N (zero for the free fixture).
+    /// Force on the load cell, N (zero for the free fixture). Always
+    /// inlined, as [`Strip::step`] is.
     #[inline(always)]
     pub fn blocking_force_n(&self, x: &[T; S]) -> T {
         // The electrical entries carry the moments, so the gain scales them.

@@ -12,7 +12,7 @@
 //! simulation), and the one point the rule reads is scored when it is
 //! read.
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, OnceLock};
 
 use crate::model::predict::ModelSpec;
@@ -66,7 +66,6 @@ pub struct Lane<'a> {
     /// The rule's answer, once it has the point it reads (the other's end
     /// is then known and fixed).
     verdict: OnceLock<bool>,
-    dropped: AtomicBool,
 }
 
 impl<'a> Lane<'a> {
@@ -83,7 +82,6 @@ impl<'a> Lane<'a> {
             points: Mutex::new(Vec::new()),
             cost,
             verdict: OnceLock::new(),
-            dropped: AtomicBool::new(false),
         }
     }
 
@@ -103,13 +101,7 @@ impl<'a> Lane<'a> {
         if n as f64 >= FACTOR * other_so_far as f64 {
             self.points().push((n, *spec));
         }
-        match self.other.finished() {
-            Some(end) if self.gives_up(end) => {
-                self.dropped.store(true, Ordering::SeqCst);
-                false
-            }
-            _ => true,
-        }
+        !self.other.finished().is_some_and(|end| self.gives_up(end))
     }
 
     /// Whether the rule gives this start up against the other's `end`
@@ -140,9 +132,9 @@ impl<'a> Lane<'a> {
         *self.own.finished.lock().unwrap_or_else(|e| e.into_inner()) = Some((total, cost));
     }
 
-    /// Whether the start was given up.
+    /// Whether the rule has given the start up.
     pub fn dropped(&self) -> bool {
-        self.dropped.load(Ordering::SeqCst)
+        self.verdict.get() == Some(&true)
     }
 
     /// The start's evaluations and its end's cost, once finished.
@@ -176,6 +168,15 @@ mod tests {
         (FACTOR * e as f64).ceil() as usize
     }
 
+    /// This start's lane and the other's, racing.
+    fn lanes<'a>(
+        own: &'a Progress,
+        other: &'a Progress,
+        cost: &'a (dyn Fn(&ModelSpec) -> Option<f64> + Sync),
+    ) -> (Lane<'a>, Lane<'a>) {
+        (Lane::new(own, other, cost), Lane::new(other, own, cost))
+    }
+
     fn evaluate(lane: &Lane<'_>, n: usize) {
         for _ in 0..n {
             lane.evaluated();
@@ -185,10 +186,7 @@ mod tests {
     #[test]
     fn a_start_past_the_factor_and_no_lower_than_the_others_end_is_given_up() {
         let (own, other) = (Progress::default(), Progress::default());
-        let (lane, rival) = (
-            Lane::new(&own, &other, &cost),
-            Lane::new(&other, &own, &cost),
-        );
+        let (lane, rival) = lanes(&own, &other, &cost);
         evaluate(&rival, 10);
         rival.finish(5.0);
         evaluate(&lane, past(10) - 1);
@@ -203,10 +201,7 @@ mod tests {
     #[test]
     fn a_start_lower_than_the_others_end_at_the_point_read_goes_on_to_its_end() {
         let (own, other) = (Progress::default(), Progress::default());
-        let (lane, rival) = (
-            Lane::new(&own, &other, &cost),
-            Lane::new(&other, &own, &cost),
-        );
+        let (lane, rival) = lanes(&own, &other, &cost);
         evaluate(&rival, 10);
         rival.finish(5.0);
         evaluate(&lane, past(10));
@@ -224,10 +219,7 @@ mod tests {
         // FACTOR times the other's 12 evaluations.
         let answer = |other_finishes_first: bool| {
             let (own, other) = (Progress::default(), Progress::default());
-            let (lane, rival) = (
-                Lane::new(&own, &other, &cost),
-                Lane::new(&other, &own, &cost),
-            );
+            let (lane, rival) = lanes(&own, &other, &cost);
             if other_finishes_first {
                 evaluate(&rival, 12);
                 rival.finish(5.0);
@@ -257,10 +249,7 @@ mod tests {
     fn a_point_the_model_refuses_is_given_up() {
         let refused = |_: &ModelSpec| None;
         let (own, other) = (Progress::default(), Progress::default());
-        let (lane, rival) = (
-            Lane::new(&own, &other, &refused),
-            Lane::new(&other, &own, &refused),
-        );
+        let (lane, rival) = lanes(&own, &other, &refused);
         evaluate(&rival, 2);
         rival.finish(1.0);
         evaluate(&lane, 3);
