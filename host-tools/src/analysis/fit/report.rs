@@ -27,8 +27,9 @@ pub fn text(fit: &FitResult, targets: &SessionTargets) -> String {
     if let Some(form) = &fit.form {
         let _ = writeln!(
             s,
-            "\nintervals span the fit with each mode's own damping ratio in place of the law \
-             (cost {:.1} with the law, {:.1} with each mode's own; lower is better):",
+            "\nintervals span the fit with each mode's own damping ratio in place of the law's \
+             constant one, its β kept (cost {:.1} with the law, {:.1} with each mode's own; \
+             lower is better):",
             form.cost_law, form.cost_each_mode
         );
         estimate_lines(&mut s, &form.each_mode);

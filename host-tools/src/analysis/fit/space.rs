@@ -307,13 +307,14 @@ impl Space {
     }
 
     /// The same structure with each mode's own damping ratio in place of
-    /// its damping law (`damping`'s `ζ₀` and `β`; none without it): the
-    /// first [`OWN_FREE_MODES`] modes of the free strip and
+    /// its law's constant one (`damping`'s `ζ₀`; its Rayleigh `β` stays):
+    /// the first [`OWN_FREE_MODES`] modes of the free strip and
     /// [`OWN_BLOCKED_MODES`] of the held one, the modes above each taking
-    /// the last one's. Not a catalogue effect: the fit's check of how far
-    /// its estimates lean on the law's form ([`super::form`]).
+    /// the last one's. With every ratio at `ζ₀` it is the law, so the law's
+    /// fit is one of its points. Not a catalogue effect: the fit's check
+    /// of how far its estimates lean on the law's form ([`super::form`]).
     pub fn with_each_modes_damping(mut self) -> Space {
-        self.knobs.retain(|k| !matches!(k, Knob::Zeta | Knob::Beta));
+        self.knobs.retain(|k| !matches!(k, Knob::Zeta));
         self.knobs.extend((0..OWN_FREE_MODES).map(Knob::FreeMode));
         self.knobs
             .extend((0..OWN_BLOCKED_MODES).map(Knob::BlockedMode));
