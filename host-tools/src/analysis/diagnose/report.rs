@@ -347,11 +347,11 @@ fn parameters(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(s, "\n## Final model's parameters (95 % intervals)\n");
     if let Some(form) = &d.final_fit.form {
         let which = if form.each_mode_final {
-            "each mode's own damping ratio, which gained on the held-out part; each interval \
-             spans it and the model with the damping law"
+            "each mode's own damping ratio beside the law's β, which gained on the held-out \
+             part; each interval spans it and the model with the damping law"
         } else {
             "the damping law; each interval spans it and the model with each mode's own \
-             damping ratio in place of the law"
+             damping ratio in place of the law's constant one"
         };
         let _ = writeln!(
             s,

@@ -85,7 +85,7 @@ pub struct Verdict {
     pub gain_percent: f64,
     /// Where the final model has `damping`: how much lower, percent, the
     /// held-out RSS is with each mode's own damping ratio in place of the
-    /// law. Where [`each_mode_damping_kept`](super::gates::each_mode_damping_kept),
+    /// law's constant one (its `β` kept). Where [`each_mode_damping_kept`](super::gates::each_mode_damping_kept),
     /// the final model is the one with each mode's own ratio.
     pub each_mode_damping_gain_percent: Option<f64>,
     /// Every candidate tried.
@@ -152,7 +152,7 @@ impl std::fmt::Display for Verdict {
             if super::gates::each_mode_damping_kept(g) {
                 writeln!(
                     f,
-                    "damping: each mode's own ratio (held-out RSS {g:.2} % below the law's)"
+                    "damping: each mode's own ratio beside the law's β (held-out RSS {g:.2} % below the law's)"
                 )?;
             } else {
                 writeln!(
