@@ -5,7 +5,9 @@
 //! 10013, 2026-11-27). Kept gains are the very numbers computed afresh,
 //! so keeping them changes no number.
 
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::Arc;
+
+use super::recent::Recent;
 
 /// Gain vectors kept at most, the newest first: a session's recordings
 /// under the drying of the current point and of a trial or two.
@@ -35,7 +37,7 @@ impl Kept {
     }
 }
 
-static KEPT_GAINS: Mutex<Vec<Kept>> = Mutex::new(Vec::new());
+static KEPT_GAINS: Recent<Kept> = Recent::new(KEPT);
 
 /// The moment gain after drying for `t_s` at initial rate `r` with
 /// curvature `c`: `(1 + c r t)^(−1/c)`, which is `e^{−r t}` at `c = 0` and
@@ -62,34 +64,25 @@ pub(super) fn gains(
         curvature.to_bits(),
         t_start_s.to_bits(),
     );
-    if let Some(k) = kept().iter().find(|k| k.is_for(rate, curv, start, times_s)) {
-        return Arc::clone(&k.gains);
+    let found = KEPT_GAINS.find_map(|k| {
+        k.is_for(rate, curv, start, times_s)
+            .then(|| Arc::clone(&k.gains))
+    });
+    if let Some(gains) = found {
+        return gains;
     }
-    // Computed outside the lock: two threads may compute one vector at
-    // once, which costs the work twice, never a wrong answer.
     let gains: Arc<[f64]> = times_s
         .iter()
         .map(|&t| drying_gain(rate_per_s, curvature, t_start_s + t))
         .collect();
-    let mut kept = kept();
-    kept.insert(
-        0,
-        Kept {
-            rate,
-            curvature: curv,
-            t_start: start,
-            times_s: times_s.into(),
-            gains: Arc::clone(&gains),
-        },
-    );
-    kept.truncate(KEPT);
+    KEPT_GAINS.keep(Kept {
+        rate,
+        curvature: curv,
+        t_start: start,
+        times_s: times_s.into(),
+        gains: Arc::clone(&gains),
+    });
     gains
-}
-
-/// The kept gains; a thread that panicked holding them left them whole
-/// (each entry is immutable), so a poisoned lock is still usable.
-fn kept() -> std::sync::MutexGuard<'static, Vec<Kept>> {
-    KEPT_GAINS.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 #[cfg(test)]

@@ -8,9 +8,11 @@
 //! number.
 
 use std::any::Any;
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::Arc;
 
 use model_core::{BeamModes, Extensions, Fixture, ParamError, Params};
+
+use super::recent::Recent;
 
 /// Beams kept at most, the newest first: a fit's trials move the beam
 /// (`EI`, mass) a few values at a time.
@@ -19,7 +21,7 @@ const KEPT: usize = 16;
 /// One kept beam, of whichever mesh (`BeamModes<N, E, S>`).
 type Kept = Arc<dyn Any + Send + Sync>;
 
-static KEPT_MODES: Mutex<Vec<Kept>> = Mutex::new(Vec::new());
+static KEPT_MODES: Recent<Kept> = Recent::new(KEPT);
 
 /// The modes of the beam of `params` (with `ext`'s added mass) in
 /// `fixture`: kept ones if there are, else solved and kept.
@@ -28,7 +30,7 @@ pub(super) fn modes_for<const N: usize, const E: usize, const S: usize>(
     ext: &Extensions,
     fixture: Fixture,
 ) -> Result<Arc<BeamModes<N, E, S>>, ParamError> {
-    let found = kept().iter().find_map(|k| {
+    let found = KEPT_MODES.find_map(|k| {
         Arc::clone(k)
             .downcast::<BeamModes<N, E, S>>()
             .ok()
@@ -37,19 +39,9 @@ pub(super) fn modes_for<const N: usize, const E: usize, const S: usize>(
     if let Some(modes) = found {
         return Ok(modes);
     }
-    // Solved outside the lock: two threads may solve one beam at once,
-    // which costs a solve and keeps a duplicate, never a wrong answer.
     let modes = Arc::new(BeamModes::<N, E, S>::new(params, ext, fixture)?);
-    let mut kept = kept();
-    kept.insert(0, Arc::clone(&modes) as Kept);
-    kept.truncate(KEPT);
+    KEPT_MODES.keep(Arc::clone(&modes) as Kept);
     Ok(modes)
-}
-
-/// The kept beams; a thread that panicked holding them left them whole
-/// (each entry is immutable), so a poisoned lock is still usable.
-fn kept() -> std::sync::MutexGuard<'static, Vec<Kept>> {
-    KEPT_MODES.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 #[cfg(test)]

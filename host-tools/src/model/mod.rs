@@ -6,5 +6,6 @@ mod drying;
 mod kept_modes;
 pub mod params;
 pub mod predict;
+mod recent;
 pub mod simulate;
 pub mod synth;

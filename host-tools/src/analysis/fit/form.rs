@@ -42,8 +42,7 @@ impl Fitter<'_> {
     /// ratio (see the module's text); the second fit's estimates in
     /// [`FitResult::form`]. The second fit starts from the kept start's
     /// end and runs beside the first's intervals: the same numbers as one
-    /// after the other, the serial parts of each overlapped (10099's fit
-    /// spent 6.7 s in the check after 10.9 s).
+    /// after the other, the serial parts of each overlapped.
     pub fn fit_with_form_check(
         &self,
         recordings: &[usize],

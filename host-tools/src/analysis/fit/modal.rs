@@ -45,15 +45,9 @@ pub fn model_blocked_hz(spec: &ModelSpec) -> Option<f64> {
     model_first_hz(spec, Fixture::Blocked)
 }
 
-/// The first natural frequency of `spec`'s beam held as `fixture`, Hz.
+/// The first natural frequency of `spec`'s beam held as `fixture`, Hz
+/// (none if the model is refused).
 pub fn model_first_hz(spec: &ModelSpec, fixture: Fixture) -> Option<f64> {
-    model_hz(spec, fixture, 1).first().copied()
-}
-
-/// The first `n` natural frequencies of `spec`'s beam held as `fixture`,
-/// Hz, ascending (fewer if the beam has fewer; none if the model is
-/// refused).
-pub fn model_hz(spec: &ModelSpec, fixture: Fixture, n: usize) -> Vec<f64> {
     let fixture = match fixture {
         Fixture::Free => CoreFixture::Free,
         Fixture::Blocked => CoreFixture::Blocked,
@@ -65,9 +59,9 @@ pub fn model_hz(spec: &ModelSpec, fixture: Fixture, n: usize) -> Vec<f64> {
         fixture,
         1e-3,
     )
-    .ok();
-    s.map(|s| s.natural_frequencies_hz().take(n).collect())
-        .unwrap_or_default()
+    .ok()?;
+    let first = s.natural_frequencies_hz().next();
+    first
 }
 
 /// The first blocked mode of `spec`'s beam: its frequency and the damping
