@@ -41,6 +41,9 @@ use crate::real::Real;
 use crate::rounding::round_block;
 use crate::zoh::discretise;
 
+mod harmonic;
+pub use harmonic::{Harmonic, HarmonicError};
+
 /// How the tip is held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Fixture {
