@@ -448,6 +448,34 @@ mod tests {
     }
 
     #[test]
+    fn the_board_s_f32_blocks_give_the_same_wave() {
+        // What the board would compute from its own f32 model: 3.5e-5 apart
+        // at 0.1 Hz (measured), where the relaxation's pole `c = e^{−p Δt}`
+        // sits 1e-4 from `e^{jθ}` and f32's rounding of `c` shows; 7e-7 at
+        // 10 Hz.
+        let p = Params::table_4_2_2006();
+        let ext = Extensions {
+            damping_ratio: 0.05,
+            crosstalk: 0.1,
+            ..Extensions::NONE
+        };
+        let wide = Strip::<f64, 3, 1, 18>::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap();
+        let board = Strip::<f32, 3, 1, 18>::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap();
+        for hz in [0.1, 1.0, 10.0] {
+            let (a, b) = (
+                wide.tip_wave(hz, 1e-3, 1.0).unwrap(),
+                board.tip_wave(hz, 1e-3, 1.0).unwrap(),
+            );
+            for (x, y) in a.iter().zip(&b) {
+                assert!(
+                    (*x - *y).amplitude() < 1e-4 * x.amplitude(),
+                    "{hz} Hz: {x:?} against {y:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn what_has_no_single_sinusoid_is_refused() {
         let p = Params::main_m_2006();
         let v = [Phasor::from_sine(1.0, 0.0); 3];
