@@ -9,7 +9,9 @@
 //! the evidence punishing its extra parameters favours it strongly
 //! (`ΔBIC < −10` on the training part) *and* it lowers the held-out error
 //! (weighted residual sum of squares by at least 1 %) *and* the term that
-//! makes it that effect is significant (its 95 % interval excludes "off":
+//! makes it that effect is significant (its interval excludes "off", at a
+//! level that keeps the chance of any of the search's candidates passing
+//! on noise alone at [`FAMILY_ALPHA`]:
 //! hydrodynamic loading needs added mass, since its drag alone is
 //! damping; back-relaxation needs the zero below zero). Of the effects
 //! that pass, the one with the lowest held-out error joins the model, or
@@ -48,7 +50,7 @@ mod verdict;
 pub mod whiteness;
 
 pub use floors::{sensor_floors, SensorFloor, NOISE_FLOOR_RATIO};
-pub use gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
+pub use gates::{DELTA_BIC, FAMILY_ALPHA, HOLDOUT_RSS_GAIN};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
 pub use search::{diagnose, split, tested_channels, untestable, MAX_CAUSES};
 pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};

@@ -263,14 +263,19 @@ fn candidates(s: &mut String, v: &Verdict) {
     let _ = writeln!(
         s,
         "An effect is accepted when ΔBIC < {} on the training recordings and the \
-         held-out weighted RSS falls by more than {:.0} %. After the search, each \
+         held-out weighted RSS falls by more than {:.0} % and its own term stands \
+         out from \"off\" by more than its bar (in standard errors: 1.96 for one \
+         test, raised by Bonferroni for every candidate tried so far, so that all \
+         of a search's candidates together pass on noise alone less than {:.0} % \
+         of the time). After the search, each \
          accepted effect is checked (`check`) as if it joined the model of the \
          others last; one that would not pass leaves.\n",
         super::DELTA_BIC,
-        100.0 * super::HOLDOUT_RSS_GAIN
+        100.0 * super::HOLDOUT_RSS_GAIN,
+        100.0 * super::FAMILY_ALPHA
     );
-    let _ = writeln!(s, "| round | effect | ΔBIC | held-out NRMSE gain % | held-out RSS gain % | passed | fitted terms |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "| round | effect | ΔBIC | held-out NRMSE gain % | held-out RSS gain % | bar (σ) | passed | fitted terms |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
     for c in &v.candidates {
         let terms: Vec<String> = c
             .params
@@ -279,7 +284,7 @@ fn candidates(s: &mut String, v: &Verdict) {
             .collect();
         let _ = writeln!(
             s,
-            "| {} | {} | {:.1} | {:.2} | {:.2} | {} | {} |",
+            "| {} | {} | {:.1} | {:.2} | {:.2} | {:.2} | {} | {} |",
             if c.backward {
                 "check".to_string()
             } else {
@@ -289,6 +294,7 @@ fn candidates(s: &mut String, v: &Verdict) {
             c.delta_bic,
             c.holdout_gain_percent,
             c.holdout_rss_gain_percent,
+            c.signature_z,
             match (c.backward, c.passed) {
                 (false, true) => "yes",
                 (false, false) => "no",

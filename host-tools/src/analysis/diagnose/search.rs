@@ -5,12 +5,13 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::floors::sensor_floors;
-use super::gates::{each_mode_damping_kept, holdout_gain_passes, DELTA_BIC};
+use super::gates::{each_mode_damping_kept, family_tail, family_z, holdout_gain_passes, DELTA_BIC};
 use super::identify;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
+use crate::analysis::fit::{below_zero_at, excludes_at};
 use crate::analysis::fit::{
     form, profile_cost, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score,
 };
@@ -219,6 +220,11 @@ pub fn diagnose(
 }
 
 impl Found {
+    /// The candidates the search has tried (not its checks).
+    fn tried(&self) -> usize {
+        self.candidates.iter().filter(|c| !c.backward).count()
+    }
+
     /// Effects accepted, in the order they joined.
     fn accepted(&self) -> Vec<Effect> {
         self.joined.concat()
@@ -295,6 +301,9 @@ impl Search<'_> {
                 break;
             }
             progress(&format!("round {}: {} candidates", round + 1, moves.len()));
+            // The search's family: every candidate tried so far and this
+            // round's.
+            let tried = found.tried() + moves.len();
             let mut passed: Vec<Passed<Vec<Effect>>> = Vec::new();
             // The pair comes after the single effects.
             for (m, fit, score) in self.fit_round(&moves, &found.fit)? {
@@ -304,6 +313,7 @@ impl Search<'_> {
                     (&fit, &score),
                     (&found.fit, &found.hold),
                     Signatures::Every,
+                    tried,
                 );
                 // The pair must pay, on held-out data, for its second
                 // effect over a member that passed alone, as that effect
@@ -396,6 +406,7 @@ impl Search<'_> {
                     (&found.fit, &found.hold),
                     (&fit, &hold),
                     Signatures::Any,
+                    found.tried(),
                 );
                 check.backward = true;
                 check.passed |= m.iter().any(|&e| self.expected(e));
@@ -467,17 +478,19 @@ impl Search<'_> {
         with: (&FitResult, &Score),
         without: (&FitResult, &Score),
         signatures: Signatures,
+        tried: usize,
     ) -> Candidate {
         let ((fit, score), (base_fit, base_hold)) = (with, without);
         let delta_bic = fit.bic - base_fit.bic;
         let rss_gain = 1.0 - score.rss / base_hold.rss;
-        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed);
+        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed, tried);
         Candidate {
             name: m.iter().map(|e| e.name()).collect::<Vec<_>>().join("+"),
             round,
             delta_bic,
             holdout_gain_percent: gain_percent(base_hold.nrmse, score.nrmse),
             holdout_rss_gain_percent: 100.0 * rss_gain,
+            signature_z: family_z(tried),
             passed: delta_bic < DELTA_BIC
                 && holdout_gain_passes(rss_gain)
                 && match signatures {
@@ -538,18 +551,25 @@ pub fn tested_channels<'a>(
 }
 
 /// Whether the term that makes `e` what it is differs from "off" beyond
-/// its 95 % interval. Without this, an effect that contains another (linear
-/// drag is mass-proportional damping) could be named for the other's work.
-fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bool {
+/// its interval, at the level that keeps the whole search's chance of a
+/// term standing out by the noise at
+/// [`FAMILY_ALPHA`](super::gates::FAMILY_ALPHA): `tried` candidates
+/// tried so far ([`family_z`]; an effect of several knobs any one of which
+/// may show it, `segment-variation`'s, counts each). Without this, an
+/// effect that contains another (linear drag is mass-proportional damping)
+/// could be named for the other's work.
+fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried: usize) -> bool {
+    let z = family_z(tried);
     let excludes = |knob: Knob, off: f64| {
         fit.estimates
             .iter()
-            .any(|est| est.knob == knob && (est.low > off || est.high < off))
+            .any(|est| est.knob == knob && excludes_at(est, off, z))
     };
     // The joint test alone would lose a term that stands out on its own
     // beside one that does nothing (its two degrees of freedom ask more).
-    let either_or_both =
-        |off: &[(Knob, f64)]| off.iter().any(|&(k, o)| excludes(k, o)) || fit.jointly_excludes(off);
+    let either_or_both = |off: &[(Knob, f64)]| {
+        off.iter().any(|&(k, o)| excludes(k, o)) || fit.jointly_excludes(off, family_tail(tried))
+    };
     match e {
         Effect::LargeDeflection => true,
         Effect::BeamStiffness => excludes(Knob::Ei, fixed.params.ei_nm2),
@@ -567,14 +587,19 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec) -> bo
         Effect::BackRelaxation => fit
             .estimates
             .iter()
-            .any(|est| est.knob == Knob::B && est.high < 0.0),
+            .any(|est| est.knob == Knob::B && below_zero_at(est, z)),
         Effect::Dehydration => excludes(Knob::Dehydration, 0.0),
         Effect::SegmentCrosstalk => excludes(Knob::Crosstalk, 0.0),
         // Some segment differs from the reference in some value.
-        Effect::SegmentVariation => fit
-            .estimates
-            .iter()
-            .any(|est| est.knob.is_segment_deviation() && (est.low > 0.0 || est.high < 0.0)),
+        Effect::SegmentVariation => {
+            // Any of its knobs: each is a test of the family.
+            let knobs = fit
+                .estimates
+                .iter()
+                .filter(|est| est.knob.is_segment_deviation());
+            let z = family_z(tried * knobs.clone().count());
+            knobs.clone().any(|est| excludes_at(est, 0.0, z))
+        }
     }
 }
 

@@ -37,6 +37,9 @@ pub struct Candidate {
     pub holdout_gain_percent: f64,
     /// Reduction of held-out weighted RSS, percent.
     pub holdout_rss_gain_percent: f64,
+    /// The standard errors its own term had to clear (1.96 for a lone
+    /// test, raised for every candidate the search had tried).
+    pub signature_z: f64,
     /// Whether it passed both tests.
     pub passed: bool,
     /// A check after the search, not a step of it: the effect, already in

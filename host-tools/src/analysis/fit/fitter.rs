@@ -94,10 +94,10 @@ pub struct FormCheck {
 
 impl FitResult {
     /// Whether the knobs in `off` differ from their "off" values jointly
-    /// at 95 % (see [`stats::wald_excludes`]): those of them the fit had
-    /// and bounded (a knob with an unbounded interval says nothing either
-    /// way); false when there are none.
-    pub fn jointly_excludes(&self, off: &[(Knob, f64)]) -> bool {
+    /// at the level `1 − tail` (see [`stats::wald_excludes`]): those of
+    /// them the fit had and bounded (a knob with an unbounded interval says
+    /// nothing either way); false when there are none.
+    pub fn jointly_excludes(&self, off: &[(Knob, f64)], tail: f64) -> bool {
         let (at, d): (Vec<usize>, Vec<f64>) = off
             .iter()
             .filter_map(|(knob, o)| {
@@ -110,7 +110,7 @@ impl FitResult {
         let sigma = nalgebra::DMatrix::from_fn(at.len(), at.len(), |a, b| {
             self.value_covariance[(at[a], at[b])]
         });
-        stats::wald_excludes(&d, &sigma)
+        stats::wald_excludes(&d, &sigma, tail)
     }
 
     /// The parameter file for this fit: the seed's material; `[beam]` when

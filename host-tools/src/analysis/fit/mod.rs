@@ -37,4 +37,4 @@ pub use error::FitError;
 pub use fitter::{FitResult, Fitter, FormCheck, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
 pub use space::{difference_step, Knob, Space};
-pub use stats::{nrmse, wilson_hilferty, ChannelFit, Estimate, Score};
+pub use stats::{below_zero_at, excludes_at, nrmse, wilson_hilferty, ChannelFit, Estimate, Score};

@@ -294,21 +294,10 @@ pub fn value_covariance(cov: &DMatrix<f64>, active: &[usize], grads: &[Vec<f64>]
     out
 }
 
-/// The 95 % quantile of `χ²(q)` for the few degrees of freedom a joint
-/// test of one effect's knobs has (exact to four figures), else by
-/// Wilson–Hilferty.
-pub fn chi2_95(q: usize) -> f64 {
-    match q {
-        1 => 3.841_5,
-        2 => 5.991_5,
-        3 => 7.814_7,
-        4 => 9.487_7,
-        5 => 11.070_5,
-        6 => 12.591_6,
-        7 => 14.067_1,
-        8 => 15.507_3,
-        _ => wilson_hilferty(q, 1.644_853_6),
-    }
+/// The quantile `p` of `χ²(q)` (infinite for no degree of freedom).
+pub fn chi2_quantile(q: usize, p: f64) -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    ChiSquared::new(q as f64).map_or(f64::INFINITY, |c| c.inverse_cdf(p))
 }
 
 /// Wilson and Hilferty's approximation to the quantile of `χ²(h)` whose
@@ -320,11 +309,12 @@ pub fn wilson_hilferty(h: usize, z: f64) -> f64 {
 }
 
 /// Whether the values `d` (each knob's value less its "off") differ from
-/// zero jointly at 95 %, by Wald's test `dᵀ Σ⁺ d > χ²₉₅(r)`: `Σ⁺` the
+/// zero jointly at the level `1 − tail`, by Wald's test `dᵀ Σ⁺ d` above
+/// the quantile `1 − tail` of `χ²(r)`: `Σ⁺` the
 /// pseudo-inverse of their covariance `sigma` and `r` its rank, so two
 /// knobs that are one direction in the data count as one. False when a
 /// variance is not finite.
-pub fn wald_excludes(d: &[f64], sigma: &DMatrix<f64>) -> bool {
+pub fn wald_excludes(d: &[f64], sigma: &DMatrix<f64>, tail: f64) -> bool {
     let n = d.len();
     if n == 0 || (0..n).any(|i| !sigma[(i, i)].is_finite() || !d[i].is_finite()) {
         return false;
@@ -352,7 +342,7 @@ pub fn wald_excludes(d: &[f64], sigma: &DMatrix<f64>) -> bool {
     let Ok(inv) = svd.pseudo_inverse(tol) else {
         return false;
     };
-    rank > 0 && (z.transpose() * inv * &z)[(0, 0)] > chi2_95(rank)
+    rank > 0 && (z.transpose() * inv * &z)[(0, 0)] > chi2_quantile(rank, 1.0 - tail)
 }
 
 /// `gᵀ C h`.
@@ -368,6 +358,26 @@ fn quadratic(g: &[f64], cov: &DMatrix<f64>, h: &[f64]) -> f64 {
         }
     }
     v
+}
+
+/// Whether `est`'s interval, widened from 95 % to `z` standard errors (in
+/// the space it is symmetric in), excludes `off`.
+pub fn excludes_at(est: &Estimate, off: f64, z: f64) -> bool {
+    if !(est.low.is_finite() && est.high.is_finite()) {
+        return false;
+    }
+    let widen = z / 1.96;
+    if est.knob.positive() && est.value > 0.0 {
+        // Log-symmetric: a positive interval never reaches 0 or below.
+        off <= 0.0 || (est.value / off).ln().abs() > widen * (est.high / est.value).ln()
+    } else {
+        (est.value - off).abs() > widen * 0.5 * (est.high - est.low)
+    }
+}
+
+/// Whether `est`'s upper end, widened as [`excludes_at`] does, is below 0.
+pub fn below_zero_at(est: &Estimate, z: f64) -> bool {
+    est.high.is_finite() && est.value + z / 1.96 * (est.high - est.value) < 0.0
 }
 
 /// The 95 % interval of `value` with standard error `se`: unbounded for an
@@ -387,6 +397,11 @@ fn interval(positive: bool, value: f64, se: f64) -> (f64, f64) {
 mod tests {
     use super::*;
 
+    /// Wald's test at 95 %.
+    fn wald(d: &[f64], sigma: &DMatrix<f64>) -> bool {
+        wald_excludes(d, sigma, 0.05)
+    }
+
     /// Unit variances with correlation `rho`.
     fn corr(rho: f64) -> DMatrix<f64> {
         DMatrix::from_row_slice(2, 2, &[1.0, rho, rho, 1.0])
@@ -396,46 +411,85 @@ mod tests {
     fn two_unsure_knobs_that_trade_off_can_differ_from_off_together() {
         // Each 1 σ from zero alone (inside its 95 % interval); along the
         // direction they share, far out.
-        assert!(wald_excludes(&[1.0, 1.0], &corr(-0.95)));
+        assert!(wald(&[1.0, 1.0], &corr(-0.95)));
         // The same values along the direction they trade: no evidence.
-        assert!(!wald_excludes(&[1.0, 1.0], &corr(0.95)));
-        assert!(!wald_excludes(&[1.0, -1.0], &corr(-0.95)));
+        assert!(!wald(&[1.0, 1.0], &corr(0.95)));
+        assert!(!wald(&[1.0, -1.0], &corr(-0.95)));
     }
 
     #[test]
     fn knobs_that_are_one_direction_count_as_one_degree_of_freedom() {
         // Rank one: the statistic is (z₁ + z₂)²/4 against χ²₉₅(1).
-        assert!(wald_excludes(&[2.0, 2.0], &corr(1.0)));
-        assert!(!wald_excludes(&[1.9, 1.9], &corr(1.0)));
+        assert!(wald(&[2.0, 2.0], &corr(1.0)));
+        assert!(!wald(&[1.9, 1.9], &corr(1.0)));
     }
 
     #[test]
     fn a_lone_knob_is_its_interval() {
-        let one = |d: f64, var: f64| wald_excludes(&[d], &DMatrix::from_element(1, 1, var));
+        let one = |d: f64, var: f64| wald(&[d], &DMatrix::from_element(1, 1, var));
         assert!(one(2.0, 1.0));
         assert!(!one(1.9, 1.0));
         assert!(one(-2.0 * 3.0, 9.0));
         assert!(!one(5.0, f64::INFINITY));
         assert!(!one(f64::NAN, 1.0));
-        assert!(!wald_excludes(&[], &DMatrix::zeros(0, 0)));
+        assert!(!wald(&[], &DMatrix::zeros(0, 0)));
     }
 
     #[test]
     fn a_knob_held_at_off_leaves_the_test_to_the_others() {
         // ζ₀ at its bound 0 with no spread, β 3 σ from zero.
         let sigma = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 0.0, 1.0]);
-        assert!(wald_excludes(&[0.0, 3.0], &sigma));
-        assert!(!wald_excludes(&[0.0, 1.0], &sigma));
+        assert!(wald(&[0.0, 3.0], &sigma));
+        assert!(!wald(&[0.0, 1.0], &sigma));
         // Held away from off: it differs.
-        assert!(wald_excludes(&[0.5, 0.0], &sigma));
-        assert!(!wald_excludes(&[0.0, 0.0], &DMatrix::zeros(2, 2)));
+        assert!(wald(&[0.5, 0.0], &sigma));
+        assert!(!wald(&[0.0, 0.0], &DMatrix::zeros(2, 2)));
     }
 
     #[test]
-    fn the_chi_square_quantiles_join_up() {
-        // Wilson–Hilferty's first against the exact 95 % quantile of
-        // χ²(9), 16.9190, within 0.2 %.
-        assert!((chi2_95(9) / 16.9190 - 1.0).abs() < 2e-3);
-        assert!((1..12).all(|q| chi2_95(q) < chi2_95(q + 1)));
+    fn the_chi_square_quantiles_are_the_tables() {
+        for (q, p, table) in [
+            (1, 0.95, 3.8415),
+            (2, 0.95, 5.9915),
+            (9, 0.95, 16.9190),
+            (2, 0.9983, 12.7553),
+        ] {
+            assert!((chi2_quantile(q, p) / table - 1.0).abs() < 1e-4, "{q} {p}");
+        }
+        // Wilson–Hilferty's (the whiteness tests') within 0.2 % of it.
+        assert!((wilson_hilferty(9, 1.644_853_6) / chi2_quantile(9, 0.95) - 1.0).abs() < 2e-3);
+    }
+
+    #[test]
+    fn a_wider_interval_asks_more_of_a_knob() {
+        let est = |value: f64, low: f64, high: f64| Estimate {
+            knob: Knob::Crosstalk,
+            value,
+            low,
+            high,
+        };
+        // 0.04 ± 0.03 (at 1.96 σ, so 2.6 σ from 0): excludes 0 at 95 %,
+        // not at 3 σ.
+        let e = est(0.04, 0.01, 0.07);
+        assert!(excludes_at(&e, 0.0, 1.96) && !excludes_at(&e, 0.0, 3.0));
+        assert!(!excludes_at(
+            &est(0.05, f64::NEG_INFINITY, f64::INFINITY),
+            0.0,
+            1.0
+        ));
+        // A positive knob's interval is log-symmetric: EI 0.8 of the
+        // laminate's with a factor 1.1 at 95 %.
+        let ei = Estimate {
+            knob: Knob::Ei,
+            value: 0.8,
+            low: 0.8 / 1.1,
+            high: 0.88,
+        };
+        assert!(excludes_at(&ei, 1.0, 1.96));
+        let f = (1.0f64 / 0.8).ln() / 1.1f64.ln() * 1.96;
+        assert!(excludes_at(&ei, 1.0, 0.99 * f) && !excludes_at(&ei, 1.0, 1.01 * f));
+        // Below zero: b's upper end.
+        let b = est(-1.0, -1.5, -0.5);
+        assert!(below_zero_at(&b, 1.96) && below_zero_at(&b, 3.9) && !below_zero_at(&b, 4.0));
     }
 }
