@@ -345,7 +345,8 @@ impl FirmwareWaveArgs {
 #[derive(Args)]
 pub struct WaveArgs {
     /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
-    /// pulses:AMP,ON_S,OFF_S or standing:AMP,HZ.
+    /// pulses:AMP,ON_S,OFF_S, standing:AMP,HZ or
+    /// harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..] (each segment its own sine).
     pub wave: String,
     #[command(flatten)]
     pub shaping: FirmwareWaveArgs,
@@ -585,7 +586,8 @@ pub struct SimulateArgs {
     )]
     pub input: Option<PathBuf>,
     /// A wave instead of a recording: step:V[,V..], sine:AMP,HZ,LAG_DEG,
-    /// standing:AMP,HZ, chirp:AMP,HZ0,HZ1 or pulses:AMP,ON_S,OFF_S (as
+    /// standing:AMP,HZ, chirp:AMP,HZ0,HZ1, pulses:AMP,ON_S,OFF_S or
+    /// harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..] (as
     /// `finrs wave`, evaluated by the firmware's generator).
     #[arg(long)]
     pub wave: Option<String>,

@@ -1,6 +1,7 @@
 //! The one parser of the `--wave` syntax, shared by `finrs simulate` and
 //! `finrs wave`: `step:V[,V..]`, `sine:AMP,HZ,LAG_DEG`, `standing:AMP,HZ`,
-//! `chirp:AMP,HZ0,HZ1`, `pulses:AMP,ON_S,OFF_S`.
+//! `chirp:AMP,HZ0,HZ1`, `pulses:AMP,ON_S,OFF_S`,
+//! `harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..]` (each segment its own sine).
 //!
 //! [`Wave::parse`] checks the syntax only (kind, number of values, finite
 //! numbers). [`Wave::generator`] maps the wave, with its [`WaveOptions`]
@@ -60,7 +61,9 @@ pub enum WaveError {
         got: usize,
     },
     /// No such kind.
-    #[error("wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses)")]
+    #[error(
+        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic)"
+    )]
     UnknownKind {
         /// The wave's text.
         wave: String,
@@ -80,8 +83,18 @@ pub enum WaveError {
     /// The segment count is not one the firmware drives.
     #[error("segments must be 1..={MAX_SEGMENTS}, got {0}")]
     Segments(usize),
+    /// A harmonic wave names neither one segment's sine nor one per segment.
+    #[error("wave `{wave}`: harmonic has {sines} amplitude-phase pairs for {segments} segments")]
+    Sines {
+        /// The wave's text.
+        wave: String,
+        /// Pairs given.
+        sines: usize,
+        /// Segments driven.
+        segments: usize,
+    },
     /// An offset for a wave that has none.
-    #[error("offset_v applies to sine: and standing: waves only, not `{wave}`")]
+    #[error("offset_v applies to sine:, standing: and harmonic: waves only, not `{wave}`")]
     Offset {
         /// The wave's text.
         wave: String,
@@ -158,6 +171,16 @@ pub enum WaveKind {
         /// Time off, s.
         off_s: f64,
     },
+    /// Each segment its own sine (see [`Program::Harmonic`]); one pair
+    /// means every segment.
+    Harmonic {
+        /// Frequency, Hz.
+        frequency_hz: f64,
+        /// Each segment's amplitude, V.
+        amplitudes_v: Vec<f64>,
+        /// Each segment's phase, degrees.
+        phases_deg: Vec<f64>,
+    },
 }
 
 /// A parsed `--wave` text.
@@ -172,7 +195,8 @@ pub struct Wave {
 /// with (`model::synth::drive_recording_shaped`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WaveOptions {
-    /// Constant added to a `sine:` or `standing:` wave, V (0 for others).
+    /// Constant added to a `sine:`, `standing:` or `harmonic:` wave, V (0
+    /// for others).
     pub offset_v: f64,
     /// Time to full amplitude, s.
     pub ramp_in_s: f64,
@@ -265,6 +289,21 @@ impl Wave {
                     off_s: values[2],
                 }
             }
+            "harmonic" => {
+                if values.len() < 3 || values.len() % 2 == 0 {
+                    return Err(WaveError::Count {
+                        wave: spec.to_string(),
+                        kind: kind.to_string(),
+                        usage: "FREQUENCY_HZ then AMPLITUDE_V,PHASE_DEG per segment (or one pair for all)",
+                        got: values.len(),
+                    });
+                }
+                WaveKind::Harmonic {
+                    frequency_hz: values[0],
+                    amplitudes_v: values[1..].iter().step_by(2).copied().collect(),
+                    phases_deg: values[2..].iter().step_by(2).copied().collect(),
+                }
+            }
             other => {
                 return Err(WaveError::UnknownKind {
                     wave: spec.to_string(),
@@ -298,6 +337,15 @@ impl Wave {
                     segments,
                 })
             }
+            WaveKind::Harmonic { amplitudes_v, .. }
+                if amplitudes_v.len() != 1 && amplitudes_v.len() != segments =>
+            {
+                Err(WaveError::Sines {
+                    wave: self.text.clone(),
+                    sines: amplitudes_v.len(),
+                    segments,
+                })
+            }
             _ => Ok(()),
         }
     }
@@ -316,7 +364,9 @@ impl Wave {
         self.check_segments(segments)?;
         let spec = &self.text;
         let offset_v = match self.kind {
-            WaveKind::Sine { .. } | WaveKind::Standing { .. } => options.offset_v,
+            WaveKind::Sine { .. } | WaveKind::Standing { .. } | WaveKind::Harmonic { .. } => {
+                options.offset_v
+            }
             _ if options.offset_v == 0.0 => 0.0,
             _ => {
                 return Err(WaveError::Offset {
@@ -421,6 +471,29 @@ impl Wave {
                 amplitude_v.abs(),
                 "amplitude",
             ),
+            WaveKind::Harmonic {
+                frequency_hz,
+                amplitudes_v,
+                phases_deg,
+            } => {
+                let (mut amps, mut phases) = ([0.0f32; MAX_SEGMENTS], [0.0f32; MAX_SEGMENTS]);
+                for k in 0..segments {
+                    let i = if amplitudes_v.len() == 1 { 0 } else { k };
+                    amps[k] = f(amplitudes_v[i]);
+                    phases[k] = f(phases_deg[i]);
+                }
+                let largest = amplitudes_v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+                (
+                    Program::Harmonic {
+                        frequency_hz: f(*frequency_hz),
+                        offset_v: f(offset_v),
+                        amplitudes_v: amps,
+                        phases_deg: phases,
+                    },
+                    largest + offset_v.abs(),
+                    "largest amplitude plus offset",
+                )
+            }
         }
     }
 }
@@ -706,7 +779,7 @@ mod tests {
         };
         assert_eq!(
             wave.generator(3, &offset).unwrap_err().to_string(),
-            "offset_v applies to sine: and standing: waves only, not `pulses:1,1,1`"
+            "offset_v applies to sine:, standing: and harmonic: waves only, not `pulses:1,1,1`"
         );
     }
 

@@ -27,7 +27,7 @@ pub const MAX_PROGRAM_V: f32 = 1000.0;
 /// What each segment does. The host's one `--wave` parser (`finrs::wave`)
 /// maps its texts onto these kinds one to one (`step:` → `Steps`, `sine:`
 /// → `Travelling`, `standing:` → `Standing`, `chirp:` → `Chirp`,
-/// `pulses:` → `Pulses`), and the host evaluates them with this generator
+/// `pulses:` → `Pulses`, `harmonic:` → `Harmonic`), and the host evaluates them with this generator
 /// too: `finrs simulate` and the firmware drive the same voltages.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Program {
@@ -89,6 +89,22 @@ pub enum Program {
         end_hz: f32,
         /// Length of one sweep, s (above 0).
         duration_s: f32,
+    },
+    /// Each segment its own sine at one frequency: segment k gets
+    /// `offset_v + amplitudes_v[k] · sin(2π frequency_hz t + phases_deg[k])`.
+    /// What a wave shaped by the strip's model asks: a travelling bending
+    /// wave through segments that differ needs each its own amplitude and
+    /// phase (`model_core::Strip::tip_wave`). Entries beyond the
+    /// generator's N segments are ignored.
+    Harmonic {
+        /// Frequency, Hz.
+        frequency_hz: f32,
+        /// Constant added to every segment, V.
+        offset_v: f32,
+        /// Each segment's amplitude, V (≥ 0).
+        amplitudes_v: [f32; 8],
+        /// Each segment's phase, degrees (ahead for a positive one).
+        phases_deg: [f32; 8],
     },
 }
 
@@ -179,8 +195,8 @@ pub fn default_program() -> (Program, Envelope) {
 pub struct Generator<const N: usize> {
     program: Program,
     envelope: Envelope,
-    /// Travelling: each segment's lag in cycles, in [0, 1). Standing: each
-    /// segment's weight.
+    /// Travelling and Harmonic: each segment's lag in cycles, in [0, 1).
+    /// Standing: each segment's weight.
     per_segment: [f32; N],
     /// Chirp: ln(end_hz / start_hz).
     chirp_ln_ratio: f32,
@@ -212,6 +228,11 @@ impl<const N: usize> Generator<N> {
                     } else {
                         F32Ext::cos(PI * k as f32 / (N - 1) as f32)
                     };
+                }
+            }
+            Program::Harmonic { phases_deg, .. } => {
+                for (lag, phase) in per_segment.iter_mut().zip(phases_deg) {
+                    *lag = math::frac(-phase / 360.0);
                 }
             }
             Program::Chirp {
@@ -257,6 +278,16 @@ impl<const N: usize> Generator<N> {
                 }
             }
             Program::Chirp { amplitude_v, .. } => amplitude_v,
+            Program::Harmonic {
+                offset_v,
+                amplitudes_v,
+                ..
+            } => {
+                amplitudes_v[..N]
+                    .iter()
+                    .fold(0.0, |peak: f32, &a| peak.max(a))
+                    + math::abs(offset_v)
+            }
         }
     }
 
@@ -326,6 +357,17 @@ impl<const N: usize> Generator<N> {
                 let s = amplitude_v * sin_cycles(cycles(frequency_hz, whole_s, frac_s));
                 for (out, weight) in v.iter_mut().zip(self.per_segment) {
                     *out = offset_v + weight * s;
+                }
+            }
+            Program::Harmonic {
+                frequency_hz,
+                offset_v,
+                amplitudes_v,
+                ..
+            } => {
+                let cycles = cycles(frequency_hz, whole_s, frac_s);
+                for ((out, lag), a) in v.iter_mut().zip(self.per_segment).zip(amplitudes_v) {
+                    *out = offset_v + a * sin_cycles(cycles - lag);
                 }
             }
             Program::Steps { levels_v } => v.copy_from_slice(&levels_v[..N]),
@@ -487,6 +529,21 @@ fn check_program<const N: usize>(program: &Program) -> Result<(), WaveError> {
         Program::Steps { levels_v } => levels_v[..N]
             .iter()
             .try_for_each(|&v| volts("Steps.levels_v", v)),
+        Program::Harmonic {
+            frequency_hz,
+            offset_v,
+            amplitudes_v,
+            phases_deg,
+        } => {
+            frequency("Harmonic.frequency_hz", frequency_hz)?;
+            volts("Harmonic.offset_v", offset_v)?;
+            amplitudes_v[..N]
+                .iter()
+                .try_for_each(|&a| amplitude("Harmonic.amplitudes_v", a))?;
+            phases_deg[..N]
+                .iter()
+                .try_for_each(|&p| finite("Harmonic.phases_deg", p))
+        }
         Program::Pulses {
             amplitude_v,
             on_s,

@@ -40,6 +40,70 @@ const TRAVELLING: Program = Program::Travelling {
 // cosine enters: standing weights, envelope ramps), plus 1e-4 V for f32
 // rounding.
 
+/// Three segments each with its own amplitude and phase (a model-shaped
+/// wave); the entries past them are never driven.
+const HARMONIC: Program = Program::Harmonic {
+    frequency_hz: 2.3,
+    offset_v: -0.25,
+    amplitudes_v: [1.0, 2.5, 0.75, 9.0, 9.0, 9.0, 9.0, 9.0],
+    phases_deg: [10.0, -75.0, 400.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+};
+
+#[test]
+fn harmonic_gives_each_segment_its_own_sine() {
+    let e = Envelope {
+        ramp_in_s: 0.5,
+        hold_s: 2.0,
+        ramp_out_s: 0.5,
+    };
+    let tol = 2.0 * 2.5 * SINE_MAX_ERROR as f64 + 1e-4;
+    let w = worst::<3>(HARMONIC, e, &times(4.0, 1e-3));
+    assert!(w <= tol, "{w} V > {tol} V");
+    // Segment k's crest comes where its phase puts it: sin(2π f t + φ) = 1
+    // at t = (1/4 − φ/360)/f (modulo a period).
+    let g = Generator::<3>::new(HARMONIC, ALWAYS).unwrap();
+    for (k, (a, phase)) in [(1.0f32, 10.0f32), (2.5, -75.0), (0.75, 400.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let t = (0.25 - phase / 360.0).rem_euclid(1.0) / 2.3 + 1.0 / 2.3;
+        let v = g.voltages_v(t)[k];
+        assert!(
+            (v - (a - 0.25)).abs() < a * 2.0 * SINE_MAX_ERROR + 1e-4,
+            "{k}: {v}"
+        );
+    }
+    // A field of a driven segment is checked; one past them is not.
+    let mut broken = HARMONIC;
+    if let Program::Harmonic {
+        amplitudes_v,
+        phases_deg,
+        ..
+    } = &mut broken
+    {
+        amplitudes_v[1] = -1.0;
+        phases_deg[6] = f32::NAN;
+    }
+    assert_eq!(
+        Generator::<3>::new(broken, ALWAYS).unwrap_err(),
+        WaveError {
+            field: "Harmonic.amplitudes_v",
+            rule: WaveRule::NonNegative
+        }
+    );
+    if let Program::Harmonic { amplitudes_v, .. } = &mut broken {
+        amplitudes_v[1] = 1.0;
+    }
+    assert!(Generator::<3>::new(broken, ALWAYS).is_ok());
+    assert_eq!(
+        Generator::<7>::new(broken, ALWAYS).unwrap_err(),
+        WaveError {
+            field: "Harmonic.phases_deg",
+            rule: WaveRule::Finite
+        }
+    );
+}
+
 #[test]
 fn travelling_matches_reference() {
     let e = Envelope {
@@ -503,6 +567,8 @@ fn peak_is_the_largest_voltage_each_kind_reaches() {
                 levels_v: [0.5, -3.5, 1.0, 9.0, 9.0, 9.0, 9.0, 9.0],
             },
         ),
+        // The largest amplitude of the three driven, not of the eight.
+        ("harmonic", HARMONIC),
     ];
     for (name, p) in kinds {
         let g = Generator::<3>::new(p, ALWAYS).unwrap();

@@ -43,6 +43,11 @@ const PROGRAM_STANDING: u8 = 2;
 const PROGRAM_STEPS: u8 = 3;
 const PROGRAM_PULSES: u8 = 4;
 const PROGRAM_CHIRP: u8 = 5;
+const PROGRAM_HARMONIC: u8 = 6;
+
+/// Most f32 fields of a program: Harmonic's frequency, offset, and eight
+/// amplitudes and phases.
+const MAX_PROGRAM_FIELDS: usize = 18;
 
 /// The envelope's three f32 after the program's fields.
 const ENVELOPE_LEN: usize = 12;
@@ -56,6 +61,7 @@ const fn program_fields(program_kind: u8) -> Option<usize> {
         PROGRAM_STEPS => Some(8),
         PROGRAM_PULSES => Some(3),
         PROGRAM_CHIRP => Some(4),
+        PROGRAM_HARMONIC => Some(MAX_PROGRAM_FIELDS),
         _ => None,
     }
 }
@@ -65,10 +71,10 @@ const fn set_wave_payload_len(fields: usize) -> usize {
     1 + 4 * fields + ENVELOPE_LEN
 }
 
-/// Longest SetWave payload: Steps, 8 levels.
-const SET_WAVE_MAX_PAYLOAD_LEN: usize = set_wave_payload_len(8);
+/// Longest SetWave payload: Harmonic's 18 fields.
+const SET_WAVE_MAX_PAYLOAD_LEN: usize = set_wave_payload_len(MAX_PROGRAM_FIELDS);
 
-/// Longest command frame (a SetWave of Steps), bytes.
+/// Longest command frame (a SetWave of Harmonic), bytes.
 pub const MAX_COMMAND_LEN: usize = HEADER_LEN + SET_WAVE_MAX_PAYLOAD_LEN + CRC_LEN;
 
 /// Whether `len` may be the payload length of a command of `kind`. For a
@@ -80,6 +86,7 @@ const fn command_len_ok(kind: u8, len: usize) -> bool {
             len == set_wave_payload_len(3)
                 || len == set_wave_payload_len(4)
                 || len == set_wave_payload_len(8)
+                || len == set_wave_payload_len(MAX_PROGRAM_FIELDS)
         }
         KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT | KIND_REQUEST_INFO => len == 0,
         KIND_SET_LIMIT => len == SET_LIMIT_PAYLOAD_LEN,
@@ -140,7 +147,7 @@ pub enum CommandError {
         /// The command kind in the (possibly damaged) header.
         kind: u8,
     },
-    /// A SetWave's program kind is not 1..=5.
+    /// A SetWave's program kind is not 1..=6.
     BadProgramKind(u8),
     /// The stream ended ([`CommandDecoder::finish`]) inside a frame.
     Truncated {
@@ -160,7 +167,7 @@ impl fmt::Display for CommandError {
                 write!(f, "length {len} does not fit command kind {kind:#04x}")
             }
             Self::BadCrc { kind } => write!(f, "CRC mismatch in command kind {kind:#04x}"),
-            Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=5"),
+            Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=6"),
             Self::Truncated { kind } => write!(f, "command kind {kind:#04x} cut short"),
         }
     }
@@ -212,8 +219,8 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
 
 /// The program's kind and its f32 fields in declaration order (the first
 /// `n` of the array).
-fn program_to_fields(p: &Program) -> (u8, [f32; 8], usize) {
-    let mut f = [0.0; 8];
+fn program_to_fields(p: &Program) -> (u8, [f32; MAX_PROGRAM_FIELDS], usize) {
+    let mut f = [0.0; MAX_PROGRAM_FIELDS];
     match *p {
         Program::Travelling {
             amplitude_v,
@@ -232,7 +239,21 @@ fn program_to_fields(p: &Program) -> (u8, [f32; 8], usize) {
             f[..3].copy_from_slice(&[amplitude_v, frequency_hz, offset_v]);
             (PROGRAM_STANDING, f, 3)
         }
-        Program::Steps { levels_v } => (PROGRAM_STEPS, levels_v, 8),
+        Program::Steps { levels_v } => {
+            f[..8].copy_from_slice(&levels_v);
+            (PROGRAM_STEPS, f, 8)
+        }
+        Program::Harmonic {
+            frequency_hz,
+            offset_v,
+            amplitudes_v,
+            phases_deg,
+        } => {
+            f[..2].copy_from_slice(&[frequency_hz, offset_v]);
+            f[2..10].copy_from_slice(&amplitudes_v);
+            f[10..].copy_from_slice(&phases_deg);
+            (PROGRAM_HARMONIC, f, MAX_PROGRAM_FIELDS)
+        }
         Program::Pulses {
             amplitude_v,
             on_s,
@@ -460,11 +481,17 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                     on_s: field(1),
                     off_s: field(2),
                 },
-                _ => Program::Chirp {
+                PROGRAM_CHIRP => Program::Chirp {
                     amplitude_v: field(0),
                     start_hz: field(1),
                     end_hz: field(2),
                     duration_s: field(3),
+                },
+                _ => Program::Harmonic {
+                    frequency_hz: field(0),
+                    offset_v: field(1),
+                    amplitudes_v: core::array::from_fn(|k| field(2 + k)),
+                    phases_deg: core::array::from_fn(|k| field(10 + k)),
                 },
             };
             let envelope = Envelope {

@@ -51,7 +51,7 @@
 //!
 //! | kind | command | `len` | payload |
 //! |------|---------|-------|---------|
-//! | 0x81 | SetWave | 25, 29 or 45 | program kind u8 (1 Travelling, 2 Standing, 3 Steps, 4 Pulses, 5 Chirp), the program's f32 fields in declaration order, then the envelope's `ramp_in_s`, `hold_s` (may be +inf), `ramp_out_s` f32 |
+//! | 0x81 | SetWave | 25, 29, 45 or 85 | program kind u8 (1 Travelling, 2 Standing, 3 Steps, 4 Pulses, 5 Chirp, 6 Harmonic), the program's f32 fields in declaration order, then the envelope's `ramp_in_s`, `hold_s` (may be +inf), `ramp_out_s` f32 |
 //! | 0x82 | Tare | 0 | |
 //! | 0x83 | Stop | 0 | |
 //! | 0x84 | SetLimit | 4 | `max_abs_v` f32 (may only lower the limit) |
@@ -63,7 +63,10 @@
 //! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
 //! (`amplitude_v`, `start_hz`, `end_hz`, `duration_s`) 29; Standing
 //! (`amplitude_v`, `frequency_hz`, `offset_v`) and Pulses (`amplitude_v`,
-//! `on_s`, `off_s`) 25; Steps (8 levels, V) 45. [`CommandDecoder`] checks
+//! `on_s`, `off_s`) 25; Steps (8 levels, V) 45; Harmonic (`frequency_hz`,
+//! `offset_v`, 8 amplitudes, V, 8 phases, degrees) 85, longer than the
+//! board's 64-byte RTT down buffer: the host writes it as the buffer
+//! drains, and the decoder takes it in pieces. [`CommandDecoder`] checks
 //! the framing only and reports what it refuses ([`CommandError`]); the
 //! firmware's controller checks the values.
 //!

@@ -90,7 +90,7 @@ fn travelling() -> Command {
 
 #[test]
 fn layout_is_as_documented() {
-    assert_eq!(MAX_COMMAND_LEN, 4 + 45 + 2);
+    assert_eq!(MAX_COMMAND_LEN, 4 + 85 + 2);
     assert_eq!(frame(&Command::Tare), framed(0x82, &[]));
     assert_eq!(frame(&Command::Stop), framed(0x83, &[]));
     assert_eq!(frame(&Command::ClearFault), framed(0x85, &[]));
@@ -173,6 +173,19 @@ fn set_wave_lengths_per_program_kind() {
             },
             5,
             29,
+        ),
+        (
+            Command::SetWave {
+                program: Program::Harmonic {
+                    frequency_hz: 1.0,
+                    offset_v: 0.0,
+                    amplitudes_v: [1.0, 2.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.5],
+                    phases_deg: [0.0, -60.0, -120.0, 0.0, 0.0, 0.0, 0.0, 90.0],
+                },
+                envelope: env,
+            },
+            6,
+            85,
         ),
     ];
     for (c, program_kind, len) in cases {
@@ -364,6 +377,20 @@ fn any_program() -> BoxedStrategy<Program> {
             end_hz: c,
             duration_s: d,
         }),
+        (
+            f(),
+            f(),
+            prop::array::uniform8(f()),
+            prop::array::uniform8(f())
+        )
+            .prop_map(|(frequency_hz, offset_v, amplitudes_v, phases_deg)| {
+                Program::Harmonic {
+                    frequency_hz,
+                    offset_v,
+                    amplitudes_v,
+                    phases_deg,
+                }
+            }),
     ]
     .boxed()
 }
@@ -448,6 +475,18 @@ fn bits(c: &Command) -> Vec<u32> {
                 } => {
                     let mut v = vec![5];
                     v.extend(b(&[amplitude_v, start_hz, end_hz, duration_s]));
+                    v
+                }
+                Program::Harmonic {
+                    frequency_hz,
+                    offset_v,
+                    amplitudes_v,
+                    phases_deg,
+                } => {
+                    let mut v = vec![6];
+                    v.extend(b(&[frequency_hz, offset_v]));
+                    v.extend(b(&amplitudes_v));
+                    v.extend(b(&phases_deg));
                     v
                 }
             };

@@ -162,6 +162,25 @@ mod tests {
                 offset_v: 0.0
             }
         );
+        assert_eq!(
+            program("harmonic:1,2,0,1.5,-60,0.5,-120", 3),
+            Program::Harmonic {
+                frequency_hz: 1.0,
+                offset_v: 0.0,
+                amplitudes_v: [2.0, 1.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
+                phases_deg: [0.0, -60.0, -120.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+            }
+        );
+        // One pair for every segment.
+        assert_eq!(
+            program("harmonic:2,1,90", 2),
+            Program::Harmonic {
+                frequency_hz: 2.0,
+                offset_v: 0.0,
+                amplitudes_v: [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                phases_deg: [90.0, 90.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+            }
+        );
     }
 
     #[test]
@@ -214,7 +233,25 @@ mod tests {
         r.options.offset_v = 0.5;
         assert_eq!(
             refuse(r),
-            "offset_v applies to sine: and standing: waves only, not `pulses:1,1,1`"
+            "offset_v applies to sine:, standing: and harmonic: waves only, not `pulses:1,1,1`"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("harmonic:1,2,0,1,0", 3)),
+            "wave `harmonic:1,2,0,1,0`: harmonic takes FREQUENCY_HZ then AMPLITUDE_V,PHASE_DEG \
+             per segment (or one pair for all), got 5 value(s)"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("harmonic:1,2,0,1,0,1,0,1,0", 3)),
+            "wave `harmonic:1,2,0,1,0,1,0,1,0`: harmonic has 4 amplitude-phase pairs for 3 segments"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("harmonic:1,2,0,4.5,0,1,0", 3)),
+            "wave `harmonic:1,2,0,4.5,0,1,0`: peak 4.5 V (largest amplitude plus offset) \
+             exceeds the hard limit of ±4 V"
+        );
+        assert_eq!(
+            refuse(WaveRequest::new("harmonic:1,2,0,-1,0,1,0", 3)),
+            "wave `harmonic:1,2,0,-1,0,1,0`: Harmonic.amplitudes_v must be at least 0"
         );
         let mut r = WaveRequest::new("standing:1,1", 3);
         r.options.offset_v = 3.5;

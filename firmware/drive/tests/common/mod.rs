@@ -38,6 +38,11 @@ pub fn cycles(p: &Program, k: usize, t_s: f64) -> f64 {
             ..
         } => wrap(frequency_hz as f64 * t_s - k as f64 * lag_deg_per_segment as f64 / 360.0),
         Program::Standing { frequency_hz, .. } => wrap(frequency_hz as f64 * t_s),
+        Program::Harmonic {
+            frequency_hz,
+            phases_deg,
+            ..
+        } => wrap(frequency_hz as f64 * t_s + phases_deg[k] as f64 / 360.0),
         Program::Chirp {
             start_hz,
             end_hz,
@@ -93,6 +98,11 @@ pub fn wave(p: &Program, n: usize, k: usize, t_s: f64, sine: impl Fn(f64) -> f64
             }
         }
         Program::Chirp { amplitude_v, .. } => amplitude_v as f64 * s,
+        Program::Harmonic {
+            offset_v,
+            amplitudes_v,
+            ..
+        } => offset_v as f64 + amplitudes_v[k] as f64 * s,
     }
 }
 
