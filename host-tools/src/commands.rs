@@ -11,6 +11,7 @@ use anyhow::{anyhow, bail, Context};
 use finrs::analysis::fit::{Effect, Fitter};
 use finrs::link::capture::{self, CaptureError, Firmware, Monitor};
 use finrs::link::probe::ProbeError;
+use finrs::model::motion;
 use finrs::model::params::{ModelFile, Preset};
 use finrs::model::simulate::predict_recording;
 use finrs::model::synth::{self, DriveError};
@@ -18,7 +19,7 @@ use finrs::plot;
 use finrs::recording::Geometry;
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
-use finrs::wave::{Wave, WaveError, WaveOptions};
+use finrs::wave::{Wave, WaveError, WaveKind, WaveOptions};
 use finrs_drive::MAX_SEGMENTS;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -42,7 +43,13 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
             (path.display().to_string(), Recording::read(path)?)
         }
         (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
-        (None, Some(spec)) => (spec.clone(), wave_recording(spec, &args.drive)?),
+        (None, Some(spec)) => {
+            let elements = sim_elements(&args, &model);
+            (
+                spec.clone(),
+                wave_recording(spec, &args.drive, &model, elements)?,
+            )
+        }
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
     };
     let geometry = Geometry {
@@ -59,11 +66,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
             .progress_chars("=> "),
     );
     bar.set_message("simulating");
-    // A fitted file predicts what its fit saw on the fit's own mesh.
-    let elements = args
-        .elements
-        .or(model.mesh.map(|m| m.elements_per_segment))
-        .unwrap_or(1);
+    let elements = sim_elements(&args, &model);
     let sim = predict_recording(&name, &input, &spec, elements, &mut |n| bar.set_position(n))?;
     bar.finish_and_clear();
 
@@ -86,8 +89,23 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The drive of `simulate --wave`, with `simulate`'s defaults.
-fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
+/// The elements per segment `simulate` runs: a fitted file predicts what
+/// its fit saw on the fit's own mesh.
+fn sim_elements(args: &SimulateArgs, model: &ModelFile) -> usize {
+    args.elements
+        .or(model.mesh.map(|m| m.elements_per_segment))
+        .unwrap_or(1)
+}
+
+/// The drive of `simulate --wave`, with `simulate`'s defaults; a motion
+/// turned into each segment's sine by `model` (as simulated: the wave's
+/// recording has the seed's geometry).
+fn wave_recording(
+    spec: &str,
+    args: &SimWaveArgs,
+    model: &ModelFile,
+    elements: usize,
+) -> anyhow::Result<Recording> {
     let wave = Wave::parse(spec)?;
     let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
         FixtureArg::Free => Fixture::Free,
@@ -112,6 +130,15 @@ fn wave_recording(spec: &str, args: &SimWaveArgs) -> anyhow::Result<Recording> {
         ramp_in_s: args.shape.ramp_in_s.unwrap_or(0.0),
         ramp_out_s: args.shape.ramp_out_s.unwrap_or(0.0),
         ..WaveOptions::steady(args.shape.sweep_s.unwrap_or(duration_s))
+    };
+    let wave = match wave.kind() {
+        WaveKind::Motion { .. } => {
+            let spec = model.spec_for(&Geometry::THESIS_2006)?;
+            let shaped = motion::shaped(&wave, &spec, drive.segments, elements, drive.rate_hz)?;
+            eprintln!("{} is {}", wave.text(), shaped.text());
+            shaped
+        }
+        _ => wave,
     };
     synth::drive_recording_shaped(&wave, &drive, &options, limits).map_err(drive_flags)
 }

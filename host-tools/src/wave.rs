@@ -1,7 +1,10 @@
 //! The one parser of the `--wave` syntax, shared by `finrs simulate` and
 //! `finrs wave`: `step:V[,V..]`, `sine:AMP,HZ,LAG_DEG`, `standing:AMP,HZ`,
 //! `chirp:AMP,HZ0,HZ1`, `pulses:AMP,ON_S,OFF_S`,
-//! `harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..]` (each segment its own sine).
+//! `harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..]` (each segment its own sine),
+//! `motion:TIP_AMP_M,HZ,LAG_DEG` (a travelling bending wave asked of the
+//! free tip, which only the strip's model turns into voltages:
+//! `finrs::model::motion`).
 //!
 //! [`Wave::parse`] checks the syntax only (kind, number of values, finite
 //! numbers). [`Wave::generator`] maps the wave, with its [`WaveOptions`]
@@ -62,7 +65,7 @@ pub enum WaveError {
     },
     /// No such kind.
     #[error(
-        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic)"
+        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, motion)"
     )]
     UnknownKind {
         /// The wave's text.
@@ -92,6 +95,15 @@ pub enum WaveError {
         sines: usize,
         /// Segments driven.
         segments: usize,
+    },
+    /// A motion wave where no model turns it into voltages.
+    #[error(
+        "wave `{wave}`: a motion needs the strip's model to become voltages: \
+         `finrs simulate --wave` computes them from --params (the board cannot yet)"
+    )]
+    NeedsModel {
+        /// The wave's text.
+        wave: String,
     },
     /// An offset for a wave that has none.
     #[error("offset_v applies to sine:, standing: and harmonic: waves only, not `{wave}`")]
@@ -170,6 +182,17 @@ pub enum WaveKind {
         on_s: f64,
         /// Time off, s.
         off_s: f64,
+    },
+    /// A travelling bending wave asked of the free tip: every segment's
+    /// moment of one amplitude, each `lag_deg` behind the one before,
+    /// scaled so that the tip moves `tip_amp_m` (`model_core::Strip::tip_wave`).
+    Motion {
+        /// The tip's amplitude, m.
+        tip_amp_m: f64,
+        /// Frequency, Hz.
+        frequency_hz: f64,
+        /// Each segment's moment behind the one before, degrees.
+        lag_deg: f64,
     },
     /// Each segment its own sine (see [`Program::Harmonic`]); one pair
     /// means every segment.
@@ -304,6 +327,14 @@ impl Wave {
                     phases_deg: values[2..].iter().step_by(2).copied().collect(),
                 }
             }
+            "motion" => {
+                need(3, "TIP_AMPLITUDE_M,FREQUENCY_HZ,LAG_DEG")?;
+                WaveKind::Motion {
+                    tip_amp_m: values[0],
+                    frequency_hz: values[1],
+                    lag_deg: values[2],
+                }
+            }
             other => {
                 return Err(WaveError::UnknownKind {
                     wave: spec.to_string(),
@@ -374,7 +405,11 @@ impl Wave {
                 })
             }
         };
-        let (program, peak_v, peak_is) = self.program(segments, offset_v, options.sweep_s);
+        let (program, peak_v, peak_is) = self
+            .program(segments, offset_v, options.sweep_s)
+            .ok_or_else(|| WaveError::NeedsModel {
+                wave: spec.to_string(),
+            })?;
         let f = |x: f64| x as f32;
         let envelope = Envelope {
             ramp_in_s: f(options.ramp_in_s),
@@ -401,15 +436,17 @@ impl Wave {
     }
 
     /// The firmware's program for `segments` segments (offset and chirp
-    /// sweep given), its peak voltage, V, and what makes that peak.
+    /// sweep given), its peak voltage, V, and what makes that peak; `None`
+    /// for a motion, which only the strip's model turns into voltages.
     fn program(
         &self,
         segments: usize,
         offset_v: f64,
         sweep_s: f64,
-    ) -> (Program, f64, &'static str) {
+    ) -> Option<(Program, f64, &'static str)> {
         let f = |x: f64| x as f32;
-        match &self.kind {
+        Some(match &self.kind {
+            WaveKind::Motion { .. } => return None,
             WaveKind::Step { levels_v } => {
                 let mut levels = [0.0f32; MAX_SEGMENTS];
                 for (k, level) in levels.iter_mut().take(segments).enumerate() {
@@ -494,7 +531,7 @@ impl Wave {
                     "largest amplitude plus offset",
                 )
             }
-        }
+        })
     }
 }
 

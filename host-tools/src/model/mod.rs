@@ -4,6 +4,7 @@
 
 mod drying;
 mod kept_modes;
+pub mod motion;
 pub mod params;
 pub mod predict;
 mod recent;

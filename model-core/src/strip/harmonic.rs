@@ -79,6 +79,24 @@ pub enum HarmonicError {
     NoResponse,
 }
 
+impl core::fmt::Display for HarmonicError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Frequency { hz, nyquist_hz } => {
+                write!(f, "frequency {hz} Hz is not within (0, {nyquist_hz}) Hz")
+            }
+            Self::Nonlinear { field } => write!(
+                f,
+                "{field} is on: the response holds harmonics, not one sine"
+            ),
+            Self::Resonant { mode } => {
+                write!(f, "the drive sits on undamped mode {mode}'s own frequency")
+            }
+            Self::NoResponse => write!(f, "no voltage moves the output at this frequency"),
+        }
+    }
+}
+
 /// Which output a wave's amplitude is asked of.
 #[derive(Clone, Copy)]
 enum Output {
