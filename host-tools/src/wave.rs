@@ -753,7 +753,7 @@ mod tests {
             ),
             (
                 "wobble:1",
-                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses)",
+                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, motion)",
             ),
             ("step:x", "wave `step:x`: `x` is not a finite number"),
             ("step:nan", "wave `step:nan`: `nan` is not a finite number"),

@@ -236,13 +236,13 @@ mod tests {
             "offset_v applies to sine:, standing: and harmonic: waves only, not `pulses:1,1,1`"
         );
         assert_eq!(
-            refuse(WaveRequest::new("harmonic:1,2,0,1,0", 3)),
-            "wave `harmonic:1,2,0,1,0`: harmonic takes FREQUENCY_HZ then AMPLITUDE_V,PHASE_DEG \
-             per segment (or one pair for all), got 5 value(s)"
+            refuse(WaveRequest::new("harmonic:1,2,0,1", 3)),
+            "wave `harmonic:1,2,0,1`: harmonic takes FREQUENCY_HZ then AMPLITUDE_V,PHASE_DEG \
+             per segment (or one pair for all), got 4 value(s)"
         );
         assert_eq!(
-            refuse(WaveRequest::new("harmonic:1,2,0,1,0,1,0,1,0", 3)),
-            "wave `harmonic:1,2,0,1,0,1,0,1,0`: harmonic has 4 amplitude-phase pairs for 3 segments"
+            refuse(WaveRequest::new("harmonic:1,2,0,1,0", 3)),
+            "wave `harmonic:1,2,0,1,0`: harmonic has 2 amplitude-phase pairs for 3 segments"
         );
         assert_eq!(
             refuse(WaveRequest::new("harmonic:1,2,0,4.5,0,1,0", 3)),
