@@ -16,7 +16,7 @@ use finrs::model::params::{ModelFile, Preset};
 use finrs::model::simulate::predict_recording;
 use finrs::model::synth::{self, DriveError};
 use finrs::plot;
-use finrs::recording::Geometry;
+use finrs::recording::{Channel, Geometry};
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
 use finrs::wave::{Wave, WaveError, WaveKind, WaveOptions};
@@ -77,8 +77,15 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         let measured = args.input.as_ref().map(|_| &input);
         // Plotting needs the prediction as a recording of its own.
         let sim = sim.to_recording();
-        plot::plot(png, &format!("finrs simulate: {name}"), measured, &sim)
-            .with_context(|| png.display().to_string())?;
+        let title = format!("finrs simulate: {name}");
+        match asked_motion(&args, &sim)? {
+            // A motion: what was asked beside what the model does.
+            Some(asked) => {
+                plot::plot_models(png, &title, None, &[("model", &sim), ("asked", &asked)])
+            }
+            None => plot::plot(png, &title, measured, &sim),
+        }
+        .with_context(|| png.display().to_string())?;
         eprintln!("wrote {}", png.display());
         std::mem::forget(sim);
     }
@@ -87,6 +94,33 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     std::mem::forget(sim);
     std::mem::forget(input);
     Ok(())
+}
+
+/// For `simulate --wave motion:…`, the tip it asks as a recording beside
+/// `sim` (its rows, the tip only, while the wave is held).
+fn asked_motion(args: &SimulateArgs, sim: &Recording) -> anyhow::Result<Option<Recording>> {
+    let Some(spec) = args.input.is_none().then_some(args.wave.as_ref()).flatten() else {
+        return Ok(None);
+    };
+    let d = &args.drive;
+    let rate_hz = d.rate_hz.unwrap_or(1000.0);
+    // The wave starts on the first row at or after the rest, as the drive
+    // puts it (`synth::drive_recording_shaped`).
+    let start_s = (d.rest_s.unwrap_or(1.0) * rate_hz - 1e-9).ceil().max(0.0) / rate_hz;
+    let duration_s = d.duration_s.unwrap_or(10.0);
+    let hold_s = (
+        start_s + d.shape.ramp_in_s.unwrap_or(0.0),
+        start_s + duration_s - d.shape.ramp_out_s.unwrap_or(0.0),
+    );
+    let Some(tip) = motion::asked_tip_m(&Wave::parse(spec)?, &sim.t_s, start_s, hold_s) else {
+        return Ok(None);
+    };
+    Ok(Some(Recording {
+        meta: sim.meta.clone(),
+        t_s: sim.t_s.clone(),
+        v_v: sim.v_v.clone(),
+        channels: vec![(Channel::TipY, tip)],
+    }))
 }
 
 /// The elements per segment `simulate` runs: a fitted file predicts what

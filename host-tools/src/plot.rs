@@ -227,12 +227,17 @@ fn channel_traces(
     }
     for (j, (name, sim)) in models.iter().enumerate() {
         let colour = shade(model_colour(j), segment);
-        traces.push(Trace {
-            label: format!("{prefix}{name}"),
-            colour,
-            style: Style::Line,
-            points: points(sim, ch, scale),
-        });
+        // A model without the channel (what a motion asked has no
+        // currents) draws nothing and takes no legend entry.
+        let line = points(sim, ch, scale);
+        if !line.is_empty() {
+            traces.push(Trace {
+                label: format!("{prefix}{name}"),
+                colour,
+                style: Style::Line,
+                points: line,
+            });
+        }
         if let (Some(frames), Some(values)) = (frames, sim.channel(ch)) {
             traces.push(Trace {
                 label: String::new(),

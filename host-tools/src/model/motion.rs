@@ -145,6 +145,36 @@ pub fn shaped(
     Ok(Wave::parse(&harmonic)?)
 }
 
+/// The tip a motion asks, m, at each of `t_s` (`None` for another wave):
+/// `TIP_AMP_M · sin(2π HZ (t − start_s))` while the wave is held
+/// (`hold_s`, from and to, s), `None` outside it, where the envelope's
+/// ramps and the relaxation's settling are not what was asked.
+pub fn asked_tip_m(
+    wave: &Wave,
+    t_s: &[f64],
+    start_s: f64,
+    hold_s: (f64, f64),
+) -> Option<Vec<Option<f64>>> {
+    let &WaveKind::Motion {
+        tip_amp_m,
+        frequency_hz,
+        ..
+    } = wave.kind()
+    else {
+        return None;
+    };
+    let omega = 2.0 * std::f64::consts::PI * frequency_hz;
+    Some(
+        t_s.iter()
+            .map(|&t| {
+                (hold_s.0..=hold_s.1)
+                    .contains(&t)
+                    .then(|| tip_amp_m * (omega * (t - start_s)).sin())
+            })
+            .collect(),
+    )
+}
+
 /// Why the model gave no voltages.
 enum Why {
     Model(model_core::ParamError),
@@ -195,7 +225,7 @@ fn voltages(
 
 #[cfg(test)]
 mod tests {
-    use super::{shaped, MotionError};
+    use super::{asked_tip_m, shaped, MotionError};
     use crate::model::params::ModelFile;
     use crate::model::simulate::predict_recording;
     use crate::model::synth::{drive_recording_shaped, Drive};
@@ -251,6 +281,19 @@ mod tests {
             "{}",
             y.sine_phase_rad().to_degrees()
         );
+    }
+
+    #[test]
+    fn the_asked_tip_is_the_motion_while_the_wave_is_held() {
+        let wave = Wave::parse("motion:0.001,2,60").unwrap();
+        let t: Vec<f64> = (0..100).map(|k| k as f64 * 0.01).collect();
+        let asked = asked_tip_m(&wave, &t, 0.1, (0.3, 0.8)).unwrap();
+        assert!(asked[..30].iter().all(Option::is_none) && asked[81..].iter().all(Option::is_none));
+        for k in 30..=80 {
+            let want = 0.001 * (2.0 * std::f64::consts::PI * 2.0 * (t[k] - 0.1)).sin();
+            assert!((asked[k].unwrap() - want).abs() < 1e-15, "{k}");
+        }
+        assert!(asked_tip_m(&Wave::parse("sine:1,1,0").unwrap(), &t, 0.0, (0.0, 1.0)).is_none());
     }
 
     #[test]
