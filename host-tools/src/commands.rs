@@ -35,6 +35,8 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         Some(p) => ModelFile::read(p)?,
         None => ModelFile::main_m_2006(),
     };
+    // What a motion asks of the tip, to draw beside the model's.
+    let mut asked_tip_m = None;
     // clap refuses the wave's options with --input, and requires one of
     // --input and --wave.
     let (name, input) = match (&args.input, &args.wave) {
@@ -45,10 +47,9 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
         (None, Some(spec)) => {
             let elements = sim_elements(&args, &model);
-            (
-                spec.clone(),
-                wave_recording(spec, &args.drive, &model, elements)?,
-            )
+            let (rec, tip) = wave_recording(spec, &args.drive, &model, elements)?;
+            asked_tip_m = tip;
+            (spec.clone(), rec)
         }
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
     };
@@ -78,9 +79,15 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         // Plotting needs the prediction as a recording of its own.
         let sim = sim.to_recording();
         let title = format!("finrs simulate: {name}");
-        match asked_motion(&args, &sim)? {
+        match asked_tip_m {
             // A motion: what was asked beside what the model does.
-            Some(asked) => {
+            Some(tip) => {
+                let asked = Recording {
+                    meta: sim.meta.clone(),
+                    t_s: sim.t_s.clone(),
+                    v_v: sim.v_v.clone(),
+                    channels: vec![(Channel::TipY, tip)],
+                };
                 plot::plot_models(png, &title, None, &[("model", &sim), ("asked", &asked)])
             }
             None => plot::plot(png, &title, measured, &sim),
@@ -96,33 +103,6 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// For `simulate --wave motion:…`, the tip it asks as a recording beside
-/// `sim` (its rows, the tip only, while the wave is held).
-fn asked_motion(args: &SimulateArgs, sim: &Recording) -> anyhow::Result<Option<Recording>> {
-    let Some(spec) = args.input.is_none().then_some(args.wave.as_ref()).flatten() else {
-        return Ok(None);
-    };
-    let d = &args.drive;
-    let rate_hz = d.rate_hz.unwrap_or(1000.0);
-    // The wave starts on the first row at or after the rest, as the drive
-    // puts it (`synth::drive_recording_shaped`).
-    let start_s = (d.rest_s.unwrap_or(1.0) * rate_hz - 1e-9).ceil().max(0.0) / rate_hz;
-    let duration_s = d.duration_s.unwrap_or(10.0);
-    let hold_s = (
-        start_s + d.shape.ramp_in_s.unwrap_or(0.0),
-        start_s + duration_s - d.shape.ramp_out_s.unwrap_or(0.0),
-    );
-    let Some(tip) = motion::asked_tip_m(&Wave::parse(spec)?, &sim.t_s, start_s, hold_s) else {
-        return Ok(None);
-    };
-    Ok(Some(Recording {
-        meta: sim.meta.clone(),
-        t_s: sim.t_s.clone(),
-        v_v: sim.v_v.clone(),
-        channels: vec![(Channel::TipY, tip)],
-    }))
-}
-
 /// The elements per segment `simulate` runs: a fitted file predicts what
 /// its fit saw on the fit's own mesh.
 fn sim_elements(args: &SimulateArgs, model: &ModelFile) -> usize {
@@ -133,13 +113,14 @@ fn sim_elements(args: &SimulateArgs, model: &ModelFile) -> usize {
 
 /// The drive of `simulate --wave`, with `simulate`'s defaults; a motion
 /// turned into each segment's sine by `model` (as simulated: the wave's
-/// recording has the seed's geometry).
+/// recording has the seed's geometry), with the tip it asks at each row
+/// while the wave is held.
 fn wave_recording(
     spec: &str,
     args: &SimWaveArgs,
     model: &ModelFile,
     elements: usize,
-) -> anyhow::Result<Recording> {
+) -> anyhow::Result<(Recording, Option<Vec<Option<f64>>>)> {
     let wave = Wave::parse(spec)?;
     let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
         FixtureArg::Free => Fixture::Free,
@@ -165,16 +146,24 @@ fn wave_recording(
         ramp_out_s: args.shape.ramp_out_s.unwrap_or(0.0),
         ..WaveOptions::steady(args.shape.sweep_s.unwrap_or(duration_s))
     };
-    let wave = match wave.kind() {
+    let shaped = match wave.kind() {
         WaveKind::Motion { .. } => {
             let spec = model.spec_for(&Geometry::THESIS_2006)?;
             let shaped = motion::shaped(&wave, &spec, drive.segments, elements, drive.rate_hz)?;
             eprintln!("{} is {}", wave.text(), shaped.text());
             shaped
         }
-        _ => wave,
+        _ => wave.clone(),
     };
-    synth::drive_recording_shaped(&wave, &drive, &options, limits).map_err(drive_flags)
+    let rec =
+        synth::drive_recording_shaped(&shaped, &drive, &options, limits).map_err(drive_flags)?;
+    let start_s = drive.start_row() as f64 / drive.rate_hz;
+    let hold_s = (
+        start_s + options.ramp_in_s,
+        start_s + duration_s - options.ramp_out_s,
+    );
+    let asked = motion::asked_tip_m(&wave, &rec.t_s, start_s, hold_s);
+    Ok((rec, asked))
 }
 
 /// The flag that sets a field of the library's options: `rest_s` is

@@ -99,31 +99,16 @@ pub fn shaped(
     else {
         return Ok(wave.clone());
     };
-    let text = wave.text().to_string();
+    let text = wave.text();
     let v = voltages(
+        text,
         spec,
-        segments,
-        elements,
+        (segments, elements),
         1.0 / rate_hz,
         frequency_hz,
         tip_amp_m,
         lag_deg,
-    )
-    .map_err(|e| match e {
-        Why::Model(source) => MotionError::Model {
-            wave: text.clone(),
-            source,
-        },
-        Why::Harmonic(why) => MotionError::Harmonic {
-            wave: text.clone(),
-            why,
-        },
-        Why::Mesh => MotionError::Mesh {
-            wave: text.clone(),
-            segments,
-            elements,
-        },
-    })?;
+    )?;
     let (k, needs_v) = v
         .iter()
         .map(|p| p.amplitude())
@@ -131,7 +116,7 @@ pub fn shaped(
         .fold((0, 0.0), |m, (k, a)| if a > m.1 { (k, a) } else { m });
     if needs_v > f64::from(HARD_LIMIT_V) {
         return Err(MotionError::Unreachable {
-            wave: text,
+            wave: text.to_string(),
             needs_v,
             segment: k + 1,
             // Linear: the voltages scale with the amplitude asked.
@@ -175,48 +160,53 @@ pub fn asked_tip_m(
     )
 }
 
-/// Why the model gave no voltages.
-enum Why {
-    Model(model_core::ParamError),
-    Harmonic(String),
-    Mesh,
-}
-
-/// Each segment's voltage phasor for the motion, V.
+/// Each segment's voltage phasor for the motion `text`, V, on a mesh of
+/// `(segments, elements)`.
 fn voltages(
+    text: &str,
     spec: &ModelSpec,
-    segments: usize,
-    elements: usize,
+    (segments, elements): (usize, usize),
     dt_s: f64,
     hz: f64,
     tip_amp_m: f64,
     lag_deg: f64,
-) -> Result<Vec<Phasor>, Why> {
+) -> Result<Vec<Phasor>, MotionError> {
     fn go<const N: usize, const E: usize, const S: usize>(
+        text: &str,
         spec: &ModelSpec,
         dt_s: f64,
         hz: f64,
         tip_amp_m: f64,
         lag_deg: f64,
-    ) -> Result<Vec<Phasor>, Why> {
+    ) -> Result<Vec<Phasor>, MotionError> {
         let strip =
             Strip::<f64, N, E, S>::with_extensions(&spec.params, &spec.ext, Fixture::Free, dt_s)
-                .map_err(Why::Model)?;
+                .map_err(|source| MotionError::Model {
+                    wave: text.to_string(),
+                    source,
+                })?;
         strip
             .tip_wave(hz, tip_amp_m, lag_deg.to_radians())
             .map(|v| v.to_vec())
-            .map_err(|e| Why::Harmonic(e.to_string()))
+            .map_err(|e| MotionError::Harmonic {
+                wave: text.to_string(),
+                why: e.to_string(),
+            })
     }
     // One monomorphisation per mesh, as the simulation has.
     macro_rules! dispatch {
         ($($n:literal),*) => {
             match (segments, elements) {
                 $(
-                    ($n, 1) => go::<$n, 1, { state_len($n, 1) }>(spec, dt_s, hz, tip_amp_m, lag_deg),
-                    ($n, 2) => go::<$n, 2, { state_len($n, 2) }>(spec, dt_s, hz, tip_amp_m, lag_deg),
-                    ($n, 4) => go::<$n, 4, { state_len($n, 4) }>(spec, dt_s, hz, tip_amp_m, lag_deg),
+                    ($n, 1) => go::<$n, 1, { state_len($n, 1) }>(text, spec, dt_s, hz, tip_amp_m, lag_deg),
+                    ($n, 2) => go::<$n, 2, { state_len($n, 2) }>(text, spec, dt_s, hz, tip_amp_m, lag_deg),
+                    ($n, 4) => go::<$n, 4, { state_len($n, 4) }>(text, spec, dt_s, hz, tip_amp_m, lag_deg),
                 )*
-                _ => Err(Why::Mesh),
+                _ => Err(MotionError::Mesh {
+                    wave: text.to_string(),
+                    segments,
+                    elements,
+                }),
             }
         };
     }

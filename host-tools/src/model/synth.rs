@@ -121,6 +121,14 @@ pub struct Drive {
     pub rate_hz: f64,
 }
 
+impl Drive {
+    /// The row the wave starts on: the first at or after `rest_s` (the
+    /// 1e-9 forgives rounding in the product, e.g. 0.1 s × 1000 Hz).
+    pub fn start_row(&self) -> usize {
+        (self.rest_s * self.rate_hz - 1e-9).ceil().max(0.0) as usize
+    }
+}
+
 /// The firmware's limits, checked by [`finrs_drive::Limits::new`]; the
 /// error names the value (`limit_v` or `slew_v_per_s`) and its rule.
 pub fn limits(limit_v: f64, slew_v_per_s: f64) -> Result<finrs_drive::Limits, DriveError> {
@@ -196,9 +204,7 @@ pub fn drive_recording_shaped(
             segments: d.segments,
         });
     }
-    // First row at or after rest_s (the 1e-9 forgives rounding in the
-    // product, e.g. 0.1 s × 1000 Hz).
-    let start_row = ((d.rest_s * d.rate_hz - 1e-9).ceil().max(0.0) as usize).min(rows);
+    let start_row = d.start_row().min(rows);
     let mut v_v = Voltages::zeros(d.segments, start_row);
     let wave_rows = (rows - start_row) as u64;
     // A limiter through the rest would hold its outputs at 0 V: starting

@@ -128,7 +128,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         let gain = f(self.moment_gain);
 
         let elec: [[Phasor; 2]; N] =
-            core::array::from_fn(|i| self.electrics(hz, i).map(|e| e * v[i]));
+            core::array::from_fn(|i| self.electrics(z, i).map(|e| e * v[i]));
 
         // Each mode's pair from its own rotation and every segment's drive.
         let dof = Self::DOF;
@@ -182,9 +182,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             let per_vc = f(self.circuit.current(i, T::ZERO, T::from_f64(1.0)));
             v[i].scale(per_v) + elec[i][0].scale(per_vc)
         });
-        let own: [Phasor; N] = core::array::from_fn(|i| {
-            elec[i][0].scale(f(self.instant[i])) + elec[i][1].scale(f(self.lag[i]))
-        });
+        let own: [Phasor; N] = core::array::from_fn(|i| self.own_moment(i, elec[i]));
         let kappa = f(self.crosstalk);
         let moments_nm = core::array::from_fn(|i| {
             let mut u = own[i];
@@ -239,13 +237,11 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         output: Output,
         amplitude: f64,
     ) -> Result<[Phasor; N], HarmonicError> {
-        // Each segment's own moment per volt at this frequency, from the
-        // response to a unit drive on every segment (its own moment does
-        // not depend on the others').
-        let per_volt: [Phasor; N] = core::array::from_fn(|i| {
-            let e = self.electrics(hz, i);
-            e[0].scale(self.instant[i].to_f64()) + e[1].scale(self.lag[i].to_f64())
-        });
+        // Each segment's own moment per volt at this frequency (its own
+        // moment does not depend on the others').
+        let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
+        let per_volt: [Phasor; N] =
+            core::array::from_fn(|i| self.own_moment(i, self.electrics(z, i)));
         // Wanted moments on the beam, then the segments' own moments
         // through the crosstalk's tridiagonal (I + κT) (Thomas' sweep),
         // then the voltages.
@@ -274,10 +270,16 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         Ok(v.map(|vi| vi * c))
     }
 
-    /// Segment `i`'s electrics `[v_C, r]` per volt of a sine at `hz`:
-    /// `v_C ← a v_C + g₀ v` and `r ← b v_C + c r + g₁ v` settled.
-    fn electrics(&self, hz: f64, i: usize) -> [Phasor; 2] {
-        let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
+    /// Segment `i`'s own moment (before crosstalk and the moment gain)
+    /// from its electrics `e = [v_C, r]`: `C a v_C + C (b − a p) r`.
+    fn own_moment(&self, i: usize, e: [Phasor; 2]) -> Phasor {
+        e[0].scale(self.instant[i].to_f64()) + e[1].scale(self.lag[i].to_f64())
+    }
+
+    /// Segment `i`'s electrics `[v_C, r]` per volt of a sine whose step
+    /// turns it by `z = e^{jθ}`: `v_C ← a v_C + g₀ v` and
+    /// `r ← b v_C + c r + g₁ v` settled.
+    fn electrics(&self, z: Phasor, i: usize) -> [Phasor; 2] {
         let [a, b, c, g0, g1] = self.circuit.elec[i].map(|x| x.to_f64());
         let vc = Phasor::real(g0) / (z - Phasor::real(a));
         let r = (vc.scale(b) + Phasor::real(g1)) / (z - Phasor::real(c));

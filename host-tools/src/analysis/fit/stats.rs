@@ -360,13 +360,16 @@ fn quadratic(g: &[f64], cov: &DMatrix<f64>, h: &[f64]) -> f64 {
     v
 }
 
+/// The normal deviate of the fit's two-sided 95 % intervals.
+const Z95: f64 = 1.96;
+
 /// Whether `est`'s interval, widened from 95 % to `z` standard errors (in
 /// the space it is symmetric in), excludes `off`.
 pub fn excludes_at(est: &Estimate, off: f64, z: f64) -> bool {
     if !(est.low.is_finite() && est.high.is_finite()) {
         return false;
     }
-    let widen = z / 1.96;
+    let widen = z / Z95;
     if est.knob.positive() && est.value > 0.0 {
         // Log-symmetric: a positive interval never reaches 0 or below.
         off <= 0.0 || (est.value / off).ln().abs() > widen * (est.high / est.value).ln()
@@ -377,7 +380,7 @@ pub fn excludes_at(est: &Estimate, off: f64, z: f64) -> bool {
 
 /// Whether `est`'s upper end, widened as [`excludes_at`] does, is below 0.
 pub fn below_zero_at(est: &Estimate, z: f64) -> bool {
-    est.high.is_finite() && est.value + z / 1.96 * (est.high - est.value) < 0.0
+    est.high.is_finite() && est.value + z / Z95 * (est.high - est.value) < 0.0
 }
 
 /// The 95 % interval of `value` with standard error `se`: unbounded for an
@@ -386,10 +389,10 @@ fn interval(positive: bool, value: f64, se: f64) -> (f64, f64) {
     if !se.is_finite() {
         (f64::NEG_INFINITY, f64::INFINITY)
     } else if positive && value > 0.0 {
-        let f = (1.96 * se / value).exp();
+        let f = (Z95 * se / value).exp();
         (value / f, value * f)
     } else {
-        (value - 1.96 * se, value + 1.96 * se)
+        (value - Z95 * se, value + Z95 * se)
     }
 }
 
