@@ -54,8 +54,15 @@ mod app {
     use super::*;
     use crate::board::{self, CommandIn, FrameOut, Housekeeping, Io};
     use crate::config::{self, N};
+    use finrs_controller::shaper::{self, Shaper, ELEMENTS};
     use finrs_controller::{Controller, FaultCode, Identity};
     use finrs_frames::{Command, CommandDecoder, CommandEvent};
+    use model_core::state_len;
+
+    /// The state length of the board's model strip.
+    const S: usize = state_len(N, ELEMENTS);
+    /// The sample time the model's strip is discretised at, s.
+    const DT_S: f64 = 1.0 / config::SAMPLE_HZ as f64;
 
     #[shared]
     struct Shared {
@@ -68,6 +75,8 @@ mod app {
         frames: FrameOut,
         commands: CommandIn,
         housekeeping: Housekeeping,
+        shaper: Shaper<N, ELEMENTS, S>,
+        stored_model: Option<finrs_frames::ModelRecord>,
     }
 
     #[init]
@@ -119,6 +128,8 @@ mod app {
                 frames: parts.frames,
                 commands: parts.commands,
                 housekeeping: parts.housekeeping,
+                shaper: Shaper::new(),
+                stored_model: parts.stored_model,
             },
         )
     }
@@ -134,12 +145,13 @@ mod app {
         let Some(input) = io.read() else {
             return;
         };
-        let (out, faulted, to_store) = cx.shared.controller.lock(|c| {
+        let (out, faulted, to_store, model_to_store) = cx.shared.controller.lock(|c| {
             let out = c.tick(&input, frames);
             (
                 out,
                 c.fault_state().is_some(),
                 c.take_calibration_to_store(),
+                c.take_model_to_store(),
             )
         });
         // A latched fault keeps the outputs off: the controller's 0 V would
@@ -154,6 +166,10 @@ mod app {
             let ok = io.store_calibration(&calibration);
             cx.shared.controller.lock(|c| c.calibration_stored(ok));
         });
+        // Likewise a model (its write's outcome is in the log only).
+        let stored = stored.or(model_to_store.map(|record| {
+            io.store_model(&record);
+        }));
         // The next period's conversion already finished: this one overran.
         if io.deadline_missed() && stored.is_none() {
             cx.shared
@@ -182,21 +198,40 @@ mod app {
     }
 
     /// Reads the command channel, decodes, and hands commands to the
-    /// controller; refusals (framing or value) are logged and change
+    /// controller, a model or a motion through the shaper first (outside
+    /// the controller's lock: building the model's strip takes
+    /// milliseconds); refusals (framing or value) are logged and change
     /// nothing.
-    #[task(priority = 1, shared = [controller], local = [commands, decoder: CommandDecoder = CommandDecoder::new()])]
+    #[task(priority = 1, shared = [controller], local = [commands, shaper, stored_model, decoder: CommandDecoder = CommandDecoder::new()])]
     async fn commands(mut cx: commands::Context) {
+        // The model stored last, checked as a SetModel's is: here, at the
+        // lowest priority, not in `init`, where building its strip would
+        // hold the first samples back.
+        if let Some(record) = cx.local.stored_model.take() {
+            match Shaper::check(&record, DT_S) {
+                Ok(model) => {
+                    cx.shared.controller.lock(|c| c.use_stored_model(&record));
+                    cx.local.shaper.install(model);
+                    defmt::info!("model: {=u16:04x} from flash", record.crc());
+                }
+                Err(e) => defmt::warn!(
+                    "model: the stored record is refused: {}",
+                    defmt::Display2Format(&e.brief())
+                ),
+            }
+        }
         let mut buf = [0u8; 64];
         loop {
             let n = cx.local.commands.read(&mut buf);
             let controller = &mut cx.shared.controller;
+            let shaper = &mut *cx.local.shaper;
             cx.local.decoder.push(&buf[..n], &mut |event| match event {
                 CommandEvent::Command(command) => {
                     let name = command_name(&command);
-                    match controller.lock(|c| c.command(command)) {
-                        Ok(()) => defmt::info!("command accepted: {}", name),
+                    match shaper::command(command, shaper, DT_S, controller) {
+                        Ok(_) => defmt::info!("command accepted: {}", name),
                         // The message names the command, the field and the rule.
-                        Err(e) => defmt::error!("{}", defmt::Display2Format(&e)),
+                        Err(e) => defmt::error!("{}", defmt::Display2Format(&e.brief())),
                     }
                 }
                 CommandEvent::Refused(e) => {
@@ -233,6 +268,8 @@ mod app {
             Command::ClearFault => "ClearFault",
             Command::RequestInfo => "RequestInfo",
             Command::SetCalibration(_) => "SetCalibration",
+            Command::SetModel(_) => "SetModel",
+            Command::SetMotion { .. } => "SetMotion",
         }
     }
 

@@ -1,14 +1,15 @@
 //! `finrs calibrate`: connects through the probe, runs the library's
 //! measurement ([`finrs::link::calibrate`]), prints what it found, and
 //! stores it unless `--dry-run`; the prompts for the reference load are
-//! asked here, on the terminal.
+//! asked here, on the terminal. And `finrs tune`, which sends the board
+//! its model.
 
 use anyhow::bail;
 use finrs::link::calibrate::{self, CalibrateOptions};
 use finrs::link::capture::{self, Connected, Firmware};
 use finrs_frames::{Calibration, Info, MAX_SEGMENTS};
 
-use crate::cli::{timeout, CalibrateWhat, LoadDirection, SendArgs};
+use crate::cli::{timeout, CalibrateWhat, LoadDirection, SendArgs, TuneArgs};
 use crate::commands::{capture_flags, prompt, StatusLine};
 
 /// `finrs calibrate ...`.
@@ -106,6 +107,45 @@ pub fn run(what: CalibrateWhat) -> anyhow::Result<()> {
             store(&mut c, &opts, &new, false)
         }
     }
+}
+
+/// `finrs tune`: the fit's model for the strip's geometry, checked by the
+/// board's own shaper for the board's segments and sample rate, sent, and
+/// confirmed by the Info that names it.
+pub fn tune(args: TuneArgs) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use finrs::model::motion::{board_check, record};
+    use finrs::model::params::ModelFile;
+    use finrs::recording::{Geometry, Recording};
+
+    let opts = CalibrateOptions {
+        timeout: timeout("--timeout-s", args.timeout_s)?,
+        ..CalibrateOptions::default()
+    };
+    let model = ModelFile::read(&args.params)?;
+    let rec = Recording::read_drive(&args.geometry_from)?;
+    let geometry = Geometry {
+        length_m: rec.meta.length_m,
+        width_m: rec.meta.width_m,
+        thickness_m: rec.meta.thickness_m,
+    };
+    let spec = model
+        .spec_for(&geometry)
+        .with_context(|| args.params.display().to_string())?;
+    let r = record(&spec);
+    let mut c = connect(&args.send)?;
+    let info = calibrate::read_info(&mut c.link, &opts)?;
+    board_check(&r, usize::from(info.segments), f64::from(info.sample_hz))
+        .with_context(|| format!("{}: the board would refuse it", args.params.display()))?;
+    let info = calibrate::apply_model(&mut c.link, &opts, &r)?;
+    println!(
+        "board: model {:04x} from {} (a strip {} m long) in use for motion waves; \
+         not yet stored in flash: send it again after a reset",
+        info.model_crc.unwrap_or_default(),
+        args.params.display(),
+        geometry.length_m
+    );
+    Ok(())
 }
 
 fn connect(send: &SendArgs) -> anyhow::Result<Connected> {

@@ -74,6 +74,9 @@ pub enum Command {
         #[command(subcommand)]
         what: BenchWhat,
     },
+    /// Send a fitted model to the running firmware, which then shapes
+    /// motion waves with it (`finrs wave motion:TIP_AMP_M,HZ,LAG_DEG`).
+    Tune(TuneArgs),
     /// Measure the board's sensors (shunt zeros, load-cell scale) and store
     /// the calibration in its flash; or show or set it.
     Calibrate {
@@ -81,6 +84,22 @@ pub enum Command {
         #[command(subcommand)]
         what: CalibrateWhat,
     },
+}
+
+/// `finrs tune`.
+#[derive(Args)]
+pub struct TuneArgs {
+    /// The fitted parameter file (`finrs fit`'s, or `finrs params`'s).
+    pub params: PathBuf,
+    /// A recording of the strip (the session's the fit came from), for its
+    /// length, width and thickness.
+    #[arg(long)]
+    pub geometry_from: PathBuf,
+    /// Wait this long for the board's answer, s.
+    #[arg(long, default_value_t = 10.0)]
+    pub timeout_s: f64,
+    #[command(flatten)]
+    pub send: SendArgs,
 }
 
 /// `finrs merge-camera`.

@@ -46,8 +46,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         }
         (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
         (None, Some(spec)) => {
-            let elements = sim_elements(&args, &model);
-            let (rec, tip) = wave_recording(spec, &args.drive, &model, elements)?;
+            let (rec, tip) = wave_recording(spec, &args.drive, &model)?;
             asked_tip_m = tip;
             (spec.clone(), rec)
         }
@@ -112,14 +111,13 @@ fn sim_elements(args: &SimulateArgs, model: &ModelFile) -> usize {
 }
 
 /// The drive of `simulate --wave`, with `simulate`'s defaults; a motion
-/// turned into each segment's sine by `model` (as simulated: the wave's
-/// recording has the seed's geometry), with the tip it asks at each row
-/// while the wave is held.
+/// turned into each segment's sine by `model` as the board's shaper does
+/// it (on the seed's geometry, which the wave's recording has), with the
+/// tip it asks at each row while the wave is held.
 fn wave_recording(
     spec: &str,
     args: &SimWaveArgs,
     model: &ModelFile,
-    elements: usize,
 ) -> anyhow::Result<(Recording, Option<Vec<Option<f64>>>)> {
     let wave = Wave::parse(spec)?;
     let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
@@ -149,7 +147,7 @@ fn wave_recording(
     let shaped = match wave.kind() {
         WaveKind::Motion { .. } => {
             let spec = model.spec_for(&Geometry::THESIS_2006)?;
-            let shaped = motion::shaped(&wave, &spec, drive.segments, elements, drive.rate_hz)?;
+            let shaped = motion::shaped(&wave, &spec, drive.segments, drive.rate_hz)?;
             eprintln!("{} is {}", wave.text(), shaped.text());
             shaped
         }

@@ -2,7 +2,7 @@
 //!
 //! [`cli`] declares the commands and options, [`commands`] runs each one
 //! (progress bars, Ctrl-C and the files it writes), [`calibrate`] the
-//! board's calibration, [`bench_cli`] a session by protocol, [`stages`]
+//! board's calibration and model, [`bench_cli`] a session by protocol, [`stages`]
 //! a long run's time per stage; this file
 //! only parses and dispatches.
 
@@ -46,6 +46,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::ClearFault(args) => commands::send(&args, &finrs_frames::Command::ClearFault),
         Command::Limit { max_abs_v, send } => commands::limit(max_abs_v, &send),
         Command::Calibrate { what } => calibrate::run(what),
+        Command::Tune(args) => calibrate::tune(args),
         Command::Bench { what } => bench_cli::run(what),
         Command::MergeCamera(args) => commands::merge_camera(args),
     }

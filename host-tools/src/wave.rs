@@ -99,7 +99,8 @@ pub enum WaveError {
     /// A motion wave where no model turns it into voltages.
     #[error(
         "wave `{wave}`: a motion needs the strip's model to become voltages: \
-         `finrs simulate --wave` computes them from --params (the board cannot yet)"
+         `finrs simulate --wave` computes them from --params, the board from the model \
+         `finrs tune` gave it"
     )]
     NeedsModel {
         /// The wave's text.

@@ -7,8 +7,8 @@ use core::fmt;
 use finrs_drive::{Envelope, Generator, LimitError, Limiter, Limits, Program, WaveError};
 use finrs_frames::{
     encode_dropped, encode_fault, encode_info, encode_sample, Calibration, CalibrationOrigin,
-    Command, Dropped, Fault, FaultCode, Info, ResetCause, Sample, SampleFlags, DROPPED_FRAME_LEN,
-    FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
+    Command, Dropped, Fault, FaultCode, Info, ModelRecord, ResetCause, Sample, SampleFlags,
+    DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 use crate::config::{Config, ConfigError, ConfigRule};
@@ -70,6 +70,13 @@ pub enum CommandRefused {
     CalibrationWhileDriving,
     /// SetCalibration: a value breaks a rule (field and rule).
     Calibration(ConfigError),
+    /// SetModel while a program drives the outputs (or they have not yet
+    /// slewed to 0 V): Stop first, so that no run changes model midway and
+    /// the flash write stalls no drive.
+    ModelWhileDriving,
+    /// SetModel or SetMotion handed to the controller itself: these are
+    /// shaped first, outside its lock (`shaper::command`).
+    NotShaped,
 }
 
 impl fmt::Display for CommandRefused {
@@ -92,6 +99,12 @@ impl fmt::Display for CommandRefused {
                 "SetCalibration refused: the outputs are driven (Stop, and wait for 0 V, first)",
             ),
             Self::Calibration(e) => write!(f, "SetCalibration refused: {e}"),
+            Self::ModelWhileDriving => f.write_str(
+                "SetModel refused: the outputs are driven (Stop, and wait for 0 V, first)",
+            ),
+            Self::NotShaped => f.write_str(
+                "SetModel and SetMotion go through the shaper (shaper::command), not to the controller",
+            ),
         }
     }
 }
@@ -172,6 +185,10 @@ pub struct Controller<const N: usize> {
     calibration_origin: CalibrationOrigin,
     /// A calibration the host set, for the board to store in flash.
     calibration_to_store: Option<Calibration>,
+    /// The CRC of the model record the shaper holds, for the Info frame.
+    model_crc: Option<u16>,
+    /// A model the host set, for the board to store in flash.
+    model_to_store: Option<ModelRecord>,
 }
 
 /// What only the board knows of itself, for the Info frame (the rest comes
@@ -227,6 +244,8 @@ impl<const N: usize> Controller<N> {
             info_pending: false,
             calibration_origin: CalibrationOrigin::Defaults,
             calibration_to_store: None,
+            model_crc: None,
+            model_to_store: None,
         })
     }
 
@@ -265,6 +284,38 @@ impl<const N: usize> Controller<N> {
                 Mode::Running { .. } | Mode::PowerUpTare { then_run: true }
             );
         wants || self.limiter.last_v().iter().any(|&v| v != 0.0)
+    }
+
+    /// A model checked by the shaper (`shaper::command` calls this under
+    /// the lock): refused while the outputs are driven; else the Info frame
+    /// names it from now on (and goes out again), and the board is handed
+    /// it to store ([`take_model_to_store`](Self::take_model_to_store)).
+    pub fn model_set(&mut self, record: &ModelRecord) -> Result<(), CommandRefused> {
+        if self.driving() {
+            return Err(CommandRefused::ModelWhileDriving);
+        }
+        self.model_crc = Some(record.crc());
+        self.model_to_store = Some(*record);
+        self.info_pending = self.identity.is_some();
+        Ok(())
+    }
+
+    /// A model read from the board's flash at boot and checked by the
+    /// shaper: the Info frame names it (and goes out again); nothing to
+    /// store.
+    pub fn use_stored_model(&mut self, record: &ModelRecord) {
+        self.model_crc = Some(record.crc());
+        // The first Info may have gone out before the model was checked.
+        self.info_pending = self.identity.is_some();
+    }
+
+    /// The model a SetModel asked to store, if any, and only while nothing
+    /// drives (as [`take_calibration_to_store`](Self::take_calibration_to_store)).
+    pub fn take_model_to_store(&mut self) -> Option<ModelRecord> {
+        if self.driving() {
+            return None;
+        }
+        self.model_to_store.take()
     }
 
     /// The board's report of a store: the origin becomes `Stored` or
@@ -402,6 +453,9 @@ impl<const N: usize> Controller<N> {
                 self.fault = None;
             }
             Command::RequestInfo => self.info_pending = self.identity.is_some(),
+            Command::SetModel(_) | Command::SetMotion { .. } => {
+                return Err(CommandRefused::NotShaped)
+            }
             Command::SetCalibration(calibration) => {
                 if self.driving() {
                     return Err(CommandRefused::CalibrationWhileDriving);
@@ -643,6 +697,7 @@ impl<const N: usize> Controller<N> {
             overcurrent_a: c.overcurrent_a,
             calibration_origin: self.calibration_origin,
             reset_cause: id.reset_cause,
+            model_crc: self.model_crc,
         })
     }
 

@@ -4,7 +4,10 @@
 //! segments' drivers ([`HBridge`] or [`DacOutput`]), hands it the host's
 //! commands ([`finrs_frames::Command`]) and faults found outside (missed
 //! deadline, watchdog), and gives it a [`FrameSink`] for the up channel.
-//! Everything here runs in the host's tests.
+//! A SetModel or a SetMotion goes through the [`shaper`] first, which
+//! holds the fitted model and turns a motion into each segment's sine
+//! outside the controller's lock. Everything here runs in the host's
+//! tests.
 //!
 //! # A tick
 //!
@@ -149,6 +152,7 @@
 mod config;
 mod controller;
 mod output;
+pub mod shaper;
 
 pub use config::{Config, ConfigError, ConfigRule};
 pub use controller::{CommandRefused, Controller, FrameSink, Identity, TickInput, TickOutput};

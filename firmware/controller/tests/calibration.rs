@@ -5,35 +5,13 @@
 
 mod common;
 
-use common::{config, input, Channel};
-use finrs_controller::{
-    Calibration, CalibrationOrigin, CommandRefused, ConfigRule, Controller, Identity,
-};
+use common::{config, input, tared};
+use finrs_controller::{Calibration, CalibrationOrigin, CommandRefused, ConfigRule, Controller};
 use finrs_drive::{Envelope, Program};
-use finrs_frames::{Command, Event, ResetCause};
+use finrs_frames::{Command, Event};
 
 const N: usize = 3;
 const IDLE: [u16; N] = [2048; N];
-
-/// Past the power-up tare at 1000 counts, with an identity (its first Info
-/// taken), the channel emptied.
-fn tared() -> (Controller<N>, Channel, u64) {
-    let mut c = Controller::<N>::new(config()).unwrap();
-    c.set_identity(Identity {
-        version: [0, 1, 0],
-        git_hash: 0,
-        dac_segments: [None, None],
-        bridge_supply_v: 5.0,
-        reset_cause: ResetCause::PowerOn,
-    });
-    let mut ch = Channel::default();
-    for tick in 0..10 {
-        c.tick(&input(tick, 1000, IDLE), &mut ch);
-    }
-    assert!(!c.taring());
-    ch.bytes.clear();
-    (c, ch, 10)
-}
 
 fn calibration(newtons_per_count: f32, zeros: [u16; N]) -> Calibration {
     let mut current_zero_counts = [2048; 8];

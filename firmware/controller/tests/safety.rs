@@ -32,6 +32,8 @@ enum Sink {
     RefuseFirst(usize),
 }
 
+// A Command carries a SetModel's 238-byte record by value.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Op {
     Tick {

@@ -28,7 +28,10 @@ use core::fmt;
 use finrs_drive::{Envelope, Program};
 
 use crate::encode::Writer;
-use crate::{crc16, Calibration, EncodeError, CALIBRATION_LEN, CRC_LEN, HEADER_LEN, SYNC};
+use crate::{
+    crc16, Calibration, EncodeError, ModelRecord, CALIBRATION_LEN, CRC_LEN, HEADER_LEN,
+    MODEL_RECORD_LEN, SYNC,
+};
 
 const KIND_SET_WAVE: u8 = 0x81;
 const KIND_TARE: u8 = 0x82;
@@ -37,6 +40,8 @@ const KIND_SET_LIMIT: u8 = 0x84;
 const KIND_CLEAR_FAULT: u8 = 0x85;
 const KIND_REQUEST_INFO: u8 = 0x86;
 const KIND_SET_CALIBRATION: u8 = 0x87;
+const KIND_SET_MODEL: u8 = 0x88;
+const KIND_SET_MOTION: u8 = 0x89;
 
 const PROGRAM_TRAVELLING: u8 = 1;
 const PROGRAM_STANDING: u8 = 2;
@@ -44,6 +49,10 @@ const PROGRAM_STEPS: u8 = 3;
 const PROGRAM_PULSES: u8 = 4;
 const PROGRAM_CHIRP: u8 = 5;
 const PROGRAM_HARMONIC: u8 = 6;
+
+const MOTION_TRAVELLING: u8 = 1;
+/// SetMotion's payload: the motion kind, its three f32, the envelope.
+const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN;
 
 /// Most f32 fields of a program: Harmonic's frequency, offset, and eight
 /// amplitudes and phases.
@@ -74,8 +83,9 @@ const fn set_wave_payload_len(fields: usize) -> usize {
 /// Longest SetWave payload: Harmonic's 18 fields.
 const SET_WAVE_MAX_PAYLOAD_LEN: usize = set_wave_payload_len(MAX_PROGRAM_FIELDS);
 
-/// Longest command frame (a SetWave of Harmonic), bytes.
-pub const MAX_COMMAND_LEN: usize = HEADER_LEN + SET_WAVE_MAX_PAYLOAD_LEN + CRC_LEN;
+/// Longest command frame (a SetModel), bytes.
+pub const MAX_COMMAND_LEN: usize = HEADER_LEN + MODEL_RECORD_LEN + CRC_LEN;
+const _: () = assert!(SET_WAVE_MAX_PAYLOAD_LEN <= MODEL_RECORD_LEN && MODEL_RECORD_LEN <= 255);
 
 /// Whether `len` may be the payload length of a command of `kind`. For a
 /// SetWave only the set of lengths is checked here; the program kind in the
@@ -91,6 +101,8 @@ const fn command_len_ok(kind: u8, len: usize) -> bool {
         KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT | KIND_REQUEST_INFO => len == 0,
         KIND_SET_LIMIT => len == SET_LIMIT_PAYLOAD_LEN,
         KIND_SET_CALIBRATION => len == CALIBRATION_LEN,
+        KIND_SET_MODEL => len == MODEL_RECORD_LEN,
+        KIND_SET_MOTION => len == SET_MOTION_PAYLOAD_LEN,
         _ => false,
     }
 }
@@ -122,6 +134,35 @@ pub enum Command {
     /// Use this calibration from now on and store it in the board's flash
     /// (refused while a program drives the outputs).
     SetCalibration(Calibration),
+    /// Use this fitted model from now on to shape motions, and store it in
+    /// the board's flash (refused while a program drives the outputs).
+    SetModel(ModelRecord),
+    /// Replace the running wave by the voltages that make this motion on
+    /// the model the board holds (refused if it holds none, or if the
+    /// motion needs more than the limit).
+    SetMotion {
+        /// What the strip is to do.
+        motion: Motion,
+        /// The gain over the voltages.
+        envelope: Envelope,
+    },
+}
+
+/// A motion asked of the strip, which the board turns into voltages
+/// through the inverse of the model it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Motion {
+    /// A travelling bending wave of the free strip: every segment's moment
+    /// of one amplitude, each `lag_deg_per_segment` behind the one before,
+    /// the tip moving `tip_amp_m · sin(2π frequency_hz t)`.
+    Travelling {
+        /// Tip amplitude, m.
+        tip_amp_m: f32,
+        /// Frequency, Hz.
+        frequency_hz: f32,
+        /// Phase lag of each segment's moment behind the one before, degrees.
+        lag_deg_per_segment: f32,
+    },
 }
 
 /// Why bytes on the down channel were not a command.
@@ -132,7 +173,7 @@ pub enum CommandError {
         /// How many.
         skipped_bytes: usize,
     },
-    /// The header's kind is not a command kind (0x81..=0x87).
+    /// The header's kind is not a command kind (0x81..=0x89).
     UnknownKind(u8),
     /// The payload length does not fit the kind (or, for a SetWave, its
     /// program kind).
@@ -149,6 +190,8 @@ pub enum CommandError {
     },
     /// A SetWave's program kind is not 1..=6.
     BadProgramKind(u8),
+    /// A SetMotion's motion kind is not 1.
+    BadMotionKind(u8),
     /// The stream ended ([`CommandDecoder::finish`]) inside a frame.
     Truncated {
         /// The command kind in the header.
@@ -162,12 +205,13 @@ impl fmt::Display for CommandError {
             Self::NoSync { skipped_bytes } => {
                 write!(f, "{skipped_bytes} bytes without a sync pair skipped")
             }
-            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x87)"),
+            Self::UnknownKind(k) => write!(f, "kind {k:#04x} is not a command (0x81..=0x89)"),
             Self::BadLength { kind, len } => {
                 write!(f, "length {len} does not fit command kind {kind:#04x}")
             }
             Self::BadCrc { kind } => write!(f, "CRC mismatch in command kind {kind:#04x}"),
             Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=6"),
+            Self::BadMotionKind(m) => write!(f, "motion kind {m} is not 1"),
             Self::Truncated { kind } => write!(f, "command kind {kind:#04x} cut short"),
         }
     }
@@ -176,6 +220,9 @@ impl fmt::Display for CommandError {
 impl core::error::Error for CommandError {}
 
 /// What the command decoder found.
+// A SetModel's record (238 bytes) is carried by value: there is no heap,
+// and an event is handed over once, not stored.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CommandEvent {
     /// A well-framed command.
@@ -212,6 +259,31 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
         Command::SetCalibration(c) => {
             let mut w = Writer::start(out, KIND_SET_CALIBRATION, CALIBRATION_LEN)?;
             w.put(&c.to_bytes());
+            Ok(w.finish())
+        }
+        Command::SetModel(record) => {
+            let mut w = Writer::start(out, KIND_SET_MODEL, MODEL_RECORD_LEN)?;
+            w.put(&record.0);
+            Ok(w.finish())
+        }
+        Command::SetMotion { motion, envelope } => {
+            let Motion::Travelling {
+                tip_amp_m,
+                frequency_hz,
+                lag_deg_per_segment,
+            } = motion;
+            let mut w = Writer::start(out, KIND_SET_MOTION, SET_MOTION_PAYLOAD_LEN)?;
+            w.put(&[MOTION_TRAVELLING]);
+            for v in [
+                tip_amp_m,
+                frequency_hz,
+                lag_deg_per_segment,
+                envelope.ramp_in_s,
+                envelope.hold_s,
+                envelope.ramp_out_s,
+            ] {
+                w.put(&v.to_le_bytes());
+            }
             Ok(w.finish())
         }
     }
@@ -305,6 +377,7 @@ impl Default for CommandDecoder {
 }
 
 /// What the front of the buffer holds.
+#[allow(clippy::large_enum_variant)] // as CommandEvent: no heap, not stored
 enum Step {
     NeedMore,
     /// Bytes with no sync pair.
@@ -409,7 +482,7 @@ impl CommandDecoder {
             return Step::NeedMore;
         }
         let (kind, len) = (b[2], b[3]);
-        if !(KIND_SET_WAVE..=KIND_SET_CALIBRATION).contains(&kind) {
+        if !(KIND_SET_WAVE..=KIND_SET_MOTION).contains(&kind) {
             return Step::Refuse(1, CommandError::UnknownKind(kind));
         }
         if !command_len_ok(kind, usize::from(len)) {
@@ -515,6 +588,31 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                 kind,
                 len: p.len() as u8,
             }),
+        KIND_SET_MODEL => p
+            .try_into()
+            .map(|b| Command::SetModel(ModelRecord(b)))
+            .map_err(|_| CommandError::BadLength {
+                kind,
+                len: p.len() as u8,
+            }),
+        KIND_SET_MOTION => {
+            if p[0] != MOTION_TRAVELLING {
+                return Err(CommandError::BadMotionKind(p[0]));
+            }
+            let field = |k: usize| f32_at(1 + 4 * k);
+            Ok(Command::SetMotion {
+                motion: Motion::Travelling {
+                    tip_amp_m: field(0),
+                    frequency_hz: field(1),
+                    lag_deg_per_segment: field(2),
+                },
+                envelope: Envelope {
+                    ramp_in_s: field(3),
+                    hold_s: field(4),
+                    ramp_out_s: field(5),
+                },
+            })
+        }
         _ => Err(CommandError::UnknownKind(kind)),
     }
 }

@@ -6,7 +6,7 @@ use crate::encode::{EncodeError, Writer};
 use crate::{crc16, KIND_INFO, MAX_SEGMENTS, NO_SEGMENT};
 
 /// Payload length of an Info frame.
-pub(crate) const INFO_PAYLOAD_LEN: usize = 59;
+pub(crate) const INFO_PAYLOAD_LEN: usize = 62;
 
 /// Why the core last reset, as the firmware read it at boot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -101,6 +101,10 @@ pub struct Info {
     pub calibration_origin: CalibrationOrigin,
     /// Why the core last reset.
     pub reset_cause: ResetCause,
+    /// The fitted model the board shapes motions with, named by its
+    /// record's CRC ([`ModelRecord::crc`](crate::ModelRecord::crc)); `None`
+    /// if it holds none.
+    pub model_crc: Option<u16>,
 }
 
 impl Info {
@@ -146,19 +150,22 @@ impl Info {
         put(&self.bridge_supply_v.to_le_bytes());
         put(&self.overcurrent_a.to_le_bytes());
         put(&[self.calibration_origin as u8, self.reset_cause as u8]);
+        put(&[u8::from(self.model_crc.is_some())]);
+        put(&self.model_crc.unwrap_or(0).to_le_bytes());
         debug_assert_eq!(at + 2, INFO_PAYLOAD_LEN);
         Some(())
     }
 }
 
 /// The layout's version, first byte of the payload (2: the calibration,
-/// with a zero per segment and its origin).
-const FORMAT_VERSION: u8 = 2;
+/// with a zero per segment and its origin; 3: the model's CRC).
+const FORMAT_VERSION: u8 = 3;
 /// Where the configuration starts in the payload (after the format
 /// version, the firmware version and the git hash).
 const CONFIG_AT: usize = 8;
-/// Where it ends: the origin, the reset cause and the CRC follow.
-const CONFIG_END: usize = INFO_PAYLOAD_LEN - 4;
+/// Where it ends: the origin, the reset cause, the model and the CRC
+/// follow.
+const CONFIG_END: usize = 55;
 
 /// Writes `info` as an Info frame at the start of `out`; returns the
 /// frame's length, [`INFO_FRAME_LEN`](crate::INFO_FRAME_LEN).
@@ -201,6 +208,11 @@ pub(crate) fn parse_info(p: &[u8]) -> Option<Info> {
         overcurrent_a: f32_at(51),
         calibration_origin: CalibrationOrigin::from_u8(p[55])?,
         reset_cause: ResetCause::from_u8(p[56])?,
+        model_crc: match p[57] {
+            0 if u16_at(58) == 0 => None,
+            1 => Some(u16_at(58)),
+            _ => return None,
+        },
     };
-    (info.config_crc()? == u16_at(57)).then_some(info)
+    (info.config_crc()? == u16_at(60)).then_some(info)
 }

@@ -31,17 +31,18 @@
 //!   2 ADC saturation, 3 missed deadline, 4 watchdog or other, 5 a supply
 //!   out of range at boot), `segment` u8
 //!   (0-based segment index, below 8; 0xFF if no segment is concerned).
-//! - **Info**, `len` = 59 ([`Info`]): layout version u8 (2), firmware
+//! - **Info**, `len` = 62 ([`Info`]): layout version u8 (3), firmware
 //!   version u8 × 3, git hash u32 (its first eight hex digits), segments u8,
 //!   DAC1's and DAC2's segment u8 (0xFF none), `sample_hz` u32, the
 //!   calibration (20 bytes, [`Calibration`]: `newtons_per_count` f32, then
 //!   8 shunt zeros u16, counts), `amps_per_count` f32, `max_abs_v` f32
 //!   (the limit in force), `slew_v_per_s` f32, `bridge_supply_v` f32,
 //!   `overcurrent_a` f32, the calibration's origin u8
-//!   ([`CalibrationOrigin`]), reset cause u8 ([`ResetCause`]), then a
-//!   CRC-16 of the configuration (segments to `overcurrent_a`) u16. Sent
-//!   before the first Sample, on request, and after a SetCalibration; it
-//!   takes no sequence number.
+//!   ([`CalibrationOrigin`]), reset cause u8 ([`ResetCause`]), the model
+//!   u8 (0 none, 1 held) and its record's CRC-16 u16 (0 without one), then
+//!   a CRC-16 of the configuration (segments to `overcurrent_a`) u16. Sent
+//!   before the first Sample, on request, and after a SetCalibration or a
+//!   SetModel; it takes no sequence number.
 //!
 //! # Commands (down channel)
 //!
@@ -58,6 +59,8 @@
 //! | 0x85 | ClearFault | 0 | |
 //! | 0x86 | RequestInfo | 0 | |
 //! | 0x87 | SetCalibration | 20 | [`Calibration`]: `newtons_per_count` f32, 8 shunt zeros u16 (counts); the board stores it in flash |
+//! | 0x88 | SetModel | 238 | [`ModelRecord`]: layout version u8 (1), flags u8, 59 f32 (the fitted [`StripModel`]); the board stores it and shapes motions with it |
+//! | 0x89 | SetMotion | 25 | motion kind u8 (1 Travelling: `tip_amp_m`, `frequency_hz`, `lag_deg_per_segment` f32), then the envelope's three f32 |
 //!
 //! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,
 //! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
@@ -66,7 +69,8 @@
 //! `on_s`, `off_s`) 25; Steps (8 levels, V) 45; Harmonic (`frequency_hz`,
 //! `offset_v`, 8 amplitudes, V, 8 phases, degrees) 85, longer than the
 //! board's 64-byte RTT down buffer: the host writes it as the buffer
-//! drains, and the decoder takes it in pieces. [`CommandDecoder`] checks
+//! drains, and the decoder takes it in pieces (as it takes SetModel).
+//! [`CommandDecoder`] checks
 //! the framing only and reports what it refuses ([`CommandError`]); the
 //! firmware's controller checks the values.
 //!
@@ -125,15 +129,20 @@ mod crc;
 mod decode;
 mod encode;
 mod info;
+mod model;
 
 pub use calibration::{Calibration, CalibrationOrigin, CALIBRATION_LEN};
 pub use command::{
-    encode_command, Command, CommandDecoder, CommandError, CommandEvent, MAX_COMMAND_LEN,
+    encode_command, Command, CommandDecoder, CommandError, CommandEvent, Motion, MAX_COMMAND_LEN,
 };
 pub use crc::crc16;
 pub use decode::{DecodedSample, Decoder, Event, Stats};
 pub use encode::{encode_dropped, encode_fault, encode_sample, EncodeError};
 pub use info::{encode_info, Info, ResetCause};
+pub use model::{
+    ModelFormatError, ModelRecord, StripModel, MODEL_FIELDS, MODEL_FIELD_NAMES, MODEL_FORMAT,
+    MODEL_RECORD_LEN,
+};
 
 /// The two bytes that start every frame.
 pub const SYNC: [u8; 2] = [0xF1, 0x5E];

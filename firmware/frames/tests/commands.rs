@@ -5,7 +5,8 @@
 use finrs_drive::{Envelope, Program};
 use finrs_frames::{
     crc16, encode_command, encode_sample, Calibration, Command, CommandDecoder, CommandError,
-    CommandEvent, EncodeError, Sample, MAX_COMMAND_LEN, MAX_FRAME_LEN,
+    CommandEvent, EncodeError, ModelRecord, Motion, Sample, MAX_COMMAND_LEN, MAX_FRAME_LEN,
+    MODEL_RECORD_LEN,
 };
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -90,7 +91,7 @@ fn travelling() -> Command {
 
 #[test]
 fn layout_is_as_documented() {
-    assert_eq!(MAX_COMMAND_LEN, 4 + 85 + 2);
+    assert_eq!(MAX_COMMAND_LEN, 4 + 238 + 2);
     assert_eq!(frame(&Command::Tare), framed(0x82, &[]));
     assert_eq!(frame(&Command::Stop), framed(0x83, &[]));
     assert_eq!(frame(&Command::ClearFault), framed(0x85, &[]));
@@ -116,6 +117,31 @@ fn layout_is_as_documented() {
     }
     assert_eq!(frame(&travelling()), framed(0x81, &p));
     assert_eq!(&frame(&Command::Tare)[..4], &[0xF1, 0x5E, 0x82, 0]);
+    let record = ModelRecord(core::array::from_fn(|k| k as u8));
+    assert_eq!(frame(&Command::SetModel(record)), framed(0x88, &record.0));
+    let mut p = vec![1u8];
+    for v in [0.005f32, 1.0, 60.0, 2.0, f32::INFINITY, 1.5] {
+        p.extend_from_slice(&v.to_le_bytes());
+    }
+    let motion = Command::SetMotion {
+        motion: Motion::Travelling {
+            tip_amp_m: 0.005,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 60.0,
+        },
+        envelope: Envelope {
+            ramp_in_s: 2.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 1.5,
+        },
+    };
+    assert_eq!(frame(&motion), framed(0x89, &p));
+    // A motion kind that is not 1.
+    p[0] = 2;
+    assert_eq!(
+        decode(&framed(0x89, &p)),
+        vec![CommandEvent::Refused(CommandError::BadMotionKind(2))]
+    );
 }
 
 #[test]
@@ -242,8 +268,8 @@ fn refusals_name_their_reason() {
     );
     assert!(events.iter().all(|e| matches!(e, CommandEvent::Refused(_))));
 
-    assert_eq!(f(0x88, &[]), {
-        let mut v = r(CommandError::UnknownKind(0x88));
+    assert_eq!(f(0x8A, &[]), {
+        let mut v = r(CommandError::UnknownKind(0x8A));
         v.push(CommandEvent::Refused(CommandError::NoSync {
             skipped_bytes: 5,
         }));
@@ -418,6 +444,25 @@ fn any_command() -> BoxedStrategy<Command> {
                 current_zero_counts,
             })
         }),
+        // Any bytes: the decoder checks framing only, the record's layout
+        // is the shaper's to check.
+        1 => proptest::collection::vec(any::<u8>(), MODEL_RECORD_LEN).prop_map(|b| {
+            Command::SetModel(ModelRecord(b.try_into().unwrap()))
+        }),
+        1 => (any_f32(), any_f32(), any_f32(), any_f32(), any_f32(), any_f32()).prop_map(
+            |(tip_amp_m, frequency_hz, lag_deg_per_segment, a, b, c)| Command::SetMotion {
+                motion: Motion::Travelling {
+                    tip_amp_m,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                },
+                envelope: Envelope {
+                    ramp_in_s: a,
+                    hold_s: b,
+                    ramp_out_s: c,
+                },
+            }
+        ),
     ]
     .boxed()
 }
@@ -505,6 +550,28 @@ fn bits(c: &Command) -> Vec<u32> {
         Command::SetCalibration(c) => {
             let mut v = vec![15, c.newtons_per_count.to_bits()];
             v.extend(c.current_zero_counts.iter().map(|&z| u32::from(z)));
+            v
+        }
+        Command::SetModel(r) => {
+            let mut v = vec![16];
+            v.extend(r.0.iter().map(|&x| u32::from(x)));
+            v
+        }
+        Command::SetMotion { motion, envelope } => {
+            let Motion::Travelling {
+                tip_amp_m,
+                frequency_hz,
+                lag_deg_per_segment,
+            } = motion;
+            let mut v = vec![17, 1];
+            v.extend(b(&[
+                tip_amp_m,
+                frequency_hz,
+                lag_deg_per_segment,
+                envelope.ramp_in_s,
+                envelope.hold_s,
+                envelope.ramp_out_s,
+            ]));
             v
         }
     }

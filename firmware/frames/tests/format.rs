@@ -319,6 +319,7 @@ fn info() -> finrs_frames::Info {
         overcurrent_a: 0.4,
         calibration_origin: finrs_frames::CalibrationOrigin::Stored,
         reset_cause: finrs_frames::ResetCause::Watchdog,
+        model_crc: Some(0xbeef),
     }
 }
 
@@ -327,10 +328,10 @@ fn info_layout_is_as_documented_and_round_trips() {
     use finrs_frames::{encode_info, Decoder, Event, INFO_FRAME_LEN};
     let i = info();
     let mut buf = [0u8; INFO_FRAME_LEN];
-    assert_eq!(encode_info(&i, &mut buf), Ok(4 + 59 + 2));
-    assert_eq!(&buf[..4], &[0xF1, 0x5E, 4, 59]);
-    let p = &buf[4..63];
-    assert_eq!(p[0], 2, "layout version");
+    assert_eq!(encode_info(&i, &mut buf), Ok(4 + 62 + 2));
+    assert_eq!(&buf[..4], &[0xF1, 0x5E, 4, 62]);
+    let p = &buf[4..66];
+    assert_eq!(p[0], 3, "layout version");
     assert_eq!(&p[1..4], &[0, 1, 2]);
     assert_eq!(&p[4..8], &0x1a2b_3c4du32.to_le_bytes());
     assert_eq!(&p[8..11], &[3, 2, 0xFF]);
@@ -344,9 +345,11 @@ fn info_layout_is_as_documented_and_round_trips() {
     assert_eq!(&p[51..55], &0.4f32.to_le_bytes());
     assert_eq!(p[55], 1, "stored calibration");
     assert_eq!(p[56], 5, "watchdog");
-    assert_eq!(&p[57..59], &crc16(&p[8..55]).to_le_bytes());
+    assert_eq!(p[57], 1, "a model held");
+    assert_eq!(&p[58..60], &0xbeefu16.to_le_bytes(), "the model's CRC");
+    assert_eq!(&p[60..62], &crc16(&p[8..55]).to_le_bytes());
     assert_eq!(i.config_crc(), Some(crc16(&p[8..55])));
-    assert_eq!(&buf[63..], &crc16(&buf[2..63]).to_le_bytes());
+    assert_eq!(&buf[66..], &crc16(&buf[2..66]).to_le_bytes());
     let mut d = Decoder::new();
     let mut got = Vec::new();
     d.push(&buf, &mut |e| got.push(e));
@@ -372,6 +375,18 @@ fn info_layout_is_as_documented_and_round_trips() {
         ..i
     };
     assert_eq!(unsaved.config_crc(), i.config_crc());
+    // The model is not configuration either; none round-trips as none.
+    let no_model = finrs_frames::Info {
+        model_crc: None,
+        ..i
+    };
+    assert_eq!(no_model.config_crc(), i.config_crc());
+    encode_info(&no_model, &mut buf).unwrap();
+    assert_eq!(&buf[4 + 57..4 + 60], &[0, 0, 0]);
+    let mut d = Decoder::new();
+    let mut got = Vec::new();
+    d.push(&buf, &mut |e| got.push(e));
+    assert_eq!(got, [Event::Info(no_model)]);
 }
 
 #[test]
@@ -395,13 +410,21 @@ fn a_bad_info_is_refused_by_the_encoder_and_the_decoder() {
         assert_eq!(encode_info(&bad, &mut buf), Err(EncodeError::BadInfo));
     }
     // A config CRC that does not match, an unknown reset cause, another
-    // layout version: each a frame whose CRC checks but whose content is
-    // refused as corrupt.
-    for (at, value) in [(4 + 57, 0u8), (4 + 56, 99), (4 + 55, 3), (4, 1)] {
+    // layout version, a model flag that is neither 0 nor 1, none with a
+    // CRC: each a frame whose CRC checks but whose content is refused as
+    // corrupt.
+    for (at, value) in [
+        (4 + 60, 0u8),
+        (4 + 56, 99),
+        (4 + 55, 3),
+        (4, 2),
+        (4 + 57, 2),
+        (4 + 57, 0),
+    ] {
         encode_info(&info(), &mut buf).unwrap();
         buf[at] = value;
-        let crc = crc16(&buf[2..63]);
-        buf[63..].copy_from_slice(&crc.to_le_bytes());
+        let crc = crc16(&buf[2..66]);
+        buf[66..].copy_from_slice(&crc.to_le_bytes());
         let mut events = Vec::new();
         let mut d = Decoder::new();
         d.push(&buf, &mut |e| events.push(e));

@@ -8,8 +8,9 @@
 //!   is over), `write_v(Option<&[f32; N]>)`
 //!   through the `SegmentOutput`s (`None`: every output off, where 0 V
 //!   would hold the strip), `off()`, `feed_watchdog()`, `deadline_missed()`,
-//!   `store_calibration(&Calibration) -> bool` (false where it could not
-//!   be stored);
+//!   `store_calibration(&Calibration) -> bool` and
+//!   `store_model(&ModelRecord) -> bool` (false where it could not be
+//!   stored);
 //! - `FrameOut`: the controller's non-blocking `FrameSink`;
 //! - `CommandIn`: `read(&mut [u8]) -> usize`, never blocking;
 //! - `pace()` and `housekeeping(&mut Housekeeping)`: the board's async
@@ -47,4 +48,6 @@ pub struct Parts {
     /// The calibration stored in flash, if any (QEMU: none, it has no
     /// flash to keep one).
     pub stored_calibration: Option<finrs_frames::Calibration>,
+    /// The fitted model stored in flash, if any (QEMU: none).
+    pub stored_model: Option<finrs_frames::ModelRecord>,
 }

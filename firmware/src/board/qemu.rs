@@ -261,6 +261,7 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
         supply,
         // No flash to keep one across runs.
         stored_calibration: None,
+        stored_model: None,
     }
 }
 
@@ -393,6 +394,11 @@ impl Io {
     /// QEMU's netduinoplus2 models no flash programming: a calibration the
     /// host sets is used but not stored (the Info frame says "unsaved").
     pub fn store_calibration(&mut self, _: &finrs_frames::Calibration) -> bool {
+        false
+    }
+
+    /// Likewise a model: used, not stored.
+    pub fn store_model(&mut self, _: &finrs_frames::ModelRecord) -> bool {
         false
     }
 

@@ -75,11 +75,13 @@ use crate::config::{
 };
 use crate::{Mono, SYSCLK_HZ};
 use finrs_firmware_support::calibration_store::{self, BOARD_REGION};
+use finrs_firmware_support::model_store;
+use finrs_firmware_support::record_log::StoreError;
 use finrs_firmware_support::reset;
 use finrs_firmware_support::supply::{self, Supplies, SupplyError};
 use finrs_firmware_support::sync::SyncMark;
 use finrs_frames::Calibration;
-use stm32f4xx_hal::flash::{FlashExt, LockedFlash};
+use stm32f4xx_hal::flash::{FlashExt, LockedFlash, UnlockedFlash};
 
 /// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
 /// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
@@ -520,6 +522,13 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     if let Some(s) = stored_calibration {
         defmt::info!("calibration: record {} from flash", s.seq);
     }
+    let stored_model = match model_store::load(&mut flash, model_store::BOARD_REGION) {
+        Ok(found) => found,
+        Err(_) => {
+            defmt::warn!("model: flash unreadable, none held");
+            None
+        }
+    };
 
     // The camera's sync LED, dark until a drive starts.
     const { assert!(finrs_firmware_support::pins::SYNC_LED.is(b'E', 7)) };
@@ -553,6 +562,7 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
         reset_cause: cause,
         supply,
         stored_calibration: stored_calibration.map(|s| s.calibration),
+        stored_model,
     }
 }
 
@@ -829,13 +839,36 @@ impl Io {
     /// Appends `calibration` to the flash records; true once it reads back.
     /// Call with the outputs at 0 V: it stalls the core (module doc).
     pub fn store_calibration(&mut self, calibration: &Calibration) -> bool {
+        self.store("calibration", |flash, before_erase| {
+            calibration_store::save(flash, BOARD_REGION, calibration, before_erase)
+        })
+    }
+
+    /// Appends `record` to the model's log in flash (sectors 8 and 9), as
+    /// [`store_calibration`](Self::store_calibration) does the
+    /// calibration's: 256 bytes programmed, a sector erased only when the
+    /// other is full.
+    pub fn store_model(&mut self, record: &finrs_frames::ModelRecord) -> bool {
+        self.store("model", |flash, before_erase| {
+            model_store::save(flash, model_store::BOARD_REGION, record, before_erase)
+        })
+    }
+
+    /// Runs one store's `save` on the unlocked flash, the watchdog widened
+    /// for an erase (`save` calls its second argument first) and set back
+    /// after; logs the outcome under `what`.
+    fn store<E>(
+        &mut self,
+        what: &str,
+        save: impl FnOnce(&mut UnlockedFlash<'_>, &mut dyn FnMut()) -> Result<u32, StoreError<E>>,
+    ) -> bool {
         let Self {
             flash, watchdog, ..
         } = self;
         let mut erased = false;
         let result = {
             let mut unlocked = flash.unlocked();
-            calibration_store::save(&mut unlocked, BOARD_REGION, calibration, || {
+            save(&mut unlocked, &mut || {
                 erased = true;
                 set_watchdog(watchdog, ERASE_WATCHDOG_MS);
             })
@@ -845,11 +878,11 @@ impl Io {
         }
         match result {
             Ok(seq) => {
-                defmt::info!("calibration: stored as record {}", seq);
+                defmt::info!("{=str}: stored as record {}", what, seq);
                 true
             }
             Err(_) => {
-                defmt::error!("calibration: the flash write failed; not stored");
+                defmt::error!("{=str}: the flash write failed; not stored", what);
                 false
             }
         }

@@ -4,7 +4,8 @@
 //! its files.
 //!
 //! - [`calibration_store`]: the calibration's append-only records in a
-//!   flash sector, safe against a reset or power cut at any byte.
+//!   flash sector, safe against a reset or power cut at any byte
+//!   ([`record_log`], shared with [`model_store`], the fitted model's).
 //! - [`config`]: the segment count and DAC segments chosen at build time
 //!   (`FINRS_SEGMENTS`, `FINRS_DAC_SEGMENTS`), the sample rate, limits and
 //!   sensor scales both boards run with.
@@ -28,7 +29,9 @@
 pub mod calibration_store;
 pub mod config;
 pub mod identity;
+pub mod model_store;
 pub mod pins;
+pub mod record_log;
 pub mod reset;
 pub mod sim;
 pub mod supply;

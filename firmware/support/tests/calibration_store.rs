@@ -109,10 +109,12 @@ fn cal(k: u32, zero: u16) -> Calibration {
     }
 }
 
-/// The code's flash in `memory.x` ends where the records begin.
+/// The code's flash in `memory.x` ends where the model's records begin;
+/// the calibration's follow them to the end of the 1 MiB flash.
 #[test]
-fn the_linker_leaves_the_board_region_free() {
+fn the_linker_leaves_the_board_regions_free() {
     use finrs_firmware_support::calibration_store::BOARD_REGION;
+    use finrs_firmware_support::model_store::BOARD_REGION as MODEL_REGION;
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../memory.x");
     let text = std::fs::read_to_string(path).unwrap();
     let line = text
@@ -126,7 +128,11 @@ fn the_linker_leaves_the_board_region_free() {
         .and_then(|v| v.parse().ok())
         .unwrap_or_else(|| panic!("no LENGTH = ...K in {line:?}"));
     assert!(line.contains("ORIGIN = 0x08000000"), "{line}");
-    assert_eq!(kib * 1024, BOARD_REGION.offset);
+    assert_eq!(kib * 1024, MODEL_REGION.offset);
+    assert_eq!(
+        MODEL_REGION.offset + 2 * MODEL_REGION.sector_len,
+        BOARD_REGION.offset
+    );
     assert_eq!(
         BOARD_REGION.offset + 2 * BOARD_REGION.sector_len,
         1024 * 1024

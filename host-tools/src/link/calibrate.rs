@@ -20,7 +20,7 @@
 use std::time::{Duration, Instant};
 
 use finrs_frames::{
-    Calibration, CalibrationOrigin, Command, DecodedSample, Event, Info, SampleFlags,
+    Calibration, CalibrationOrigin, Command, DecodedSample, Event, Info, ModelRecord, SampleFlags,
 };
 
 pub use crate::link::board::Board;
@@ -115,6 +115,12 @@ pub enum CalibrateError {
     /// The board did not confirm the new calibration.
     #[error("the board did not confirm the calibration within {timeout_s} s: it refuses one while driving or with a bad value (its defmt log says why: finrs log --elf ...)")]
     NotConfirmed {
+        /// The wait, s.
+        timeout_s: f64,
+    },
+    /// The board did not confirm the new model.
+    #[error("the board did not confirm the model within {timeout_s} s: it refuses one while driving or one it cannot invert (its defmt log says why: finrs log --elf ...)")]
+    NotTuned {
         /// The wait, s.
         timeout_s: f64,
     },
@@ -426,22 +432,45 @@ pub fn apply(
     opts: &CalibrateOptions,
     calibration: &Calibration,
 ) -> Result<Info, CalibrateError> {
+    let command = Command::SetCalibration(*calibration);
+    confirmed(board, opts, &command, |i| {
+        i.calibration == *calibration && i.calibration_origin != CalibrationOrigin::Defaults
+    })
+    .map_err(|e| match e {
+        CalibrateError::Timeout { timeout_s, .. } => CalibrateError::NotConfirmed { timeout_s },
+        e => e,
+    })
+}
+
+/// Sends the fitted model `record` (`finrs tune`) and waits for the
+/// board's Info that names it by its CRC; returns that Info.
+pub fn apply_model(
+    board: &mut impl Board,
+    opts: &CalibrateOptions,
+    record: &ModelRecord,
+) -> Result<Info, CalibrateError> {
+    let command = Command::SetModel(*record);
+    confirmed(board, opts, &command, |i| i.model_crc == Some(record.crc())).map_err(|e| match e {
+        CalibrateError::Timeout { timeout_s, .. } => CalibrateError::NotTuned { timeout_s },
+        e => e,
+    })
+}
+
+/// Sends `command` and waits for an Info frame that `done` accepts.
+fn confirmed(
+    board: &mut impl Board,
+    opts: &CalibrateOptions,
+    command: &Command,
+    done: impl Fn(&Info) -> bool,
+) -> Result<Info, CalibrateError> {
     let mut l = Listener::new();
-    board.send(&Command::SetCalibration(*calibration))?;
+    board.send(command)?;
     let started = Instant::now();
     loop {
-        match l.next(board, opts, started, "Info frame") {
-            Ok(Event::Info(i))
-                if i.calibration == *calibration
-                    && i.calibration_origin != CalibrationOrigin::Defaults =>
-            {
-                return Ok(i)
+        if let Event::Info(i) = l.next(board, opts, started, "Info frame")? {
+            if done(&i) {
+                return Ok(i);
             }
-            Ok(_) => {}
-            Err(CalibrateError::Timeout { timeout_s, .. }) => {
-                return Err(CalibrateError::NotConfirmed { timeout_s })
-            }
-            Err(e) => return Err(e),
         }
     }
 }

@@ -29,18 +29,47 @@
 //! ```
 
 use finrs_drive::Limits;
-use finrs_frames::{encode_command, Command, MAX_COMMAND_LEN};
+use finrs_frames::{encode_command, Command, Motion, MAX_COMMAND_LEN};
 
-use crate::wave::{Wave, WaveError, WaveOptions};
+use crate::wave::{Wave, WaveError, WaveKind, WaveOptions};
 
 /// The `SetWave` command for the wave `spec` on `segments` segments shaped
-/// by `options`, or the field and rule it breaks.
+/// by `options`, or the field and rule it breaks; for a motion, the
+/// `SetMotion` that the board shapes with the model it holds (`finrs
+/// tune`), its frequency and envelope checked here by the generator's
+/// rules.
 pub fn wave_command(
     spec: &str,
     segments: usize,
     options: &WaveOptions,
 ) -> Result<Command, WaveError> {
-    let generator = Wave::parse(spec)?.generator(segments, options)?;
+    let wave = Wave::parse(spec)?;
+    if let WaveKind::Motion {
+        tip_amp_m,
+        frequency_hz,
+        lag_deg,
+    } = *wave.kind()
+    {
+        // The voltages are the board's to find; frequency and envelope
+        // follow the rules of the harmonic wave they become.
+        let silent = Wave::parse(&format!("harmonic:{frequency_hz},0,0"))?;
+        let generator = silent.generator(segments, options).map_err(|e| match e {
+            WaveError::Firmware { rule, .. } => WaveError::Firmware {
+                wave: spec.to_string(),
+                rule,
+            },
+            other => other,
+        })?;
+        return Ok(Command::SetMotion {
+            motion: Motion::Travelling {
+                tip_amp_m: tip_amp_m as f32,
+                frequency_hz: frequency_hz as f32,
+                lag_deg_per_segment: lag_deg as f32,
+            },
+            envelope: generator.envelope(),
+        });
+    }
+    let generator = wave.generator(segments, options)?;
     Ok(Command::SetWave {
         program: generator.program(),
         envelope: generator.envelope(),
@@ -112,6 +141,31 @@ mod tests {
             Command::SetWave { program, .. } => program,
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A motion goes to the board as itself, with the envelope asked; a
+    /// frequency the generator refuses is refused here, naming the motion.
+    #[test]
+    fn a_motion_is_sent_for_the_board_to_shape() {
+        let req = WaveRequest::new("motion:0.0002,1.5,60", 3);
+        let Command::SetMotion { motion, envelope } = request(&req).unwrap() else {
+            panic!("a SetMotion")
+        };
+        assert_eq!(
+            motion,
+            Motion::Travelling {
+                tip_amp_m: 2e-4,
+                frequency_hz: 1.5,
+                lag_deg_per_segment: 60.0
+            }
+        );
+        assert_eq!((envelope.ramp_in_s, envelope.hold_s), (1.0, f32::INFINITY));
+        let e = request(&WaveRequest::new("motion:0.0002,300,60", 3)).unwrap_err();
+        assert!(
+            e.to_string().starts_with("wave `motion:0.0002,300,60`: ")
+                && e.to_string().contains("frequency_hz"),
+            "{e}"
+        );
     }
 
     #[test]

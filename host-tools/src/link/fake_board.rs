@@ -10,6 +10,7 @@
 use std::cell::Cell;
 use std::rc::Rc;
 
+use finrs_controller::shaper::{self, Exclusive, Shaper, ELEMENTS};
 use finrs_controller::{Config, Controller, FrameSink, Identity, TickInput};
 use finrs_drive::Limits;
 use finrs_frames::{Calibration, Command, CommandDecoder, CommandEvent, ResetCause};
@@ -47,6 +48,7 @@ pub struct FakeBoard {
     pub c: Controller<N>,
     tick: u64,
     decoder: CommandDecoder,
+    shaper: Shaper<N, ELEMENTS, { model_core::state_len(N, ELEMENTS) }>,
     load_n: Rc<Cell<f64>>,
     noise: u32,
     rng: u32,
@@ -54,6 +56,8 @@ pub struct FakeBoard {
     pub discharge_counts: f64,
     pub tau_ticks: f64,
     pub stores: usize,
+    /// The last model handed over to store.
+    pub stored_model: Option<finrs_frames::ModelRecord>,
     /// The strip's blocking force, N, lagging the mean voltage.
     pub strip_force_n: f64,
     /// Blocking force per volt of mean drive at steady state, N/V.
@@ -92,12 +96,14 @@ impl FakeBoard {
             c,
             tick: 0,
             decoder: CommandDecoder::new(),
+            shaper: Shaper::new(),
             load_n,
             noise: 3,
             rng: 0x1234_5678,
             discharge_counts: 0.0,
             tau_ticks: 1.0,
             stores: 0,
+            stored_model: None,
             strip_force_n: 0.0,
             newtons_per_volt: 1e-3,
             last_v: [0.0; N],
@@ -145,6 +151,10 @@ impl FakeBoard {
                 &mut self.channel,
             );
             self.last_v = applied.voltages_v;
+            // Stored at once, as the board stores them at 0 V.
+            if let Some(model) = self.c.take_model_to_store() {
+                self.stored_model = Some(model);
+            }
             if self.c.take_calibration_to_store().is_some() {
                 self.stores += 1;
                 self.c.calibration_stored(true);
@@ -173,11 +183,12 @@ impl Board for FakeBoard {
     fn send(&mut self, command: &Command) -> Result<(), ProbeError> {
         self.catch_up();
         let bytes = crate::link::command::encode(command);
-        let c = &mut self.c;
+        let mut c = Exclusive(&mut self.c);
+        let shaper = &mut self.shaper;
         self.decoder.push(&bytes, &mut |e| {
             if let CommandEvent::Command(cmd) = e {
                 // A refusal changes nothing, as on the board.
-                let _ = c.command(cmd);
+                let _ = shaper::command(cmd, shaper, 1e-3, &mut c);
             }
         });
         Ok(())

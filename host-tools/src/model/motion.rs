@@ -1,15 +1,19 @@
 //! A motion asked of the free tip turned into each segment's sine by the
-//! strip's model: the host's twin of what the board will do once it holds
-//! a fitted model (#16).
+//! strip's model: the host's twin of what the board does once it holds a
+//! fitted model (#16), through the same code
+//! ([`finrs_controller::shaper`]).
 //!
 //! `motion:TIP_AMP_M,HZ,LAG_DEG` asks a travelling bending wave: every
 //! segment's moment of one amplitude, each `LAG_DEG` behind the one before,
-//! the tip moving `TIP_AMP_M · sin(2π HZ t)`. The model's exact harmonic
-//! inverse (`model_core::Strip::tip_wave`: each segment's electrics and
-//! relaxation, the crosstalk, the beam's modes) gives the voltages, which
-//! become a `harmonic:` wave for the firmware's one generator. A motion
-//! that needs more than the hard limit is refused with the amplitude the
-//! limit allows, never clipped (a clipped sine is not the motion asked).
+//! the tip moving `TIP_AMP_M · sin(2π HZ t)`. The board's shaper inverts
+//! the model exactly at that frequency (each segment's electrics and
+//! relaxation, the crosstalk, the beam's modes) on the strip it builds
+//! itself: the model's record as `finrs tune` sends it (every value an
+//! `f32`), [`ELEMENTS`] element per segment, discretised at the sample
+//! rate. The voltages become a `harmonic:` wave for the firmware's one
+//! generator. A motion that needs more than the hard limit is refused with
+//! the amplitude the limit allows, never clipped (a clipped sine is not the
+//! motion asked).
 //!
 //! ```
 //! use finrs::model::motion::shaped;
@@ -19,15 +23,17 @@
 //!
 //! let spec = ModelFile::main_m_2006().spec_for(&Geometry::THESIS_2006).unwrap();
 //! // 0.2 mm at 1 Hz, 60° a segment: within 4 V for the seed's strip.
-//! let wave = shaped(&Wave::parse("motion:0.0002,1,60").unwrap(), &spec, 3, 1, 1000.0).unwrap();
+//! let wave = shaped(&Wave::parse("motion:0.0002,1,60").unwrap(), &spec, 3, 1000.0).unwrap();
 //! assert!(matches!(wave.kind(), WaveKind::Harmonic { .. }));
 //! // 5 mm is not: refused with what 4 V reaches.
-//! let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1, 1000.0).unwrap_err();
+//! let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0).unwrap_err();
 //! assert!(e.to_string().contains("the model reaches 0.254 mm"), "{e}");
 //! ```
 
-use finrs_drive::HARD_LIMIT_V;
-use model_core::{state_len, Fixture, Phasor, Strip};
+use finrs_controller::shaper::{ShapeRefused, Shaper, ELEMENTS};
+use finrs_drive::{Program, HARD_LIMIT_V};
+use finrs_frames::{ModelRecord, Motion, StripModel};
+use model_core::state_len;
 
 use super::predict::ModelSpec;
 use crate::wave::{Wave, WaveError, WaveKind};
@@ -35,31 +41,21 @@ use crate::wave::{Wave, WaveError, WaveKind};
 /// Why a motion has no voltages.
 #[derive(Debug, thiserror::Error)]
 pub enum MotionError {
-    /// The model refuses its parameters.
-    #[error("wave `{wave}`: the model: {source}")]
-    Model {
+    /// The board's shaper refuses the model or the motion.
+    #[error("wave `{wave}`: {source}")]
+    Shape {
         /// The wave's text.
         wave: String,
-        /// What the model refused.
-        source: model_core::ParamError,
+        /// What the shaper refused.
+        source: ShapeRefused,
     },
-    /// The model has no single-sine response here.
-    #[error("wave `{wave}`: {why}")]
-    Harmonic {
-        /// The wave's text.
-        wave: String,
-        /// Why not (the model's words).
-        why: String,
-    },
-    /// The segments or elements are not ones the model is built for.
-    #[error("wave `{wave}`: {segments} segments of {elements} elements is not a mesh the model is built for (1..=8 segments of 1, 2 or 4)")]
-    Mesh {
+    /// The segments are not a count the board is built for.
+    #[error("wave `{wave}`: {segments} segments: the board drives 1..=8")]
+    Segments {
         /// The wave's text.
         wave: String,
         /// Segments.
         segments: usize,
-        /// Elements per segment.
-        elements: usize,
     },
     /// The motion needs more than the hard limit.
     #[error(
@@ -81,14 +77,23 @@ pub enum MotionError {
     Wave(#[from] WaveError),
 }
 
-/// `wave` itself, or for a motion the `harmonic:` wave whose voltages give
-/// it on the free strip of `spec` (`segments` of `elements` elements,
-/// sampled at `rate_hz`, as the simulation runs it).
+/// The record `finrs tune` sends for `spec`: the board's model.
+pub fn record(spec: &ModelSpec) -> ModelRecord {
+    ModelRecord::encode(&StripModel {
+        params: spec.params,
+        extensions: spec.ext,
+        dehydration_per_s: spec.dehydration_per_s,
+        dehydration_curvature: spec.dehydration_curvature,
+    })
+}
+
+/// `wave` itself, or for a motion the `harmonic:` wave the board would
+/// drive for it on `segments` segments sampled at `rate_hz`, holding the
+/// model of `spec`.
 pub fn shaped(
     wave: &Wave,
     spec: &ModelSpec,
     segments: usize,
-    elements: usize,
     rate_hz: f64,
 ) -> Result<Wave, MotionError> {
     let &WaveKind::Motion {
@@ -100,34 +105,114 @@ pub fn shaped(
         return Ok(wave.clone());
     };
     let text = wave.text();
-    let v = voltages(
-        text,
-        spec,
-        (segments, elements),
-        1.0 / rate_hz,
-        frequency_hz,
-        tip_amp_m,
-        lag_deg,
+    let motion = Motion::Travelling {
+        tip_amp_m: tip_amp_m as f32,
+        frequency_hz: frequency_hz as f32,
+        lag_deg_per_segment: lag_deg as f32,
+    };
+    let program = board_program(&record(spec), segments, rate_hz, &motion, HARD_LIMIT_V).map_err(
+        |e| match e {
+            BoardRefused::Shape(ShapeRefused::Unreachable {
+                needs_v,
+                segment,
+                limit_v,
+                ..
+            }) => MotionError::Unreachable {
+                wave: text.to_string(),
+                needs_v: f64::from(needs_v),
+                segment: usize::from(segment),
+                // From the amplitude asked, not its f32: the same ratio.
+                reachable_mm: 1e3 * tip_amp_m.abs() * f64::from(limit_v) / f64::from(needs_v),
+            },
+            BoardRefused::Shape(source) => MotionError::Shape {
+                wave: text.to_string(),
+                source,
+            },
+            BoardRefused::Segments(segments) => MotionError::Segments {
+                wave: text.to_string(),
+                segments,
+            },
+        },
     )?;
-    let (k, needs_v) = v
-        .iter()
-        .map(|p| p.amplitude())
-        .enumerate()
-        .fold((0, 0.0), |m, (k, a)| if a > m.1 { (k, a) } else { m });
-    if needs_v > f64::from(HARD_LIMIT_V) {
-        return Err(MotionError::Unreachable {
-            wave: text.to_string(),
-            needs_v,
-            segment: k + 1,
-            // Linear: the voltages scale with the amplitude asked.
-            reachable_mm: 1e3 * tip_amp_m.abs() * f64::from(HARD_LIMIT_V) / needs_v,
-        });
-    }
+    let Program::Harmonic {
+        amplitudes_v,
+        phases_deg,
+        ..
+    } = program
+    else {
+        unreachable!("the shaper makes harmonic programs only")
+    };
     let mut harmonic = format!("harmonic:{frequency_hz}");
-    for p in &v {
-        harmonic += &format!(",{},{}", p.amplitude(), p.sine_phase_rad().to_degrees());
+    for k in 0..segments {
+        harmonic += &format!(",{},{}", amplitudes_v[k], phases_deg[k]);
     }
     Ok(Wave::parse(&harmonic)?)
+}
+
+/// Why the board's shaper, run on the host, gives no program.
+#[derive(Debug, thiserror::Error)]
+pub enum BoardRefused {
+    /// The shaper's refusal.
+    #[error(transparent)]
+    Shape(ShapeRefused),
+    /// Not 1..=8 segments.
+    #[error("{0} segments: the board drives 1..=8")]
+    Segments(usize),
+}
+
+/// What the board's shaper does with `record` on `segments` segments
+/// sampled at `rate_hz`: its check of a SetModel (`motion` `None`), or
+/// the program a SetMotion of `motion` becomes under `limit_v`.
+fn shape(
+    record: &ModelRecord,
+    segments: usize,
+    rate_hz: f64,
+    motion: Option<(&Motion, f32)>,
+) -> Result<Option<Program>, BoardRefused> {
+    fn go<const N: usize, const S: usize>(
+        record: &ModelRecord,
+        dt_s: f64,
+        motion: Option<(&Motion, f32)>,
+    ) -> Result<Option<Program>, ShapeRefused> {
+        let mut shaper = Shaper::<N, ELEMENTS, S>::new();
+        shaper.install(Shaper::check(record, dt_s)?);
+        motion
+            .map(|(m, limit_v)| shaper.program(m, limit_v))
+            .transpose()
+    }
+    let dt_s = 1.0 / rate_hz;
+    // One monomorphisation per segment count, as the firmware's builds.
+    macro_rules! dispatch {
+        ($($n:literal),*) => {
+            match segments {
+                $($n => go::<$n, { state_len($n, ELEMENTS) }>(record, dt_s, motion),)*
+                _ => return Err(BoardRefused::Segments(segments)),
+            }
+        };
+    }
+    dispatch!(1, 2, 3, 4, 5, 6, 7, 8).map_err(BoardRefused::Shape)
+}
+
+/// The board's check of a SetModel of `record` (`finrs tune` runs it
+/// before sending).
+pub fn board_check(
+    record: &ModelRecord,
+    segments: usize,
+    rate_hz: f64,
+) -> Result<(), BoardRefused> {
+    shape(record, segments, rate_hz, None).map(|_| ())
+}
+
+/// The program the board's shaper makes of `motion` under `limit_v`.
+pub fn board_program(
+    record: &ModelRecord,
+    segments: usize,
+    rate_hz: f64,
+    motion: &Motion,
+    limit_v: f32,
+) -> Result<Program, BoardRefused> {
+    shape(record, segments, rate_hz, Some((motion, limit_v)))?
+        .ok_or(BoardRefused::Segments(segments))
 }
 
 /// The tip a motion asks, m, at each of `t_s` (`None` for another wave):
@@ -160,59 +245,6 @@ pub fn asked_tip_m(
     )
 }
 
-/// Each segment's voltage phasor for the motion `text`, V, on a mesh of
-/// `(segments, elements)`.
-fn voltages(
-    text: &str,
-    spec: &ModelSpec,
-    (segments, elements): (usize, usize),
-    dt_s: f64,
-    hz: f64,
-    tip_amp_m: f64,
-    lag_deg: f64,
-) -> Result<Vec<Phasor>, MotionError> {
-    fn go<const N: usize, const E: usize, const S: usize>(
-        text: &str,
-        spec: &ModelSpec,
-        dt_s: f64,
-        hz: f64,
-        tip_amp_m: f64,
-        lag_deg: f64,
-    ) -> Result<Vec<Phasor>, MotionError> {
-        let strip =
-            Strip::<f64, N, E, S>::with_extensions(&spec.params, &spec.ext, Fixture::Free, dt_s)
-                .map_err(|source| MotionError::Model {
-                    wave: text.to_string(),
-                    source,
-                })?;
-        strip
-            .tip_wave(hz, tip_amp_m, lag_deg.to_radians())
-            .map(|v| v.to_vec())
-            .map_err(|e| MotionError::Harmonic {
-                wave: text.to_string(),
-                why: e.to_string(),
-            })
-    }
-    // One monomorphisation per mesh, as the simulation has.
-    macro_rules! dispatch {
-        ($($n:literal),*) => {
-            match (segments, elements) {
-                $(
-                    ($n, 1) => go::<$n, 1, { state_len($n, 1) }>(text, spec, dt_s, hz, tip_amp_m, lag_deg),
-                    ($n, 2) => go::<$n, 2, { state_len($n, 2) }>(text, spec, dt_s, hz, tip_amp_m, lag_deg),
-                    ($n, 4) => go::<$n, 4, { state_len($n, 4) }>(text, spec, dt_s, hz, tip_amp_m, lag_deg),
-                )*
-                _ => Err(MotionError::Mesh {
-                    wave: text.to_string(),
-                    segments,
-                    elements,
-                }),
-            }
-        };
-    }
-    dispatch!(1, 2, 3, 4, 5, 6, 7, 8)
-}
-
 #[cfg(test)]
 mod tests {
     use super::{asked_tip_m, shaped, MotionError};
@@ -235,7 +267,7 @@ mod tests {
         file.extensions = Some(ext);
         let spec = file.spec_for(&Geometry::THESIS_2006).unwrap();
         let wave = Wave::parse("motion:0.0002,1,60").unwrap();
-        let shaped = shaped(&wave, &spec, 3, 1, 1000.0).unwrap();
+        let shaped = shaped(&wave, &spec, 3, 1000.0).unwrap();
         let drive = Drive {
             segments: 3,
             fixture: Fixture::Free,
@@ -291,14 +323,7 @@ mod tests {
         let spec = ModelFile::main_m_2006()
             .spec_for(&Geometry::THESIS_2006)
             .unwrap();
-        let e = shaped(
-            &Wave::parse("motion:0.005,1,60").unwrap(),
-            &spec,
-            3,
-            1,
-            1000.0,
-        )
-        .unwrap_err();
+        let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0).unwrap_err();
         let MotionError::Unreachable {
             needs_v,
             reachable_mm,
@@ -311,7 +336,7 @@ mod tests {
         // Other waves pass through untouched; a motion's own generator is
         // refused without a model.
         let sine = Wave::parse("sine:1,1,0").unwrap();
-        assert_eq!(shaped(&sine, &spec, 3, 1, 1000.0).unwrap(), sine);
+        assert_eq!(shaped(&sine, &spec, 3, 1000.0).unwrap(), sine);
         let motion = Wave::parse("motion:0.0002,1,60").unwrap();
         assert!(motion
             .generator(3, &WaveOptions::steady(1.0))
@@ -319,8 +344,8 @@ mod tests {
             .to_string()
             .contains("needs the strip's model"));
         assert!(matches!(
-            shaped(&motion, &spec, 9, 1, 1000.0),
-            Err(MotionError::Mesh { .. })
+            shaped(&motion, &spec, 9, 1000.0),
+            Err(MotionError::Segments { .. })
         ));
     }
 }

@@ -11,8 +11,9 @@
 
 use core::fmt::{self, Write};
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
-use cortex_m_semihosting::{debug, hio};
+use cortex_m_rt::entry;
+use cortex_m_semihosting::hio;
+use finrs_qemu_tests::exit;
 
 /// Collects a line, then sends it in one semihosting call (one call per
 /// fragment would be many times slower).
@@ -63,31 +64,4 @@ fn main() -> ! {
         Err(()) => false,
     };
     exit(ok)
-}
-
-fn exit(ok: bool) -> ! {
-    debug::exit(if ok {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    // Only reached without a debugger or QEMU to end us.
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-/// A fault ends QEMU with a failure code instead of hanging it.
-#[exception]
-#[allow(unsafe_code)] // cortex-m-rt requires the HardFault handler to be `unsafe fn`
-unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
-    exit(false)
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    if let Ok(mut err) = hio::hstderr() {
-        let _ = writeln!(err, "panic: {info}");
-    }
-    exit(false)
 }

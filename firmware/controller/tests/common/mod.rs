@@ -2,9 +2,9 @@
 //! accepts, decoding it with the frames crate, and a typical config.
 #![allow(dead_code)] // each test binary uses a different subset
 
-use finrs_controller::{Config, FrameSink};
+use finrs_controller::{Config, Controller, FrameSink, Identity};
 use finrs_drive::Limits;
-use finrs_frames::{Decoder, Event, Stats};
+use finrs_frames::{Decoder, Event, ResetCause, Stats};
 
 /// A sink that accepts or refuses each frame as told, and keeps the bytes
 /// of those it accepts.
@@ -82,4 +82,25 @@ pub fn input<const N: usize>(
         load_cell_counts,
         current_counts,
     }
+}
+
+/// Three segments past the power-up tare at 1000 counts (shunts at 2048),
+/// with an identity (its first Info taken), the channel emptied; and the
+/// next tick's number.
+pub fn tared() -> (Controller<3>, Channel, u64) {
+    let mut c = Controller::<3>::new(config()).unwrap();
+    c.set_identity(Identity {
+        version: [0, 1, 0],
+        git_hash: 0,
+        dac_segments: [None, None],
+        bridge_supply_v: 5.0,
+        reset_cause: ResetCause::PowerOn,
+    });
+    let mut ch = Channel::default();
+    for tick in 0..10 {
+        c.tick(&input(tick, 1000, [2048; 3]), &mut ch);
+    }
+    assert!(!c.taring());
+    ch.bytes.clear();
+    (c, ch, 10)
 }

@@ -149,3 +149,44 @@ fn block_means_see_a_drift_and_not_white_noise() {
     let m = block_mean(&ramp);
     assert!(m.drift > DRIFT_SIGMAS * m.drift_se, "{m:?}");
 }
+
+/// `finrs tune`: the board confirms the model by its CRC and is handed it
+/// to store; a motion then drives the outputs; while they are driven,
+/// another model is refused and the wait says so.
+#[test]
+fn a_model_is_confirmed_by_its_crc_and_then_shapes_motions() {
+    use crate::model::motion::record;
+    use crate::model::params::ModelFile;
+    use crate::recording::Geometry;
+
+    let mut b = FakeBoard::new(Rc::new(Cell::new(0.0)));
+    let spec = ModelFile::main_m_2006()
+        .spec_for(&Geometry::THESIS_2006)
+        .unwrap();
+    let r = record(&spec);
+    let info = apply_model(&mut b, &opts(), &r).unwrap();
+    assert_eq!(info.model_crc, Some(r.crc()));
+    assert_eq!(b.stored_model, Some(r));
+    let options = crate::wave::WaveOptions {
+        ramp_in_s: 0.1,
+        ..crate::wave::WaveOptions::steady(10.0)
+    };
+    let motion = crate::link::command::wave_command("motion:0.0001,1,60", N, &options).unwrap();
+    b.send(&motion).unwrap();
+    // Past the power-up tare (200 ticks), 50 ticks a read.
+    let mut buf = [0u8; 4096];
+    for _ in 0..5 {
+        b.read_force(&mut buf).unwrap();
+    }
+    assert!(b.c.running(), "the motion drives the outputs");
+    let mut other = spec;
+    other.params.r1_ohm *= 1.1;
+    let short = CalibrateOptions {
+        timeout: Duration::from_millis(300),
+        ..opts()
+    };
+    assert!(matches!(
+        apply_model(&mut b, &short, &record(&other)),
+        Err(CalibrateError::NotTuned { .. })
+    ));
+}

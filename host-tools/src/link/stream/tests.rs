@@ -542,6 +542,7 @@ fn info_bytes(max_abs_v: f32) -> Vec<u8> {
         overcurrent_a: 0.4,
         calibration_origin: finrs_frames::CalibrationOrigin::Stored,
         reset_cause: finrs_frames::ResetCause::Watchdog,
+        model_crc: None,
     };
     let mut buf = [0u8; finrs_frames::INFO_FRAME_LEN];
     let n = finrs_frames::encode_info(&info, &mut buf).unwrap();

@@ -6,7 +6,7 @@
 #![deny(missing_docs)]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::debug;
+use finrs_qemu_tests::exit;
 use model_core::{Fixture, Params, Strip};
 
 /// The function whose instructions are counted.
@@ -30,29 +30,5 @@ fn main() -> ! {
         }
         Err(_) => false,
     };
-    debug::exit(if ok {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[cortex_m_rt::exception]
-#[allow(unsafe_code)] // cortex-m-rt requires the HardFault handler to be `unsafe fn`
-unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[panic_handler]
-fn panic(_info: &core::panic::PanicInfo) -> ! {
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
+    exit(ok)
 }

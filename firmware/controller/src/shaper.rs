@@ -1,0 +1,375 @@
+//! Motions turned into voltages by the fitted model the board holds (#16):
+//! the one inverse that the firmware runs and that `finrs simulate`
+//! runs as its twin.
+//!
+//! A [`Shaper`] holds the model a SetModel sent (checked by
+//! [`Shaper::check`]: a layout the firmware reads, parameters the model
+//! accepts, a strip that answers a sine). A SetMotion's motion becomes a
+//! [`Program::Harmonic`]: each segment's voltage amplitude and phase from
+//! the model's exact harmonic inverse (`model_core::Strip::tip_wave`:
+//! each segment's electrics and relaxation, the crosstalk and the beam's
+//! modes at the motion's frequency, on the strip discretised at the
+//! board's sample time, so that the sampled sine the generator writes is
+//! what the inverse assumed). A motion that needs more than the limit in
+//! force is refused with the amplitude that is reachable, never clipped.
+//!
+//! Building the model's strip takes milliseconds of `f64` arithmetic
+//! (soft-float on the M4F), so [`command`] shapes outside the
+//! controller's lock and takes it only to hand the result over.
+//!
+//! ```
+//! use finrs_controller::shaper::{command, Shaper, Shaped, ELEMENTS};
+//! use finrs_controller::{Config, Controller};
+//! use finrs_frames::{Command, ModelRecord, Motion, StripModel};
+//! use finrs_drive::Envelope;
+//! use model_core::{state_len, Extensions, Params};
+//! # use finrs_controller::Calibration;
+//! # use finrs_drive::{Limits, HARD_LIMIT_V};
+//! # let config = Config {
+//! #     sample_hz: 1000,
+//! #     limits: Limits::new(HARD_LIMIT_V, 100.0).unwrap(),
+//! #     calibration: Calibration { newtons_per_count: 1e-5, current_zero_counts: [2048; 8] },
+//! #     adc_full_scale: 4095,
+//! #     saturation_margin_counts: 2,
+//! #     amps_per_count: 1e-3,
+//! #     overcurrent_a: 0.5,
+//! #     tare_samples: 100,
+//! # };
+//!
+//! let mut controller = Controller::<3>::new(config).unwrap();
+//! let mut shaper = Shaper::<3, ELEMENTS, { state_len(3, ELEMENTS) }>::new();
+//! let model = StripModel {
+//!     params: Params::main_m_2006(),
+//!     extensions: Extensions { damping_ratio: 0.05, ..Extensions::NONE },
+//!     dehydration_per_s: 0.0,
+//!     dehydration_curvature: 0.0,
+//! };
+//! let mut lock = finrs_controller::shaper::Exclusive(&mut controller);
+//! let set_model = Command::SetModel(ModelRecord::encode(&model));
+//! assert_eq!(command(set_model, &mut shaper, 1e-3, &mut lock), Ok(Shaped::ModelSet));
+//! // 0.2 mm at 1 Hz, 60° a segment: within the seed's strip's reach.
+//! let motion = Motion::Travelling { tip_amp_m: 2e-4, frequency_hz: 1.0, lag_deg_per_segment: 60.0 };
+//! let envelope = Envelope { ramp_in_s: 1.0, hold_s: f32::INFINITY, ramp_out_s: 1.0 };
+//! let set_motion = Command::SetMotion { motion, envelope };
+//! assert_eq!(command(set_motion, &mut shaper, 1e-3, &mut lock), Ok(Shaped::WaveSet));
+//! ```
+
+use core::fmt;
+
+use finrs_drive::{Envelope, Program, WaveError};
+use finrs_frames::{Command, ModelFormatError, ModelRecord, Motion};
+use model_core::{Fixture, HarmonicError, ParamError, Strip};
+/// The lock [`command`] takes the controller through (RTIC's), and its
+/// plain form for a controller owned outright.
+pub use rtic_core::{Exclusive, Mutex};
+
+use crate::controller::{CommandRefused, Controller};
+
+/// Elements per segment of the board's model: one, whose cubic shape
+/// functions give a piecewise-constant moment's static deflection exactly
+/// (the modes above the first few are coarser, and a motion's frequency is
+/// far below them).
+pub const ELEMENTS: usize = 1;
+
+/// The frequency at which [`Shaper::check`] asks the model for a wave: a
+/// model that moves nothing there is refused when it is sent, not at the
+/// first motion, Hz.
+const CHECK_HZ: f64 = 1.0;
+
+/// Why a model or a motion was refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShapeRefused {
+    /// SetModel: the record is not one this firmware reads.
+    Format(ModelFormatError),
+    /// SetModel: the model refuses a value (field and rule).
+    Model(ParamError),
+    /// SetModel: the model has no steady response to a sine at 1 Hz (why).
+    NotInvertible(HarmonicError),
+    /// SetMotion before any SetModel.
+    NoModel,
+    /// SetMotion: the model has no steady sine for this motion (why).
+    Harmonic(HarmonicError),
+    /// SetMotion: the motion needs more than the limit in force.
+    Unreachable {
+        /// The largest amplitude it needs, V.
+        needs_v: f32,
+        /// Where, counted from 1 at the clamp.
+        segment: u8,
+        /// The limit in force, V.
+        limit_v: f32,
+        /// The tip amplitude the limit allows, m.
+        reachable_m: f32,
+    },
+    /// SetMotion: the voltages break a wave rule (field and rule).
+    Wave(WaveError),
+    /// The controller refused what the model gave (a fault latched, the
+    /// outputs driven while a model was sent, …).
+    Controller(CommandRefused),
+}
+
+impl fmt::Display for ShapeRefused {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Format(e) => write!(f, "SetModel refused: {e}"),
+            Self::Model(e) => write!(f, "SetModel refused: {e}"),
+            Self::NotInvertible(e) => {
+                write!(
+                    f,
+                    "SetModel refused: the model cannot be inverted at 1 Hz: {e}"
+                )
+            }
+            Self::NoModel => f.write_str(NO_MODEL),
+            Self::Harmonic(e) => write!(f, "SetMotion refused: {e}"),
+            Self::Unreachable {
+                needs_v,
+                segment,
+                limit_v,
+                reachable_m,
+            } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
+            Self::Wave(e) => write!(f, "SetMotion refused: {e}"),
+            Self::Controller(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl core::error::Error for ShapeRefused {}
+
+const NO_MODEL: &str = "SetMotion refused: no model (finrs tune FIT.toml first)";
+
+/// In whole mV and µm: an f32 `Display` would link core's float
+/// formatting (about 14 KB of flash).
+fn unreachable(
+    f: &mut fmt::Formatter<'_>,
+    needs_v: f32,
+    segment: u8,
+    limit_v: f32,
+    reachable_m: f32,
+) -> fmt::Result {
+    write!(
+        f,
+        "SetMotion refused: needs {} mV on segment {segment}, above the {} mV limit; \
+         within it the model reaches {} um at the tip",
+        (needs_v * 1e3) as u32,
+        (limit_v * 1e3) as u32,
+        (reachable_m * 1e6) as u32
+    )
+}
+
+impl ShapeRefused {
+    /// The refusal in words without any float, for the firmware's log:
+    /// formatting an `f64` with `core::fmt` links some 10 KB of flash (the
+    /// host, which has room, prints [`Display`](fmt::Display)'s values).
+    pub fn brief(&self) -> Brief<'_> {
+        Brief(self)
+    }
+}
+
+/// [`ShapeRefused::brief`]'s form: names and integers only.
+pub struct Brief<'a>(&'a ShapeRefused);
+
+impl fmt::Display for Brief<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let harmonic = |f: &mut fmt::Formatter<'_>, e: &HarmonicError| match e {
+            HarmonicError::Frequency { .. } => {
+                f.write_str("the frequency is not above 0 and below half the sample rate")
+            }
+            HarmonicError::Nonlinear { field } => {
+                write!(f, "{field} is on: the response is not one sine")
+            }
+            HarmonicError::Resonant { mode } => {
+                write!(f, "the drive sits on undamped mode {mode}'s own frequency")
+            }
+            HarmonicError::NoResponse => f.write_str("no voltage moves the tip"),
+        };
+        match self.0 {
+            ShapeRefused::Model(e) => {
+                let field = match e {
+                    ParamError::NotFinite { field, .. }
+                    | ParamError::NotPositive { field, .. }
+                    | ParamError::OutOfRange { field, .. }
+                    | ParamError::SegmentDeviation { field, .. }
+                    | ParamError::TooMany { field, .. } => field,
+                    ParamError::BackRelaxation { .. } => "b_nm_per_c_s",
+                    ParamError::SingularMass => "the beam's mass matrix",
+                };
+                write!(f, "SetModel refused: {field} breaks its rule")
+            }
+            ShapeRefused::NotInvertible(e) => {
+                f.write_str("SetModel refused: the model cannot be inverted at 1 Hz: ")?;
+                harmonic(f, e)
+            }
+            ShapeRefused::Harmonic(e) => {
+                f.write_str("SetMotion refused: ")?;
+                harmonic(f, e)
+            }
+            // The others' own words hold no float (written out: a call to
+            // the whole `Display` would link the float formatting anyway).
+            ShapeRefused::Format(e) => write!(f, "SetModel refused: {e}"),
+            ShapeRefused::NoModel => f.write_str(NO_MODEL),
+            ShapeRefused::Unreachable {
+                needs_v,
+                segment,
+                limit_v,
+                reachable_m,
+            } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
+            ShapeRefused::Wave(e) => write!(f, "SetMotion refused: {e}"),
+            ShapeRefused::Controller(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// A model that passed [`Shaper::check`], with its strip built: what
+/// [`Shaper::install`] takes.
+#[derive(Clone, Debug)]
+pub struct CheckedModel<const N: usize, const E: usize, const S: usize> {
+    record: ModelRecord,
+    strip: Strip<f32, N, E, S>,
+}
+
+impl<const N: usize, const E: usize, const S: usize> CheckedModel<N, E, S> {
+    /// The record as sent.
+    pub fn record(&self) -> &ModelRecord {
+        &self.record
+    }
+}
+
+/// The model the board holds, for `N` segments of `E` elements (`S` the
+/// strip's state length, `model_core::state_len(N, E)`).
+#[derive(Clone, Debug, Default)]
+pub struct Shaper<const N: usize, const E: usize, const S: usize> {
+    model: Option<CheckedModel<N, E, S>>,
+}
+
+impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
+    /// No model yet: every motion is refused.
+    pub const fn new() -> Self {
+        Self { model: None }
+    }
+
+    /// Checks `record` for a strip sampled every `dt_s`: its layout, the
+    /// model's rules, and that it answers a sine at 1 Hz (a free strip
+    /// whose moment does not reach the tip cannot be shaped).
+    pub fn check(record: &ModelRecord, dt_s: f64) -> Result<CheckedModel<N, E, S>, ShapeRefused> {
+        let m = record.decode().map_err(ShapeRefused::Format)?;
+        let strip =
+            Strip::<f32, N, E, S>::with_extensions(&m.params, &m.extensions, Fixture::Free, dt_s)
+                .map_err(ShapeRefused::Model)?;
+        if CHECK_HZ < 0.5 / dt_s {
+            strip
+                .tip_wave(CHECK_HZ, 1e-3, 0.0)
+                .map_err(ShapeRefused::NotInvertible)?;
+        }
+        Ok(CheckedModel {
+            record: *record,
+            strip,
+        })
+    }
+
+    /// Uses `model` from now on.
+    pub fn install(&mut self, model: CheckedModel<N, E, S>) {
+        self.model = Some(model);
+    }
+
+    /// The record of the model in use, if any.
+    pub fn record(&self) -> Option<&ModelRecord> {
+        self.model.as_ref().map(|m| &m.record)
+    }
+
+    /// The program that makes `motion` on the model held, each segment's
+    /// amplitude at most `limit_v`.
+    pub fn program(&self, motion: &Motion, limit_v: f32) -> Result<Program, ShapeRefused> {
+        let model = self.model.as_ref().ok_or(ShapeRefused::NoModel)?;
+        let &Motion::Travelling {
+            tip_amp_m,
+            frequency_hz,
+            lag_deg_per_segment,
+        } = motion;
+        let v = model
+            .strip
+            .tip_wave(
+                f64::from(frequency_hz),
+                f64::from(tip_amp_m),
+                f64::from(lag_deg_per_segment).to_radians(),
+            )
+            .map_err(ShapeRefused::Harmonic)?;
+        let mut amplitudes_v = [0.0f32; 8];
+        let mut phases_deg = [0.0f32; 8];
+        for (k, p) in v.iter().enumerate() {
+            amplitudes_v[k] = p.amplitude() as f32;
+            phases_deg[k] = p.sine_phase_rad().to_degrees() as f32;
+        }
+        // The f32 amplitudes, as the generator and the controller's limit
+        // check will see them.
+        let (k, needs_v) = amplitudes_v
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f32), |m, (k, &a)| if a > m.1 { (k, a) } else { m });
+        if needs_v > limit_v {
+            return Err(ShapeRefused::Unreachable {
+                needs_v,
+                segment: k as u8 + 1,
+                limit_v,
+                // Linear: the voltages scale with the amplitude asked.
+                reachable_m: tip_amp_m.abs() * limit_v / needs_v,
+            });
+        }
+        let program = Program::Harmonic {
+            frequency_hz,
+            offset_v: 0.0,
+            amplitudes_v,
+            phases_deg,
+        };
+        // The generator's own rules (frequency range, finite values); the
+        // envelope is the command's, checked where it is used.
+        let steady = Envelope {
+            ramp_in_s: 0.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        };
+        finrs_drive::Generator::<N>::new(program, steady).map_err(ShapeRefused::Wave)?;
+        Ok(program)
+    }
+}
+
+/// What [`command`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shaped {
+    /// A SetModel's model is in use (and handed to the board to store).
+    ModelSet,
+    /// A SetMotion's voltages drive the outputs.
+    WaveSet,
+    /// Any other command, handed to the controller as it came.
+    Passed,
+}
+
+/// Hands `c` to the controller behind `lock`, shaping a SetModel or a
+/// SetMotion with `shaper` first, outside the lock (`dt_s` the sample
+/// time). A refused command changes nothing.
+pub fn command<const N: usize, const E: usize, const S: usize>(
+    c: Command,
+    shaper: &mut Shaper<N, E, S>,
+    dt_s: f64,
+    lock: &mut impl Mutex<T = Controller<N>>,
+) -> Result<Shaped, ShapeRefused> {
+    match c {
+        Command::SetModel(record) => {
+            let model = Shaper::check(&record, dt_s)?;
+            lock.lock(|ctl| ctl.model_set(&record))
+                .map_err(ShapeRefused::Controller)?;
+            shaper.install(model);
+            Ok(Shaped::ModelSet)
+        }
+        Command::SetMotion { motion, envelope } => {
+            let limit_v = lock.lock(|ctl| ctl.limits().max_abs_v());
+            let program = shaper.program(&motion, limit_v)?;
+            lock.lock(|ctl| ctl.command(Command::SetWave { program, envelope }))
+                .map_err(ShapeRefused::Controller)?;
+            Ok(Shaped::WaveSet)
+        }
+        other => {
+            lock.lock(|ctl| ctl.command(other))
+                .map_err(ShapeRefused::Controller)?;
+            Ok(Shaped::Passed)
+        }
+    }
+}
