@@ -19,7 +19,7 @@
 //! assert!(p.recordings[0].tare, "blocked recordings tare first");
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -90,6 +90,10 @@ pub struct Protocol {
     pub geometry: Geometry,
     /// Tracked dots' positions from the clamp, m (free recordings).
     pub dots_s_m: Option<Vec<f64>>,
+    /// A fitted model (`finrs fit`'s parameter file) the board is sent
+    /// before the first recording (`finrs tune`), for `motion:` waves; a
+    /// path relative to the protocol's folder.
+    pub model: Option<PathBuf>,
     /// The recordings, in order.
     pub recordings: Vec<Step>,
 }
@@ -106,6 +110,8 @@ struct RawProtocol {
     thickness_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     dots_s_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model: Option<String>,
     #[serde(default)]
     recording: Vec<RawStep>,
 }
@@ -158,6 +164,7 @@ impl Protocol {
             width_m: Some(self.geometry.width_m),
             thickness_m: Some(self.geometry.thickness_m),
             dots_s_m: self.dots_s_m.clone(),
+            model: self.model.as_ref().map(|p| p.display().to_string()),
             recording: self
                 .recordings
                 .iter()
@@ -279,11 +286,22 @@ impl Protocol {
                 notes: r.notes,
             });
         }
+        let model = match raw.model {
+            None => None,
+            Some(m) if m.is_empty() => {
+                return Err(err(
+                    "model: an empty path; leave the key out for none".to_string()
+                ))
+            }
+            // Relative to the protocol's folder, as a user writes it.
+            Some(m) => Some(Path::new(file).parent().unwrap_or(Path::new("")).join(m)),
+        };
         Ok(Protocol {
             sample: raw.sample,
             medium,
             geometry,
             dots_s_m: raw.dots_s_m,
+            model,
             recordings,
         })
     }
@@ -301,5 +319,20 @@ mod tests {
         let again = Protocol::parse("again.toml", &text).unwrap();
         assert_eq!(again, p, "{text}");
         assert!(text.contains("[[recording]]"), "{text}");
+    }
+
+    /// A model's path is the protocol folder's; an empty one is refused.
+    #[test]
+    fn a_model_is_found_beside_the_protocol() {
+        let text = |model: &str| {
+            format!(
+                "format = \"finrs-protocol/1\"\nmedium = \"air\"\nmodel = {model:?}\n\
+                 [[recording]]\nname = \"m\"\nfixture = \"free\"\nwave = \"motion:0.001,1,60\"\nhold_s = 5\n"
+            )
+        };
+        let p = Protocol::parse("bench/day1/protocol.toml", &text("fit.toml")).unwrap();
+        assert_eq!(p.model, Some(PathBuf::from("bench/day1/fit.toml")));
+        let e = Protocol::parse("p.toml", &text("")).unwrap_err();
+        assert!(e.to_string().contains("model: an empty path"), "{e}");
     }
 }

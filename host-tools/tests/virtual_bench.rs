@@ -115,18 +115,7 @@ fn run_chain(features: &str) -> Chain {
             Fixture::Blocked => assert!(has(Channel::Force), "{name}"),
             Fixture::Free => {
                 free += 1;
-                let track = session.join("tracks").join(&name);
-                let mut merge = finrs();
-                merge
-                    .arg("merge-camera")
-                    .arg("--daq")
-                    .arg(path)
-                    .arg("--track")
-                    .arg(&track)
-                    .args(["--m-per-px", "5e-5"])
-                    .arg("--out")
-                    .arg(path);
-                run_ok(merge, "finrs merge-camera");
+                merge(&session, path);
                 if !features.contains("plant-") {
                     check_tip_against_the_model(path, &dir);
                 }
@@ -278,9 +267,7 @@ fn a_creeping_plant_on_the_virtual_bench_names_nothing() {
 fn the_live_view_drives_the_virtual_bench_from_its_keys() {
     use std::time::Duration;
     let elf = build_firmware("qemu-serial");
-    let dir = std::env::temp_dir().join(format!("finrs-virtual-live-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("finrs-virtual-live");
     let out = dir.join("live.csv");
     let mut pty = common::pty::Pty::spawn(&format!(
         "{} bench live --qemu {} --out {}",
@@ -311,5 +298,256 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
         .filter(|v| v.iter().all(|&x| (x - 1.0).abs() < 1e-6))
         .count();
     assert!(held > 500, "{held} rows at 1 V of {}", rec.t_s.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An empty folder of this test run's, named `name`.
+fn fresh_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `finrs merge-camera` of the free recording `path` of `session`, in
+/// place.
+fn merge(session: &Path, path: &Path) {
+    let mut merge = finrs();
+    merge
+        .arg("merge-camera")
+        .arg("--daq")
+        .arg(path)
+        .arg("--track")
+        .arg(session.join("tracks").join(path.file_name().unwrap()))
+        .args(["--m-per-px", "5e-5"])
+        .arg("--out")
+        .arg(path);
+    run_ok(merge, "finrs merge-camera");
+}
+
+/// The merged free recording's tip over the last ten periods of its wave
+/// at `hz`, by lock-in: its amplitude, m, and its phase less segment 1's
+/// recorded voltage's, degrees (the command's latency cancels).
+fn tip_response(path: &Path, hz: f64) -> (f64, f64) {
+    let rec = Recording::read(path).unwrap();
+    let tip = rec
+        .channels
+        .iter()
+        .find(|(c, _)| *c == Channel::TipY)
+        .map(|(_, v)| v.clone())
+        .expect("the camera's tip, merged");
+    let v1: Vec<f64> = rec.v_v.rows().map(|r| r[0]).collect();
+    // The wave's end: the last row driven.
+    let last = v1.iter().rposition(|&v| v != 0.0).expect("a driven row");
+    let to_s = rec.t_s[last];
+    let from_s = to_s - 10.0 / hz;
+    // `2/n Σ y e^{−jωt}` over whole periods: the sine's phasor.
+    let lock_in = |values: &mut dyn Iterator<Item = (f64, f64)>| {
+        let (mut re, mut im, mut n) = (0.0, 0.0, 0.0);
+        for (t, y) in values.filter(|(t, _)| (from_s..to_s).contains(t)) {
+            let w = 2.0 * std::f64::consts::PI * hz * t;
+            re += y * w.cos();
+            im -= y * w.sin();
+            n += 1.0;
+        }
+        (2.0 * re / n, 2.0 * im / n)
+    };
+    let y = lock_in(
+        &mut rec
+            .t_s
+            .iter()
+            .zip(&tip)
+            .filter_map(|(&t, y)| y.map(|y| (t, y))),
+    );
+    let v = lock_in(&mut rec.t_s.iter().copied().zip(v1.iter().copied()));
+    (
+        y.0.hypot(y.1),
+        (y.1.atan2(y.0) - v.1.atan2(v.0)).to_degrees(),
+    )
+}
+
+/// `x`, degrees, wrapped to (−180°, 180°].
+fn wrapped_deg(x: f64) -> f64 {
+    180.0 - (180.0 - x).rem_euclid(360.0)
+}
+
+/// The program the board's shaper makes of `motion` with the model of
+/// `file` for the virtual bench's strip (the seed's geometry, as its
+/// protocols state it): its phase on segment 1, degrees.
+fn shaped_phase_deg(file: &finrs::model::params::ModelFile, motion: &finrs_frames::Motion) -> f64 {
+    let spec = file
+        .spec_for(&finrs::recording::Geometry::THESIS_2006)
+        .unwrap();
+    let record = finrs::model::motion::record(&spec);
+    match finrs::model::motion::board_program(&record, 3, 1000.0, motion, 4.0).unwrap() {
+        finrs_drive::Program::Harmonic { phases_deg, .. } => f64::from(phases_deg[0]),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A protocol of the virtual bench's strip, its model `model` if any.
+fn protocol_text(model: Option<&str>, recordings: &str) -> String {
+    let model = model.map_or(String::new(), |m| format!("model = {m:?}\n"));
+    format!(
+        "format = \"finrs-protocol/1\"\nmedium = \"air\"\nlength_m = 0.05\nwidth_m = 0.01\n\
+         thickness_m = 0.0002858\ndots_s_m = [0.025, 0.05]\n{model}\n{recordings}"
+    )
+}
+
+/// Feed-forward end to end (#16): a protocol that tunes the QEMU firmware
+/// with the plant's own model and asks a travelling motion of the free
+/// tip. The board's shaper turns it into each segment's sine; the plant's
+/// tip, as the virtual camera sees it, moves as asked: by lock-in over the
+/// last ten periods, the amplitude within 2 % and the phase (against
+/// segment 1's recorded voltage, so that the command's latency cancels)
+/// within 2° of the shaped program's.
+#[test]
+fn a_motion_on_the_virtual_bench_moves_the_plants_tip_as_asked() {
+    use finrs_frames::Motion;
+
+    let elf = build_firmware("qemu-serial");
+    let dir = fresh_dir("finrs-virtual-motion");
+    let plant = common::baseline_air_model();
+    std::fs::write(dir.join("plant.toml"), plant.to_toml()).unwrap();
+    // The issue's 5 mm at 1 Hz: within 1 V a segment for this plant.
+    let (tip_amp_m, hz, lag_deg) = (5e-3, 1.0, 60.0);
+    let recording = format!(
+        "[[recording]]\nname = \"free_motion\"\nfixture = \"free\"\n\
+         wave = \"motion:{tip_amp_m},{hz},{lag_deg}\"\nrest_s = 1.0\nhold_s = 30\noff_s = 0.5\n"
+    );
+    std::fs::write(
+        dir.join("protocol.toml"),
+        protocol_text(Some("plant.toml"), &recording),
+    )
+    .unwrap();
+    let session = dir.join("session");
+    let mut run = finrs();
+    run.args(["bench", "run"])
+        .arg(dir.join("protocol.toml"))
+        .arg("--qemu")
+        .arg(&elf)
+        .arg("--out")
+        .arg(&session);
+    let log = run_ok(run, "finrs bench run --qemu");
+    assert!(log.contains("in use on the board"), "{log}");
+    let path = common::recordings_in(&session)
+        .pop()
+        .expect("one recording");
+    merge(&session, &path);
+    let (amplitude, phase_deg) = tip_response(&path, hz);
+    let motion = Motion::Travelling {
+        tip_amp_m: tip_amp_m as f32,
+        frequency_hz: hz as f32,
+        lag_deg_per_segment: lag_deg as f32,
+    };
+    // Asked: the tip's phase 0, less segment 1's.
+    let off_deg = wrapped_deg(phase_deg + shaped_phase_deg(&plant, &motion));
+    eprintln!(
+        "motion on the virtual bench: tip {:.4} mm (asked {:.4}), phase off by {off_deg:.2}°",
+        amplitude * 1e3,
+        tip_amp_m * 1e3
+    );
+    assert!(
+        (amplitude / tip_amp_m - 1.0).abs() < 0.02,
+        "tip {amplitude} m"
+    );
+    assert!(off_deg.abs() < 2.0, "phase off by {off_deg}°");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// #16's comparison on a strip unlike its nominal model (`plant-variant`:
+/// `R1` 15 % up, `C` 10 % and the moment per charge 20 % down), no drying
+/// yet: the example protocol recorded from it on the virtual bench and
+/// fitted (`finrs fit --out`), then one protocol that drives the same
+/// motion twice: as the plain wave the nominal model shapes (the example
+/// session's parameters, sent as `harmonic:`), and as a motion the board
+/// shapes with the fit (`model =`). The fit's is within 5 % and 5° (the
+/// issue's targets); the nominal wave's misses by the parameter spread.
+#[test]
+fn feed_forward_from_a_fit_makes_the_motion_a_nominal_wave_misses() {
+    use finrs::wave::Wave;
+    use finrs_frames::Motion;
+
+    let elf = build_firmware("qemu-serial,plant-variant");
+    let dir = fresh_dir("finrs-virtual-variant");
+    let bench = |protocol: &Path, out: &Path| {
+        let mut run = finrs();
+        run.args(["bench", "run"])
+            .arg(protocol)
+            .arg("--qemu")
+            .arg(&elf)
+            .arg("--out")
+            .arg(out);
+        run_ok(run, "finrs bench run --qemu")
+    };
+    // The strip's session, and its fit.
+    let session = dir.join("session");
+    bench(&workspace().join("examples/bench/protocol.toml"), &session);
+    let mut fit = finrs();
+    fit.arg("fit")
+        .arg(&session)
+        .arg("--out")
+        .arg(dir.join("fit.toml"));
+    run_ok(fit, "finrs fit");
+    let fitted = finrs::model::params::ModelFile::read(&dir.join("fit.toml")).unwrap();
+    // The nominal model's wave for the motion, and the motion itself.
+    let (tip_amp_m, hz, lag_deg) = (5e-3, 1.0, 60.0);
+    let text = format!("motion:{tip_amp_m},{hz},{lag_deg}");
+    let nominal = common::baseline_air_model();
+    let spec = nominal
+        .spec_for(&finrs::recording::Geometry::THESIS_2006)
+        .unwrap();
+    let plain = finrs::model::motion::shaped(&Wave::parse(&text).unwrap(), &spec, 3, 1000.0)
+        .unwrap()
+        .text()
+        .to_string();
+    let recording = |name: &str, wave: &str| {
+        format!(
+            "[[recording]]\nname = \"{name}\"\nfixture = \"free\"\nwave = \"{wave}\"\n\
+             rest_s = 1.0\nhold_s = 30\noff_s = 0.5\n\n"
+        )
+    };
+    let protocol = dir.join("protocol.toml");
+    std::fs::write(
+        &protocol,
+        protocol_text(
+            Some("fit.toml"),
+            &(recording("nominal", &plain) + &recording("fitted", &text)),
+        ),
+    )
+    .unwrap();
+    let motions = dir.join("motions");
+    bench(&protocol, &motions);
+    let paths = common::recordings_in(&motions);
+    assert_eq!(paths.len(), 2, "{paths:?}");
+    let motion = Motion::Travelling {
+        tip_amp_m: tip_amp_m as f32,
+        frequency_hz: hz as f32,
+        lag_deg_per_segment: lag_deg as f32,
+    };
+    let mut errors = Vec::new();
+    for (path, model) in paths.iter().zip([&nominal, &fitted]) {
+        merge(&motions, path);
+        let (amplitude, phase_deg) = tip_response(path, hz);
+        let off_deg = wrapped_deg(phase_deg + shaped_phase_deg(model, &motion));
+        let off = amplitude / tip_amp_m - 1.0;
+        eprintln!(
+            "{}: tip {:.4} mm (asked {:.4}, {:+.2} %), phase {off_deg:+.2}°",
+            path.file_name().unwrap().to_string_lossy(),
+            amplitude * 1e3,
+            tip_amp_m * 1e3,
+            100.0 * off
+        );
+        errors.push((off.abs(), off_deg.abs()));
+    }
+    let (nominal_err, fitted_err) = (errors[0], errors[1]);
+    assert!(
+        fitted_err.0 < 0.05 && fitted_err.1 < 5.0,
+        "fitted: {fitted_err:?}"
+    );
+    assert!(
+        nominal_err.0 > 0.10 && nominal_err.0 > 3.0 * fitted_err.0,
+        "the nominal wave should miss by the spread: {nominal_err:?} against {fitted_err:?}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

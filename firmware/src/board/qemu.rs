@@ -265,11 +265,22 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
     }
 }
 
-/// The plant's parameters: the example session's, or with `plant-creep`
-/// the same strip creeping (`z = 0.24/s > p = 0.1/s`, Table 4-2's
+/// The plant's parameters: the example session's; with `plant-variant`
+/// another strip of the same kind ([`sim::PLANT_VARIANT`]); or with
+/// `plant-creep` the same strip creeping (`z = 0.24/s > p = 0.1/s`, Table 4-2's
 /// network) with the same DC moment per volt.
 fn plant_params() -> Params {
     let example = Params::baseline_air_example();
+    if cfg!(feature = "plant-variant") {
+        let (r1, c, k) = sim::PLANT_VARIANT;
+        return Params {
+            r1_ohm: example.r1_ohm * r1,
+            c_f: example.c_f * c,
+            a_nm_per_c: example.a_nm_per_c * k,
+            b_nm_per_c_s: example.b_nm_per_c_s * k,
+            ..example
+        };
+    }
     if !cfg!(feature = "plant-creep") {
         return example;
     }

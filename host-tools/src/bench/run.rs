@@ -17,11 +17,14 @@ use std::time::{Duration, Instant};
 use finrs_frames::{Command, Event, Info, SampleFlags};
 
 use crate::link::board::{request_info, Board, Frames, TrackStretch};
+use crate::link::calibrate::{apply_model, CalibrateOptions};
 use crate::link::capture::Monitor;
 use crate::link::command::wave_command;
 use crate::link::probe::ProbeError;
 use crate::link::qemu::world::VIRTUAL_M_PER_PX;
 use crate::link::stream::{Recorder, Setup};
+use crate::model::motion;
+use crate::model::params::ModelFile;
 use crate::protocol::{Protocol, Step};
 use crate::recording::{Channel, Fixture, Recording, RecordingError};
 use crate::wave::{WaveError, WaveOptions};
@@ -91,6 +94,23 @@ pub enum BenchError {
     /// The operator's prompt failed (stdin closed).
     #[error("the prompt failed: {0}")]
     Prompt(String),
+    /// The protocol's model could not be read, or the board refused it.
+    #[error("model {}: {source}", path.display())]
+    Model {
+        /// The model's file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// A motion wave with no model on the board and none in the protocol.
+    #[error("recording {k} ({name}): a motion needs a model on the board: give the protocol `model = \"FIT.toml\"`, or send one with finrs tune first")]
+    NoModel {
+        /// Its number, from 1.
+        k: usize,
+        /// Its name.
+        name: String,
+    },
 }
 
 /// How long to wait for the board.
@@ -149,6 +169,15 @@ pub fn run_session(
                 name: step.name.clone(),
                 source,
             })?;
+        if matches!(command, Command::SetMotion { .. })
+            && protocol.model.is_none()
+            && info.model_crc.is_none()
+        {
+            return Err(BenchError::NoModel {
+                k: i + 1,
+                name: step.name.clone(),
+            });
+        }
         commands.push(command);
         let path = out_dir.join(step.file_name(i + 1));
         if path.exists() {
@@ -160,6 +189,9 @@ pub fn run_session(
         source,
     })?;
     board.send(&Command::Stop)?;
+    if let Some(path) = &protocol.model {
+        tune(board, path, protocol, &info, opts, monitor)?;
+    }
     let mut stream = Frames::new(table);
     let mut session_first_seq: Option<u32> = None;
     let mut written = Vec::new();
@@ -311,6 +343,63 @@ impl Ctx<'_> {
             }
         }
     }
+}
+
+/// Sends the board the model at `path` for the protocol's strip (as
+/// `finrs tune` does), once its outputs are at 0 V (it refuses a model
+/// while they are driven), and waits for the Info that names it.
+fn tune(
+    board: &mut impl Board,
+    path: &Path,
+    protocol: &Protocol,
+    info: &Info,
+    opts: &BenchOptions,
+    monitor: &dyn Monitor,
+) -> Result<(), BenchError> {
+    let model_error = |source: Box<dyn std::error::Error + Send + Sync>| BenchError::Model {
+        path: path.to_path_buf(),
+        source,
+    };
+    let spec = ModelFile::read(path)
+        .and_then(|m| m.spec_for(&protocol.geometry))
+        .map_err(|e| model_error(e.into()))?;
+    let record = motion::record(&spec);
+    motion::board_check(
+        &record,
+        usize::from(info.segments),
+        f64::from(info.sample_hz),
+    )
+    .map_err(|e| model_error(e.into()))?;
+    // Stopped: the first sample at 0 V on every segment.
+    let mut frames = Frames::new(None);
+    let started = Instant::now();
+    loop {
+        match frames.next(board, opts.timeout, &crate::link::capture::Silent)? {
+            Some(Event::Sample(s)) if s.voltages().iter().all(|&v| v == 0.0) => break,
+            Some(_) if started.elapsed() < opts.timeout => {}
+            _ => {
+                return Err(model_error(
+                    format!(
+                        "the outputs did not come to 0 V within {} s of a Stop",
+                        opts.timeout.as_secs_f64()
+                    )
+                    .into(),
+                ))
+            }
+        }
+    }
+    let calibrate_opts = CalibrateOptions {
+        timeout: opts.timeout,
+        ..CalibrateOptions::default()
+    };
+    let confirmed =
+        apply_model(board, &calibrate_opts, &record).map_err(|e| model_error(e.into()))?;
+    monitor.line(&format!(
+        "model {:04x} from {} in use on the board",
+        confirmed.model_crc.unwrap_or_default(),
+        path.display()
+    ));
+    Ok(())
 }
 
 /// What [`record_one`] made.

@@ -272,6 +272,7 @@ mod tests {
             medium: session.recordings[0].rec.meta.medium,
             geometry: session.geometry(),
             dots_s_m: None,
+            model: None,
             recordings: all.iter().map(|c| c.step.clone()).collect(),
         };
         // Unique names, waves the protocol accepts.

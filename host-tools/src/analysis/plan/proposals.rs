@@ -105,6 +105,7 @@ impl Plan {
             medium: first.medium,
             geometry: first.geometry(),
             dots_s_m: dots,
+            model: None,
             recordings,
         })
     }
