@@ -49,7 +49,7 @@ pub const SYSCLK_HZ: u32 = 168_000_000;
 /// Interval between polls of the command channel, ms.
 const COMMAND_POLL_MS: u32 = 10;
 
-#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI1, EXTI2])]
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [EXTI1, EXTI2, EXTI3])]
 mod app {
     use super::*;
     use crate::board::{self, CommandIn, FrameOut, Housekeeping, Io};
@@ -249,8 +249,10 @@ mod app {
     }
 
     /// Board chores at low priority (QEMU: flush frames, end the run;
-    /// both: report the stack's use).
-    #[task(priority = 1, local = [housekeeping])]
+    /// both: report the stack's use). Above the command task: a model's
+    /// check there takes tens of milliseconds, which would hold QEMU's
+    /// frame flush back until its queue overflowed.
+    #[task(priority = 2, local = [housekeeping])]
     async fn housekeeping(cx: housekeeping::Context) {
         // The tasks' stack use is measured from here on (init's is kept).
         stack::repaint_for_tasks();

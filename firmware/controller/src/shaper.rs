@@ -71,6 +71,13 @@ use crate::controller::{CommandRefused, Controller};
 /// far below them).
 pub const ELEMENTS: usize = 1;
 
+/// Most segments whose model the board checks: building the model's strip
+/// and inverting it takes the command task's stack 62 KB at N = 5, 84 KB
+/// at N = 6 (of 112 KB), more than the margin at N = 7, and overflows at
+/// N = 8 (QEMU, measured by `tests/scenarios/tests/firmware_sil.rs`):
+/// above this a model is refused until that set-up is made leaner.
+pub const MAX_SHAPED_SEGMENTS: usize = 6;
+
 /// The frequency at which [`Shaper::check`] asks the model for a wave: a
 /// model that moves nothing there is refused when it is sent, not at the
 /// first motion, Hz.
@@ -81,6 +88,9 @@ const CHECK_HZ: f64 = 1.0;
 pub enum ShapeRefused {
     /// SetModel: the record is not one this firmware reads.
     Format(ModelFormatError),
+    /// SetModel on a build of more than [`MAX_SHAPED_SEGMENTS`] segments
+    /// (its segment count), whose stack cannot hold the model's check.
+    TooManySegments(usize),
     /// SetModel: the model refuses a value (field and rule).
     Model(ParamError),
     /// SetModel: the model has no steady response to a sine at 1 Hz (why).
@@ -111,6 +121,7 @@ impl fmt::Display for ShapeRefused {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Format(e) => write!(f, "SetModel refused: {e}"),
+            Self::TooManySegments(n) => too_many(f, *n),
             Self::Model(e) => write!(f, "SetModel refused: {e}"),
             Self::NotInvertible(e) => {
                 write!(
@@ -135,6 +146,14 @@ impl fmt::Display for ShapeRefused {
 impl core::error::Error for ShapeRefused {}
 
 const NO_MODEL: &str = "SetMotion refused: no model (finrs tune FIT.toml first)";
+
+fn too_many(f: &mut fmt::Formatter<'_>, n: usize) -> fmt::Result {
+    write!(
+        f,
+        "SetModel refused: a build of {n} segments cannot hold a model's check in its stack \
+         (at most {MAX_SHAPED_SEGMENTS})"
+    )
+}
 
 /// In whole mV and µm: an f32 `Display` would link core's float
 /// formatting (about 14 KB of flash).
@@ -205,6 +224,7 @@ impl fmt::Display for Brief<'_> {
             // The others' own words hold no float (written out: a call to
             // the whole `Display` would link the float formatting anyway).
             ShapeRefused::Format(e) => write!(f, "SetModel refused: {e}"),
+            ShapeRefused::TooManySegments(n) => too_many(f, *n),
             ShapeRefused::NoModel => f.write_str(NO_MODEL),
             ShapeRefused::Unreachable {
                 needs_v,
@@ -249,20 +269,38 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
     /// Checks `record` for a strip sampled every `dt_s`: its layout, the
     /// model's rules, and that it answers a sine at 1 Hz (a free strip
     /// whose moment does not reach the tip cannot be shaped).
+    // Not inlined, nor are its two steps: inlined into the command task,
+    // the strip's set-up and the inverse would share one frame, their
+    // peaks added (N = 8 then overflowed the board's stack in QEMU).
+    #[inline(never)]
     pub fn check(record: &ModelRecord, dt_s: f64) -> Result<CheckedModel<N, E, S>, ShapeRefused> {
-        let m = record.decode().map_err(ShapeRefused::Format)?;
-        let strip =
-            Strip::<f32, N, E, S>::with_extensions(&m.params, &m.extensions, Fixture::Free, dt_s)
-                .map_err(ShapeRefused::Model)?;
+        // Before anything is built: the build itself would overflow.
+        if N > MAX_SHAPED_SEGMENTS {
+            return Err(ShapeRefused::TooManySegments(N));
+        }
+        let strip = Self::build(record, dt_s)?;
         if CHECK_HZ < 0.5 / dt_s {
-            strip
-                .tip_wave(CHECK_HZ, 1e-3, 0.0)
-                .map_err(ShapeRefused::NotInvertible)?;
+            Self::answers(&strip)?;
         }
         Ok(CheckedModel {
             record: *record,
             strip,
         })
+    }
+
+    #[inline(never)]
+    fn build(record: &ModelRecord, dt_s: f64) -> Result<Strip<f32, N, E, S>, ShapeRefused> {
+        let m = record.decode().map_err(ShapeRefused::Format)?;
+        Strip::<f32, N, E, S>::with_extensions(&m.params, &m.extensions, Fixture::Free, dt_s)
+            .map_err(ShapeRefused::Model)
+    }
+
+    #[inline(never)]
+    fn answers(strip: &Strip<f32, N, E, S>) -> Result<(), ShapeRefused> {
+        strip
+            .tip_wave(CHECK_HZ, 1e-3, 0.0)
+            .map(|_| ())
+            .map_err(ShapeRefused::NotInvertible)
     }
 
     /// Uses `model` from now on.
@@ -277,6 +315,7 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
 
     /// The program that makes `motion` on the model held, each segment's
     /// amplitude at most `limit_v`.
+    #[inline(never)]
     pub fn program(&self, motion: &Motion, limit_v: f32) -> Result<Program, ShapeRefused> {
         let model = self.model.as_ref().ok_or(ShapeRefused::NoModel)?;
         let &Motion::Travelling {

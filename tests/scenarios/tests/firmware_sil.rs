@@ -268,13 +268,27 @@ fn samples_of(events: &[Event]) -> Vec<DecodedSample> {
 /// The limit the down channel sets, V.
 const COMMANDED_LIMIT_V: f32 = 1.5;
 
-/// The down channel's bytes: garbage, the default wave (the firmware boots
-/// stopped: nothing drives without it), a raise of the limit (refused: it
-/// must change nothing), then a lower limit (taken).
+/// The fitted model the down channel sends: the plant's own.
+fn model_record() -> finrs_frames::ModelRecord {
+    finrs_frames::ModelRecord::encode(&finrs_frames::StripModel {
+        params: model_core::Params::baseline_air_example(),
+        extensions: model_core::Extensions::NONE,
+        dehydration_per_s: 0.0,
+        dehydration_curvature: 0.0,
+    })
+}
+
+/// The down channel's bytes: garbage, a fitted model (checked by the
+/// board's shaper, which builds the model's strip in the command task:
+/// that must fit the stack at N = 8 and starve no sample), the default
+/// wave (the firmware boots stopped: nothing drives without it), a raise
+/// of the limit (refused: it must change nothing), then a lower limit
+/// (taken).
 fn commands() -> Vec<u8> {
     let mut bytes = vec![0x00, 0x13, 0x37, 0x5E, 0xF1];
     let (program, envelope) = finrs_drive::default_program();
     for c in [
+        FinCommand::SetModel(model_record()),
         FinCommand::SetWave { program, envelope },
         FinCommand::SetLimit { max_abs_v: 5.0 },
         FinCommand::SetLimit {
@@ -312,9 +326,21 @@ fn check_run<const N: usize, const S: usize>() {
     // Each refusal logged as an error with its reason, the good command
     // taken, the fault latched and logged, in this order.
     let up = format!("INFO fin driver up: {N} segments at 1000 Hz, limit 4.0 V");
+    // A model's check fits the stack up to MAX_SHAPED_SEGMENTS; above, it
+    // is refused before anything is built.
+    let shaped = N <= finrs_controller::shaper::MAX_SHAPED_SEGMENTS;
+    let model_line = if shaped {
+        "INFO command accepted: SetModel".to_string()
+    } else {
+        format!(
+            "ERROR SetModel refused: a build of {N} segments cannot hold a model's check in its stack (at most {})",
+            finrs_controller::shaper::MAX_SHAPED_SEGMENTS
+        )
+    };
     let expected = [
         up.as_str(),
         "ERROR command refused: 5 bytes without a sync pair skipped",
+        model_line.as_str(),
         "INFO command accepted: SetWave",
         "ERROR SetLimit refused: max_abs_v must not exceed HARD_LIMIT_V (4 V)",
         "INFO command accepted: SetLimit",
@@ -345,9 +371,15 @@ fn check_run<const N: usize, const S: usize>() {
             other => panic!("unexpected event {other:?}"),
         }
     }
-    // The Info frame, first in the stream: this build's set-up.
+    // The Info frame, first in the stream: this build's set-up; a second
+    // once the model is in use, which names it.
     assert!(matches!(events[0], Event::Info(_)), "{:?}", events[0]);
-    assert_eq!(infos.len(), 1, "{infos:?}");
+    if shaped {
+        assert_eq!(infos.len(), 2, "{infos:?}");
+        assert_eq!(infos[1].model_crc, Some(model_record().crc()));
+    } else {
+        assert_eq!(infos.len(), 1, "{infos:?}");
+    }
     let info = infos[0];
     let cfg = config::controller_config().unwrap();
     assert_eq!(
