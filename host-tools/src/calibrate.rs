@@ -20,6 +20,10 @@ pub fn run(what: CalibrateWhat) -> anyhow::Result<()> {
             let mut c = connect(&send)?;
             let info = calibrate::read_info(&mut c.link, &opts)?;
             println!("{}", describe(&info.calibration, &info));
+            match info.model_crc {
+                Some(crc) => println!("model {crc:04x} in use for motion waves (finrs tune)"),
+                None => println!("no model: motion waves are refused (finrs tune FIT.toml)"),
+            }
             Ok(())
         }
         CalibrateWhat::Shunts { window, send } => {

@@ -196,7 +196,8 @@ pub struct BenchRunArgs {
 /// `finrs calibrate`'s steps.
 #[derive(Subcommand)]
 pub enum CalibrateWhat {
-    /// Print the calibration in force and where it came from.
+    /// Print the calibration in force and where it came from, and the
+    /// model the board holds.
     Show(SendArgs),
     /// Stop the outputs, wait at 0 V and measure each shunt's zero.
     Shunts {
