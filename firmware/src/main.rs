@@ -162,16 +162,17 @@ mod app {
         // controller takes a calibration only then): the write overruns
         // this tick on purpose, and the periods it hides go out as dropped
         // samples, not as a missed deadline.
-        let stored = to_store.map(|calibration| {
+        let stored = to_store.is_some() || model_to_store.is_some();
+        if let Some(calibration) = to_store {
             let ok = io.store_calibration(&calibration);
             cx.shared.controller.lock(|c| c.calibration_stored(ok));
-        });
+        }
         // Likewise a model (its write's outcome is in the log only).
-        let stored = stored.or(model_to_store.map(|record| {
+        if let Some(record) = model_to_store {
             io.store_model(&record);
-        }));
+        }
         // The next period's conversion already finished: this one overran.
-        if io.deadline_missed() && stored.is_none() {
+        if io.deadline_missed() && !stored {
             cx.shared
                 .controller
                 .lock(|c| c.fault(FaultCode::MissedDeadline, None, frames));

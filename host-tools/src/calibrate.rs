@@ -120,19 +120,14 @@ pub fn tune(args: TuneArgs) -> anyhow::Result<()> {
     use anyhow::Context;
     use finrs::model::motion::{board_check, record};
     use finrs::model::params::ModelFile;
-    use finrs::recording::{Geometry, Recording};
+    use finrs::recording::Recording;
 
     let opts = CalibrateOptions {
         timeout: timeout("--timeout-s", args.timeout_s)?,
         ..CalibrateOptions::default()
     };
     let model = ModelFile::read(&args.params)?;
-    let rec = Recording::read_drive(&args.geometry_from)?;
-    let geometry = Geometry {
-        length_m: rec.meta.length_m,
-        width_m: rec.meta.width_m,
-        thickness_m: rec.meta.thickness_m,
-    };
+    let geometry = Recording::read_drive(&args.geometry_from)?.meta.geometry();
     let spec = model
         .spec_for(&geometry)
         .with_context(|| args.params.display().to_string())?;
@@ -144,7 +139,7 @@ pub fn tune(args: TuneArgs) -> anyhow::Result<()> {
     let info = calibrate::apply_model(&mut c.link, &opts, &r)?;
     println!(
         "board: model {:04x} from {} (a strip {} m long) in use for motion waves; \
-         not yet stored in flash: send it again after a reset",
+         the board stores it in flash (its log says whether the write succeeded)",
         info.model_crc.unwrap_or_default(),
         args.params.display(),
         geometry.length_m

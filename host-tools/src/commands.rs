@@ -52,12 +52,9 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         }
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
     };
-    let geometry = Geometry {
-        length_m: input.meta.length_m,
-        width_m: input.meta.width_m,
-        thickness_m: input.meta.thickness_m,
-    };
-    let spec = model.spec_for(&geometry).with_context(|| name.clone())?;
+    let spec = model
+        .spec_for(&input.meta.geometry())
+        .with_context(|| name.clone())?;
 
     let bar = ProgressBar::new(input.t_s.len() as u64);
     bar.set_style(

@@ -246,13 +246,6 @@ pub struct CheckedModel<const N: usize, const E: usize, const S: usize> {
     strip: Strip<f32, N, E, S>,
 }
 
-impl<const N: usize, const E: usize, const S: usize> CheckedModel<N, E, S> {
-    /// The record as sent.
-    pub fn record(&self) -> &ModelRecord {
-        &self.record
-    }
-}
-
 /// The model the board holds, for `N` segments of `E` elements (`S` the
 /// strip's state length, `model_core::state_len(N, E)`).
 #[derive(Clone, Debug, Default)]

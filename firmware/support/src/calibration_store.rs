@@ -1,19 +1,10 @@
-//! The calibration's records in flash: an append-only log in two erase
-//! sectors, so that a store programs 32 bytes and erases nothing until a
-//! sector is full, and a reset or power cut at any moment, an erase's
-//! included, leaves the last complete record readable.
+//! The calibration's records in flash, on the append-only log of
+//! [`crate::record_log`] (a store programs 32 bytes and erases nothing
+//! until a sector is full; a reset or power cut at any moment leaves the
+//! last complete record readable).
 //!
-//! A record is [`RECORD_LEN`] bytes at a multiple of it from the region's
-//! start: `FCAL`, a sequence number u32, the [`Calibration`] (20 bytes), a
-//! CRC-16 of those 28 bytes, two zero bytes. NOR flash programs bits from 1
-//! to 0 only, so a slot is either erased (all 0xFF), a record whose CRC
-//! checks, or damaged (a write cut short, a sector erase cut short): the
-//! calibration in force is the valid record with the highest sequence
-//! number, and the next store goes after the last slot of its sector that
-//! is not erased. When that sector is full, the other one is erased and
-//! takes the store: the newest record is never in the sector being erased
-//! (`before_erase` runs first: on the board an erase stalls the core for
-//! seconds and the watchdog must be widened).
+//! A record is [`RECORD_LEN`] bytes: `FCAL`, a sequence number u32, the
+//! [`Calibration`] (20 bytes), a CRC-16 of those 28 bytes, two zero bytes.
 //!
 //! Generic over embedded-storage's `NorFlash`, which the HAL implements for
 //! the STM32F4's flash; the tests use a fake with NOR's rules.

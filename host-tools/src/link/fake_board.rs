@@ -24,6 +24,8 @@ pub const NOMINAL_SCALE: f32 = 2.5e-5;
 pub const TRUE_SCALE: f64 = 3.1e-5;
 pub const TRUE_ZEROS: [u16; N] = [2056, 2041, 2048];
 pub const AMPS_PER_COUNT: f32 = 2.5e-4;
+/// The board's sample rate, Hz (its model's strip is discretised at it).
+const SAMPLE_HZ: u32 = 1000;
 
 /// The board's RTT up channel for frames at N = 3, bytes.
 const CHANNEL_BYTES: usize = 8192;
@@ -72,7 +74,7 @@ pub struct FakeBoard {
 impl FakeBoard {
     pub fn new(load_n: Rc<Cell<f64>>) -> Self {
         let config = Config {
-            sample_hz: 1000,
+            sample_hz: SAMPLE_HZ,
             limits: Limits::new(3.64, 200.0).unwrap(),
             calibration: Calibration {
                 newtons_per_count: NOMINAL_SCALE,
@@ -188,7 +190,7 @@ impl Board for FakeBoard {
         self.decoder.push(&bytes, &mut |e| {
             if let CommandEvent::Command(cmd) = e {
                 // A refusal changes nothing, as on the board.
-                let _ = shaper::command(cmd, shaper, 1e-3, &mut c);
+                let _ = shaper::command(cmd, shaper, 1.0 / f64::from(SAMPLE_HZ), &mut c);
             }
         });
         Ok(())
