@@ -4,7 +4,9 @@
 //! `harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..]` (each segment its own sine),
 //! `motion:TIP_AMP_M,HZ,LAG_DEG` (a travelling bending wave asked of the
 //! free tip, which only the strip's model turns into voltages:
-//! `finrs::model::motion`).
+//! `finrs::model::motion`; the board's gain tracker holds it against the
+//! strip's drift), `motion-ff:TIP_AMP_M,HZ,LAG_DEG` (the same, feed-forward
+//! only: the model's voltages as they are).
 //!
 //! [`Wave::parse`] checks the syntax only (kind, number of values, finite
 //! numbers). [`Wave::generator`] maps the wave, with its [`WaveOptions`]
@@ -65,7 +67,7 @@ pub enum WaveError {
     },
     /// No such kind.
     #[error(
-        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, motion)"
+        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, motion, motion-ff)"
     )]
     UnknownKind {
         /// The wave's text.
@@ -194,6 +196,9 @@ pub enum WaveKind {
         frequency_hz: f64,
         /// Each segment's moment behind the one before, degrees.
         lag_deg: f64,
+        /// Whether the board's gain tracker holds it (`motion:`), or the
+        /// model's voltages are driven as they are (`motion-ff:`).
+        tracked: bool,
     },
     /// Each segment its own sine (see [`Program::Harmonic`]); one pair
     /// means every segment.
@@ -328,12 +333,13 @@ impl Wave {
                     phases_deg: values[2..].iter().step_by(2).copied().collect(),
                 }
             }
-            "motion" => {
+            "motion" | "motion-ff" => {
                 need(3, "TIP_AMPLITUDE_M,FREQUENCY_HZ,LAG_DEG")?;
                 WaveKind::Motion {
                     tip_amp_m: values[0],
                     frequency_hz: values[1],
                     lag_deg: values[2],
+                    tracked: kind == "motion",
                 }
             }
             other => {
@@ -754,7 +760,7 @@ mod tests {
             ),
             (
                 "wobble:1",
-                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, motion)",
+                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, motion, motion-ff)",
             ),
             ("step:x", "wave `step:x`: `x` is not a finite number"),
             ("step:nan", "wave `step:nan`: `nan` is not a finite number"),

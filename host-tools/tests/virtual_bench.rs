@@ -87,14 +87,11 @@ fn run_chain(features: &str) -> Chain {
     let _ = std::fs::remove_dir_all(&dir);
     let session = dir.join("session");
 
-    let mut run = finrs();
-    run.args(["bench", "run"])
-        .arg(workspace().join("examples/bench/protocol.toml"))
-        .arg("--qemu")
-        .arg(&elf)
-        .arg("--out")
-        .arg(&session);
-    let log = run_ok(run, "finrs bench run --qemu");
+    let log = bench(
+        &elf,
+        &workspace().join("examples/bench/protocol.toml"),
+        &session,
+    );
     assert!(log.contains("session"), "{log}");
 
     let recordings = common::recordings_in(&session);
@@ -301,6 +298,19 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `finrs bench run PROTOCOL --qemu ELF --out OUT`, which must succeed;
+/// its log.
+fn bench(elf: &Path, protocol: &Path, out: &Path) -> String {
+    let mut run = finrs();
+    run.args(["bench", "run"])
+        .arg(protocol)
+        .arg("--qemu")
+        .arg(elf)
+        .arg("--out")
+        .arg(out);
+    run_ok(run, "finrs bench run --qemu")
+}
+
 /// An empty folder of this test run's, named `name`.
 fn fresh_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
@@ -325,10 +335,8 @@ fn merge(session: &Path, path: &Path) {
     run_ok(merge, "finrs merge-camera");
 }
 
-/// The merged free recording's tip over the last ten periods of its wave
-/// at `hz`, by lock-in: its amplitude, m, and its phase less segment 1's
-/// recorded voltage's, degrees (the command's latency cancels).
-fn tip_response(path: &Path, hz: f64) -> (f64, f64) {
+/// The merged free recording at `path` and its camera's tip column.
+fn read_with_tip(path: &Path) -> (Recording, Vec<Option<f64>>) {
     let rec = Recording::read(path).unwrap();
     let tip = rec
         .channels
@@ -336,6 +344,14 @@ fn tip_response(path: &Path, hz: f64) -> (f64, f64) {
         .find(|(c, _)| *c == Channel::TipY)
         .map(|(_, v)| v.clone())
         .expect("the camera's tip, merged");
+    (rec, tip)
+}
+
+/// The merged free recording's tip over the last ten periods of its wave
+/// at `hz`, by lock-in: its amplitude, m, and its phase less segment 1's
+/// recorded voltage's, degrees (the command's latency cancels).
+fn tip_response(path: &Path, hz: f64) -> (f64, f64) {
+    let (rec, tip) = read_with_tip(path);
     let v1: Vec<f64> = rec.v_v.rows().map(|r| r[0]).collect();
     // The wave's end: the last row driven.
     let last = v1.iter().rposition(|&v| v != 0.0).expect("a driven row");
@@ -421,14 +437,7 @@ fn a_motion_on_the_virtual_bench_moves_the_plants_tip_as_asked() {
     )
     .unwrap();
     let session = dir.join("session");
-    let mut run = finrs();
-    run.args(["bench", "run"])
-        .arg(dir.join("protocol.toml"))
-        .arg("--qemu")
-        .arg(&elf)
-        .arg("--out")
-        .arg(&session);
-    let log = run_ok(run, "finrs bench run --qemu");
+    let log = bench(&elf, &dir.join("protocol.toml"), &session);
     assert!(log.contains("in use on the board"), "{log}");
     let path = common::recordings_in(&session)
         .pop()
@@ -455,14 +464,40 @@ fn a_motion_on_the_virtual_bench_moves_the_plants_tip_as_asked() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// #16's comparison on a strip unlike its nominal model (`plant-variant`:
-/// `R1` 15 % up, `C` 10 % and the moment per charge 20 % down), no drying
-/// yet: the example protocol recorded from it on the virtual bench and
-/// fitted (`finrs fit --out`), then one protocol that drives the same
-/// motion twice: as the plain wave the nominal model shapes (the example
+/// The fit (TOML) of a strip unlike its nominal model (`plant-variant`:
+/// `R1` 15 % up, `C` 10 % and the moment per charge 20 % down): the
+/// example protocol recorded from it on the virtual bench, then `finrs fit
+/// --out`. Made once for the tests that use it (the first waits for it).
+fn variant_fit() -> &'static str {
+    static FIT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    FIT.get_or_init(|| {
+        let elf = build_firmware("qemu-serial,plant-variant");
+        let dir = fresh_dir("finrs-virtual-variant-fit");
+        let session = dir.join("session");
+        bench(
+            &elf,
+            &workspace().join("examples/bench/protocol.toml"),
+            &session,
+        );
+        let mut fit = finrs();
+        fit.arg("fit")
+            .arg(&session)
+            .arg("--out")
+            .arg(dir.join("fit.toml"));
+        run_ok(fit, "finrs fit");
+        let text = std::fs::read_to_string(dir.join("fit.toml")).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        text
+    })
+}
+
+/// #16's comparison on the `plant-variant` strip, no drying: its fit
+/// ([`variant_fit`]), then one protocol that drives the same motion
+/// twice: as the plain wave the nominal model shapes (the example
 /// session's parameters, sent as `harmonic:`), and as a motion the board
-/// shapes with the fit (`model =`). The fit's is within 5 % and 5° (the
-/// issue's targets); the nominal wave's misses by the parameter spread.
+/// shapes with the fit (`model =`), fed forward only (`motion-ff:`). The
+/// fit's is within 5 % and 5° (the issue's targets); the nominal wave's
+/// misses by the parameter spread.
 #[test]
 fn feed_forward_from_a_fit_makes_the_motion_a_nominal_wave_misses() {
     use finrs::wave::Wave;
@@ -470,29 +505,11 @@ fn feed_forward_from_a_fit_makes_the_motion_a_nominal_wave_misses() {
 
     let elf = build_firmware("qemu-serial,plant-variant");
     let dir = fresh_dir("finrs-virtual-variant");
-    let bench = |protocol: &Path, out: &Path| {
-        let mut run = finrs();
-        run.args(["bench", "run"])
-            .arg(protocol)
-            .arg("--qemu")
-            .arg(&elf)
-            .arg("--out")
-            .arg(out);
-        run_ok(run, "finrs bench run --qemu")
-    };
-    // The strip's session, and its fit.
-    let session = dir.join("session");
-    bench(&workspace().join("examples/bench/protocol.toml"), &session);
-    let mut fit = finrs();
-    fit.arg("fit")
-        .arg(&session)
-        .arg("--out")
-        .arg(dir.join("fit.toml"));
-    run_ok(fit, "finrs fit");
+    std::fs::write(dir.join("fit.toml"), variant_fit()).unwrap();
     let fitted = finrs::model::params::ModelFile::read(&dir.join("fit.toml")).unwrap();
     // The nominal model's wave for the motion, and the motion itself.
     let (tip_amp_m, hz, lag_deg) = (5e-3, 1.0, 60.0);
-    let text = format!("motion:{tip_amp_m},{hz},{lag_deg}");
+    let text = format!("motion-ff:{tip_amp_m},{hz},{lag_deg}");
     let nominal = common::baseline_air_model();
     let spec = nominal
         .spec_for(&finrs::recording::Geometry::THESIS_2006)
@@ -517,7 +534,7 @@ fn feed_forward_from_a_fit_makes_the_motion_a_nominal_wave_misses() {
     )
     .unwrap();
     let motions = dir.join("motions");
-    bench(&protocol, &motions);
+    bench(&elf, &protocol, &motions);
     let paths = common::recordings_in(&motions);
     assert_eq!(paths.len(), 2, "{paths:?}");
     let motion = Motion::Travelling {
@@ -548,6 +565,141 @@ fn feed_forward_from_a_fit_makes_the_motion_a_nominal_wave_misses() {
     assert!(
         nominal_err.0 > 0.10 && nominal_err.0 > 3.0 * fitted_err.0,
         "the nominal wave should miss by the spread: {nominal_err:?} against {fitted_err:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The merged free recording's tip against the motion asked of it,
+/// `tip_amp_m · sin(2π hz (t − t₀))` with `t₀` the wave's first driven row
+/// (the program's time 0: the tip after its first step holds the sample
+/// after it), by lock-in over each `window_s` of the `hold_s` after `t₀`:
+/// per window, the amplitude's error (a fraction) and the phase's, degrees.
+fn motion_errors(
+    path: &Path,
+    tip_amp_m: f64,
+    hz: f64,
+    hold_s: f64,
+    window_s: f64,
+) -> Vec<(f64, f64)> {
+    let (rec, tip) = read_with_tip(path);
+    let first = rec
+        .v_v
+        .rows()
+        .position(|r| r.iter().any(|&v| v != 0.0))
+        .expect("a driven row");
+    let t0 = rec.t_s[first];
+    let omega = 2.0 * std::f64::consts::PI * hz;
+    let windows = (hold_s / window_s).round() as usize;
+    (0..windows)
+        .map(|w| {
+            let (from, to) = (w as f64 * window_s, (w + 1) as f64 * window_s);
+            let (mut s, mut c, mut n) = (0.0, 0.0, 0.0);
+            for (&t, y) in rec.t_s.iter().zip(&tip) {
+                let (tau, Some(y)) = (t - t0, y) else {
+                    continue;
+                };
+                if (from..to).contains(&tau) {
+                    s += y * (omega * tau).sin();
+                    c += y * (omega * tau).cos();
+                    n += 1.0;
+                }
+            }
+            let (s, c) = (2.0 * s / n, 2.0 * c / n);
+            (s.hypot(c) / tip_amp_m - 1.0, c.atan2(s).to_degrees())
+        })
+        .collect()
+}
+
+/// #16's SIL: the strip of [`variant_fit`], fitted wet, then drying
+/// from boot (`plant-drying`: every admittance times e^{−t/300 s}, 18 %
+/// less after a minute); each from a fresh boot, 60 s of the issue's 5 mm
+/// travelling tip wave at 1 Hz: the plain voltage wave the nominal model
+/// shapes, the motion fed forward from the fit (`motion-ff:`), and the
+/// motion held by the board's gain tracker (`motion:`). The tip by
+/// lock-in over each 5 s window. Asserted: tracked, every window after the
+/// first (the tracker's estimate needs a few periods) within the issue's
+/// 5 % and 5°; the plain wave off by more than 10 % in every window; the
+/// feed-forward's worst window off by more than the tracked one's.
+#[test]
+fn a_tracked_motion_holds_on_a_drying_strip_where_feed_forward_drifts() {
+    use finrs::wave::Wave;
+
+    let elf = build_firmware("qemu-serial,plant-variant,plant-drying");
+    let dir = fresh_dir("finrs-virtual-drying");
+    std::fs::write(dir.join("fit.toml"), variant_fit()).unwrap();
+    let (tip_amp_m, hz, lag_deg, hold_s) = (5e-3, 1.0, 60.0, 60.0);
+    let motion = format!("{tip_amp_m},{hz},{lag_deg}");
+    let nominal = common::baseline_air_model();
+    let spec = nominal
+        .spec_for(&finrs::recording::Geometry::THESIS_2006)
+        .unwrap();
+    let plain = finrs::model::motion::shaped(
+        &Wave::parse(&format!("motion:{motion}")).unwrap(),
+        &spec,
+        3,
+        1000.0,
+    )
+    .unwrap()
+    .text()
+    .to_string();
+    let mut worst = Vec::new();
+    for (name, wave) in [
+        ("plain", plain),
+        ("feed_forward", format!("motion-ff:{motion}")),
+        ("tracked", format!("motion:{motion}")),
+    ] {
+        let recording = format!(
+            "[[recording]]\nname = \"{name}\"\nfixture = \"free\"\nwave = \"{wave}\"\n\
+             rest_s = 1.0\nhold_s = {hold_s}\noff_s = 0.5\n"
+        );
+        let protocol = dir.join(format!("{name}.toml"));
+        std::fs::write(&protocol, protocol_text(Some("fit.toml"), &recording)).unwrap();
+        let out = dir.join(name);
+        let log = bench(&elf, &protocol, &out);
+        let path = common::recordings_in(&out).pop().expect("one recording");
+        merge(&out, &path);
+        let errors = motion_errors(&path, tip_amp_m, hz, hold_s, 5.0);
+        let shown: Vec<String> = errors
+            .iter()
+            .map(|(a, p)| format!("{:+.1}% {:+.1}°", 100.0 * a, p))
+            .collect();
+        eprintln!("{name}: per 5 s: {}", shown.join(", "));
+        // The tracker's reports, once a period after the first.
+        let tracking = out.join("tracking").join(path.file_name().unwrap());
+        assert_eq!(
+            tracking.exists(),
+            name == "tracked",
+            "{name}: tracking file {}:\n{log}",
+            tracking.display()
+        );
+        if name == "tracked" {
+            let csv = std::fs::read_to_string(&tracking).unwrap();
+            let last = csv.lines().last().unwrap();
+            eprintln!(
+                "tracked: {} reports, the last {last}",
+                csv.lines().count() - 1
+            );
+            assert!(csv.lines().count() > 55, "{csv}");
+        }
+        let worst_after_first = errors[1..].iter().fold((0.0f64, 0.0f64), |m, &(a, p)| {
+            (m.0.max(a.abs()), m.1.max(p.abs()))
+        });
+        worst.push((name, errors, worst_after_first));
+    }
+    let (_, plain_errors, _) = &worst[0];
+    let (_, _, ff) = worst[1];
+    let (_, _, tracked) = worst[2];
+    assert!(
+        tracked.0 <= 0.05 && tracked.1 <= 5.0,
+        "tracked, worst 5 s window after the first: {tracked:?}"
+    );
+    assert!(
+        plain_errors.iter().all(|(a, _)| a.abs() > 0.10),
+        "the plain wave should miss by the spread and the drying: {plain_errors:?}"
+    );
+    assert!(
+        ff.0 > tracked.0,
+        "feed-forward {ff:?} against tracked {tracked:?}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,12 +6,13 @@ use core::fmt;
 
 use finrs_drive::{Envelope, Generator, LimitError, Limiter, Limits, Program, WaveError};
 use finrs_frames::{
-    encode_dropped, encode_fault, encode_info, encode_sample, Calibration, CalibrationOrigin,
-    Command, Dropped, Fault, FaultCode, Info, ModelRecord, ResetCause, Sample, SampleFlags,
-    DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
+    encode_dropped, encode_fault, encode_info, encode_sample, encode_tracking, Calibration,
+    CalibrationOrigin, Command, Dropped, Fault, FaultCode, Info, ModelRecord, ResetCause, Sample,
+    SampleFlags, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, INFO_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 use crate::config::{Config, ConfigError, ConfigRule};
+use crate::tracker::{self, Target, Tracker};
 
 /// The readings of one sample tick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -189,6 +190,8 @@ pub struct Controller<const N: usize> {
     model_crc: Option<u16>,
     /// A model the host set, for the board to store in flash.
     model_to_store: Option<ModelRecord>,
+    /// The gain tracker of the running motion, if it is tracked.
+    tracker: Option<Tracker<N>>,
 }
 
 /// What only the board knows of itself, for the Info frame (the rest comes
@@ -246,6 +249,7 @@ impl<const N: usize> Controller<N> {
             calibration_to_store: None,
             model_crc: None,
             model_to_store: None,
+            tracker: None,
         })
     }
 
@@ -298,6 +302,25 @@ impl<const N: usize> Controller<N> {
         self.model_to_store = Some(*record);
         self.info_pending = self.identity.is_some();
         Ok(())
+    }
+
+    /// A shaped motion (`shaper::command` calls this under the lock): its
+    /// `program` as a SetWave with `envelope` (refused as one), then held
+    /// by a gain tracker if `target` is given.
+    pub fn motion(
+        &mut self,
+        program: Program,
+        envelope: Envelope,
+        target: Option<Target<N>>,
+    ) -> Result<(), CommandRefused> {
+        self.command(Command::SetWave { program, envelope })?;
+        self.tracker = target.map(|t| Tracker::new(t, self.config.sample_hz));
+        Ok(())
+    }
+
+    /// Whether a gain tracker holds the running motion.
+    pub fn tracking(&self) -> bool {
+        self.tracker.is_some()
     }
 
     /// A model read from the board's flash at boot and checked by the
@@ -372,6 +395,7 @@ impl<const N: usize> Controller<N> {
                 };
             }
         }
+        self.track(&currents_a, input.t_us, sink);
         let (voltages_v, limiter_flags) = self.next_voltages(input.tick);
         let force_n = (f32::from(counts) - self.tare_offset_counts)
             * self.config.calibration.newtons_per_count;
@@ -424,6 +448,7 @@ impl<const N: usize> Controller<N> {
                     return Err(CommandRefused::AboveLimit { peak_v, limit_v });
                 }
                 self.generator = generator;
+                self.tracker = None;
                 self.mode = match self.mode {
                     Mode::PowerUpTare { .. } => Mode::PowerUpTare { then_run: true },
                     _ => Mode::Running { start_tick: None },
@@ -436,6 +461,7 @@ impl<const N: usize> Controller<N> {
                 })
             }
             Command::Stop => {
+                self.tracker = None;
                 self.mode = match self.mode {
                     Mode::PowerUpTare { .. } => Mode::PowerUpTare { then_run: false },
                     _ => Mode::Stopped,
@@ -596,6 +622,7 @@ impl<const N: usize> Controller<N> {
 
     fn latch(&mut self, code: FaultCode, segment: Option<u8>, t_us: u32) {
         self.fault = Some((code, segment));
+        self.tracker = None;
         self.limiter.stop();
         // After ClearFault the outputs stay at 0 until a SetWave.
         self.mode = Mode::Stopped;
@@ -605,6 +632,37 @@ impl<const N: usize> Controller<N> {
             code,
             segment,
         });
+    }
+
+    /// Feeds the running motion's tracker the voltages of the period that
+    /// just ended and the currents read at its end; at the end of each
+    /// period of the wave, drives its corrected program (within the limit
+    /// in force) and sends its Tracking frame (none if the channel is full:
+    /// the next period's is newer).
+    fn track(&mut self, currents_a: &[f32; N], t_us: u32, sink: &mut impl FrameSink) {
+        if !self.running() {
+            return;
+        }
+        let applied_v = self.limiter.last_v();
+        let Some(t) = &mut self.tracker else { return };
+        let Some(c) = t.feed(&applied_v, currents_a) else {
+            return;
+        };
+        let (program, flags) = t.program(&c, self.limiter.limits().max_abs_v());
+        match Generator::new(program, self.generator.envelope()) {
+            Ok(g) => self.generator = g,
+            // Not reached (amplitudes within the limit, the motion's
+            // frequency already checked); if it were, the model's program
+            // runs on untracked.
+            Err(_) => {
+                self.tracker = None;
+                return;
+            }
+        }
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        if let Ok(n) = encode_tracking(&tracker::frame(&c, flags, t_us), &mut buf) {
+            let _ = sink.try_write(&buf[..n]);
+        }
     }
 
     /// The tick's voltages, and the limiter's part in them

@@ -153,6 +153,7 @@ mod config;
 mod controller;
 mod output;
 pub mod shaper;
+pub mod tracker;
 
 pub use config::{Config, ConfigError, ConfigRule};
 pub use controller::{CommandRefused, Controller, FrameSink, Identity, TickInput, TickOutput};

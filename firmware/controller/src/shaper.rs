@@ -50,8 +50,9 @@
 //! // 0.2 mm at 1 Hz, 60° a segment: within the seed's strip's reach.
 //! let motion = Motion::Travelling { tip_amp_m: 2e-4, frequency_hz: 1.0, lag_deg_per_segment: 60.0 };
 //! let envelope = Envelope { ramp_in_s: 1.0, hold_s: f32::INFINITY, ramp_out_s: 1.0 };
-//! let set_motion = Command::SetMotion { motion, envelope };
+//! let set_motion = Command::SetMotion { motion, envelope, tracked: true };
 //! assert_eq!(command(set_motion, &mut shaper, 1e-3, &mut lock), Ok(Shaped::WaveSet));
+//! assert!(controller.tracking());
 //! ```
 
 use core::fmt;
@@ -64,6 +65,7 @@ use model_core::{Fixture, HarmonicError, ParamError, Strip};
 pub use rtic_core::{Exclusive, Mutex};
 
 use crate::controller::{CommandRefused, Controller};
+use crate::tracker::Target;
 
 /// Elements per segment of the board's model: one, whose cubic shape
 /// functions give a piecewise-constant moment's static deflection exactly
@@ -307,9 +309,9 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
     }
 
     /// The program that makes `motion` on the model held, each segment's
-    /// amplitude at most `limit_v`.
+    /// amplitude at most `limit_v`, and what the gain tracker holds it to.
     #[inline(never)]
-    pub fn program(&self, motion: &Motion, limit_v: f32) -> Result<Program, ShapeRefused> {
+    pub fn program(&self, motion: &Motion, limit_v: f32) -> Result<ShapedMotion<N>, ShapeRefused> {
         let model = self.model.as_ref().ok_or(ShapeRefused::NoModel)?;
         let &Motion::Travelling {
             tip_amp_m,
@@ -359,8 +361,28 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
             ramp_out_s: 0.0,
         };
         finrs_drive::Generator::<N>::new(program, steady).map_err(ShapeRefused::Wave)?;
-        Ok(program)
+        // Each segment's admittance as its shunt samples it.
+        let currents = model
+            .strip
+            .sampled_admittance(f64::from(frequency_hz))
+            .map_err(ShapeRefused::Harmonic)?;
+        let target = Target {
+            frequency_hz,
+            amplitudes_v: core::array::from_fn(|k| amplitudes_v[k]),
+            phases_deg: core::array::from_fn(|k| phases_deg[k]),
+            admittance_a_per_v: currents.map(|y| [y.re as f32, y.im as f32]),
+        };
+        Ok(ShapedMotion { program, target })
     }
+}
+
+/// A motion as the model held shapes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapedMotion<const N: usize> {
+    /// Each segment's sine ([`Program::Harmonic`]).
+    pub program: Program,
+    /// The same, with the model's admittances: what a gain tracker holds.
+    pub target: Target<N>,
 }
 
 /// What [`command`] did.
@@ -391,10 +413,15 @@ pub fn command<const N: usize, const E: usize, const S: usize>(
             shaper.install(model);
             Ok(Shaped::ModelSet)
         }
-        Command::SetMotion { motion, envelope } => {
+        Command::SetMotion {
+            motion,
+            envelope,
+            tracked,
+        } => {
             let limit_v = lock.lock(|ctl| ctl.limits().max_abs_v());
-            let program = shaper.program(&motion, limit_v)?;
-            lock.lock(|ctl| ctl.command(Command::SetWave { program, envelope }))
+            let shaped = shaper.program(&motion, limit_v)?;
+            let target = tracked.then_some(shaped.target);
+            lock.lock(|ctl| ctl.motion(shaped.program, envelope, target))
                 .map_err(ShapeRefused::Controller)?;
             Ok(Shaped::WaveSet)
         }

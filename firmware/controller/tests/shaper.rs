@@ -42,6 +42,7 @@ fn motion(tip_amp_m: f32, frequency_hz: f32, lag_deg_per_segment: f32) -> Comman
             hold_s: f32::INFINITY,
             ramp_out_s: 0.0,
         },
+        tracked: false,
     }
 }
 
@@ -69,7 +70,7 @@ fn the_shaped_voltages_move_the_models_tip_as_asked() {
         frequency_hz: 1.0,
         lag_deg_per_segment: 60.0,
     };
-    let program = shaper.program(&asked, 4.0).unwrap();
+    let program = shaper.program(&asked, 4.0).unwrap().program;
     assert!(matches!(program, Program::Harmonic { .. }));
     let steady = Envelope {
         ramp_in_s: 0.0,

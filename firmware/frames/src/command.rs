@@ -51,8 +51,9 @@ const PROGRAM_CHIRP: u8 = 5;
 const PROGRAM_HARMONIC: u8 = 6;
 
 const MOTION_TRAVELLING: u8 = 1;
-/// SetMotion's payload: the motion kind, its three f32, the envelope.
-const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN;
+/// SetMotion's payload: the motion kind, its three f32, the envelope,
+/// whether the tracker holds it.
+const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN + 1;
 
 /// Most f32 fields of a program: Harmonic's frequency, offset, and eight
 /// amplitudes and phases.
@@ -145,6 +146,10 @@ pub enum Command {
         motion: Motion,
         /// The gain over the voltages.
         envelope: Envelope,
+        /// Whether the board's gain tracker holds the motion against the
+        /// strip's drift (`finrs_controller::tracker`); else the model's
+        /// voltages are driven as they are (feed-forward only).
+        tracked: bool,
     },
 }
 
@@ -192,6 +197,8 @@ pub enum CommandError {
     BadProgramKind(u8),
     /// A SetMotion's motion kind is not 1.
     BadMotionKind(u8),
+    /// A SetMotion's tracking byte is neither 0 nor 1.
+    BadTracking(u8),
     /// The stream ended ([`CommandDecoder::finish`]) inside a frame.
     Truncated {
         /// The command kind in the header.
@@ -212,6 +219,7 @@ impl fmt::Display for CommandError {
             Self::BadCrc { kind } => write!(f, "CRC mismatch in command kind {kind:#04x}"),
             Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=6"),
             Self::BadMotionKind(m) => write!(f, "motion kind {m} is not 1"),
+            Self::BadTracking(t) => write!(f, "motion tracking byte {t} is neither 0 nor 1"),
             Self::Truncated { kind } => write!(f, "command kind {kind:#04x} cut short"),
         }
     }
@@ -266,7 +274,11 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
             w.put(&record.0);
             Ok(w.finish())
         }
-        Command::SetMotion { motion, envelope } => {
+        Command::SetMotion {
+            motion,
+            envelope,
+            tracked,
+        } => {
             let Motion::Travelling {
                 tip_amp_m,
                 frequency_hz,
@@ -284,6 +296,7 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
             ] {
                 w.put(&v.to_le_bytes());
             }
+            w.put(&[u8::from(tracked)]);
             Ok(w.finish())
         }
     }
@@ -600,6 +613,11 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                 return Err(CommandError::BadMotionKind(p[0]));
             }
             let field = |k: usize| f32_at(1 + 4 * k);
+            let tracked = match p[SET_MOTION_PAYLOAD_LEN - 1] {
+                0 => false,
+                1 => true,
+                t => return Err(CommandError::BadTracking(t)),
+            };
             Ok(Command::SetMotion {
                 motion: Motion::Travelling {
                     tip_amp_m: field(0),
@@ -611,6 +629,7 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                     hold_s: field(4),
                     ramp_out_s: field(5),
                 },
+                tracked,
             })
         }
         _ => Err(CommandError::UnknownKind(kind)),

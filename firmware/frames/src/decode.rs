@@ -3,8 +3,8 @@
 use crate::info::parse_info;
 use crate::{
     crc16, payload_len_ok, Dropped, Fault, FaultCode, Info, Sample, SampleFlags, CRC_LEN,
-    HEADER_LEN, KIND_DROPPED, KIND_FAULT, KIND_INFO, KIND_SAMPLE, MAX_FRAME_LEN, MAX_SEGMENTS,
-    NO_SEGMENT, SAMPLE_FIXED_LEN, SYNC,
+    HEADER_LEN, KIND_DROPPED, KIND_FAULT, KIND_INFO, KIND_SAMPLE, KIND_TRACKING, MAX_FRAME_LEN,
+    MAX_SEGMENTS, NO_SEGMENT, SAMPLE_FIXED_LEN, SYNC,
 };
 
 /// A decoded Sample; its segment count is known only at run time.
@@ -68,6 +68,8 @@ pub enum Event {
     Fault(Fault),
     /// The firmware says what it is and how it is set up.
     Info(Info),
+    /// The gain tracker's correction of a shaped motion.
+    Tracking(crate::Tracking),
     /// Sequence numbers jumped from `expected_seq` to `got_seq` without a
     /// Dropped report covering them; reported before the Sample or Dropped
     /// frame that carries `got_seq`. A `got_seq` behind `expected_seq` (in
@@ -272,7 +274,7 @@ impl Decoder {
             }
             Event::Fault(_) => self.stats.faults = self.stats.faults.saturating_add(1),
             Event::Info(_) => self.stats.infos = self.stats.infos.saturating_add(1),
-            Event::Gap { .. } | Event::Corrupt { .. } => {}
+            Event::Gap { .. } | Event::Corrupt { .. } | Event::Tracking(_) => {}
         }
         out(event);
     }
@@ -339,6 +341,7 @@ fn parse(kind: u8, p: &[u8]) -> Option<Event> {
             },
         })),
         KIND_INFO => parse_info(p).map(Event::Info),
+        KIND_TRACKING => Some(Event::Tracking(crate::tracking::parse_tracking(p))),
         _ => None,
     }
 }

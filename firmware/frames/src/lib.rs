@@ -12,7 +12,7 @@
 //! | offset    | bytes | field |
 //! |-----------|-------|-------|
 //! | 0         | 2     | sync: `0xF1 0x5E` |
-//! | 2         | 1     | kind: 1 Sample, 2 Dropped, 3 Fault, 4 Info |
+//! | 2         | 1     | kind: 1 Sample, 2 Dropped, 3 Fault, 4 Info, 5 Tracking |
 //! | 3         | 1     | `len`: payload length in bytes |
 //! | 4         | `len` | payload |
 //! | 4 + `len` | 2     | CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection, no final xor) over kind, `len` and payload |
@@ -43,6 +43,13 @@
 //!   a CRC-16 of the configuration (segments to `overcurrent_a`) u16. Sent
 //!   before the first Sample, on request, and after a SetCalibration or a
 //!   SetModel; it takes no sequence number.
+//! - **Tracking**, `len` = 5 + 8 N ([`Tracking`]): `t_us` u32, `flags` u8
+//!   ([`TrackingFlags`]: a correction at the tracker's bound, an amplitude
+//!   held at the voltage limit), then N gains f32 and N phases f32
+//!   (degrees): the gain tracker's correction of each segment's voltage
+//!   phasor, sent at the end of each period of a tracked motion. It takes
+//!   no sequence number; one the up channel has no room for is not sent
+//!   (the next period's says the same, newer).
 //!
 //! # Commands (down channel)
 //!
@@ -60,7 +67,7 @@
 //! | 0x86 | RequestInfo | 0 | |
 //! | 0x87 | SetCalibration | 20 | [`Calibration`]: `newtons_per_count` f32, 8 shunt zeros u16 (counts); the board stores it in flash |
 //! | 0x88 | SetModel | 238 | [`ModelRecord`]: layout version u8 (1), flags u8, 59 f32 (the fitted [`StripModel`]); the board stores it and shapes motions with it |
-//! | 0x89 | SetMotion | 25 | motion kind u8 (1 Travelling: `tip_amp_m`, `frequency_hz`, `lag_deg_per_segment` f32), then the envelope's three f32 |
+//! | 0x89 | SetMotion | 26 | motion kind u8 (1 Travelling: `tip_amp_m`, `frequency_hz`, `lag_deg_per_segment` f32), then the envelope's three f32, then tracked u8 (0 feed-forward only, 1 held by the gain tracker) |
 //!
 //! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,
 //! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
@@ -130,6 +137,7 @@ mod decode;
 mod encode;
 mod info;
 mod model;
+mod tracking;
 
 pub use calibration::{Calibration, CalibrationOrigin, CALIBRATION_LEN};
 pub use command::{
@@ -143,6 +151,7 @@ pub use model::{
     ModelFormatError, ModelRecord, StripModel, MODEL_FIELDS, MODEL_FIELD_NAMES, MODEL_FORMAT,
     MODEL_RECORD_LEN,
 };
+pub use tracking::{encode_tracking, Tracking, TrackingFlags};
 
 /// The two bytes that start every frame.
 pub const SYNC: [u8; 2] = [0xF1, 0x5E];
@@ -172,6 +181,14 @@ pub const DROPPED_FRAME_LEN: usize = HEADER_LEN + DROPPED_PAYLOAD_LEN + CRC_LEN;
 /// Length of a whole Fault frame.
 pub const FAULT_FRAME_LEN: usize = HEADER_LEN + FAULT_PAYLOAD_LEN + CRC_LEN;
 
+/// Length of a whole Tracking frame with `n` segments (1..=8).
+pub const fn tracking_frame_len(n: usize) -> usize {
+    tracking::tracking_payload_len(n).saturating_add(HEADER_LEN + CRC_LEN)
+}
+
+// The decoder's buffer holds the longest frame: a Sample's.
+const _: () = assert!(tracking_frame_len(MAX_SEGMENTS) <= MAX_FRAME_LEN);
+
 /// Length of a whole Info frame.
 pub const INFO_FRAME_LEN: usize = HEADER_LEN + info::INFO_PAYLOAD_LEN + CRC_LEN;
 
@@ -179,6 +196,7 @@ const KIND_SAMPLE: u8 = 1;
 const KIND_DROPPED: u8 = 2;
 const KIND_FAULT: u8 = 3;
 const KIND_INFO: u8 = 4;
+const KIND_TRACKING: u8 = 5;
 
 const SAMPLE_FIXED_LEN: usize = 13;
 const DROPPED_PAYLOAD_LEN: usize = 8;
@@ -201,6 +219,11 @@ const fn payload_len_ok(kind: u8, len: usize) -> bool {
         KIND_DROPPED => len == DROPPED_PAYLOAD_LEN,
         KIND_FAULT => len == FAULT_PAYLOAD_LEN,
         KIND_INFO => len == info::INFO_PAYLOAD_LEN,
+        KIND_TRACKING => {
+            len >= tracking::tracking_payload_len(1)
+                && len <= tracking::tracking_payload_len(MAX_SEGMENTS)
+                && (len - tracking::TRACKING_FIXED_LEN) % 8 == 0
+        }
         _ => false,
     }
 }

@@ -123,6 +123,7 @@ fn layout_is_as_documented() {
     for v in [0.005f32, 1.0, 60.0, 2.0, f32::INFINITY, 1.5] {
         p.extend_from_slice(&v.to_le_bytes());
     }
+    p.push(1);
     let motion = Command::SetMotion {
         motion: Motion::Travelling {
             tip_amp_m: 0.005,
@@ -134,6 +135,7 @@ fn layout_is_as_documented() {
             hold_s: f32::INFINITY,
             ramp_out_s: 1.5,
         },
+        tracked: true,
     };
     assert_eq!(frame(&motion), framed(0x89, &p));
     // A motion kind that is not 1.
@@ -141,6 +143,13 @@ fn layout_is_as_documented() {
     assert_eq!(
         decode(&framed(0x89, &p)),
         vec![CommandEvent::Refused(CommandError::BadMotionKind(2))]
+    );
+    // A tracking byte that is neither 0 nor 1.
+    p[0] = 1;
+    *p.last_mut().unwrap() = 2;
+    assert_eq!(
+        decode(&framed(0x89, &p)),
+        vec![CommandEvent::Refused(CommandError::BadTracking(2))]
     );
 }
 
@@ -449,20 +458,26 @@ fn any_command() -> BoxedStrategy<Command> {
         1 => proptest::collection::vec(any::<u8>(), MODEL_RECORD_LEN).prop_map(|b| {
             Command::SetModel(ModelRecord(b.try_into().unwrap()))
         }),
-        1 => (any_f32(), any_f32(), any_f32(), any_f32(), any_f32(), any_f32()).prop_map(
-            |(tip_amp_m, frequency_hz, lag_deg_per_segment, a, b, c)| Command::SetMotion {
+        1 => (
+            (any_f32(), any_f32(), any_f32()),
+            (any_f32(), any_f32(), any_f32()),
+            any::<bool>()
+        )
+            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), tracked)| {
+                Command::SetMotion {
                 motion: Motion::Travelling {
                     tip_amp_m,
                     frequency_hz,
                     lag_deg_per_segment,
                 },
-                envelope: Envelope {
-                    ramp_in_s: a,
-                    hold_s: b,
-                    ramp_out_s: c,
-                },
-            }
-        ),
+                    envelope: Envelope {
+                        ramp_in_s: a,
+                        hold_s: b,
+                        ramp_out_s: c,
+                    },
+                    tracked,
+                }
+            }),
     ]
     .boxed()
 }
@@ -557,7 +572,11 @@ fn bits(c: &Command) -> Vec<u32> {
             v.extend(r.0.iter().map(|&x| u32::from(x)));
             v
         }
-        Command::SetMotion { motion, envelope } => {
+        Command::SetMotion {
+            motion,
+            envelope,
+            tracked,
+        } => {
             let Motion::Travelling {
                 tip_amp_m,
                 frequency_hz,
@@ -572,6 +591,7 @@ fn bits(c: &Command) -> Vec<u32> {
                 envelope.hold_s,
                 envelope.ramp_out_s,
             ]));
+            v.push(u32::from(tracked));
             v
         }
     }

@@ -5,8 +5,9 @@ mod common;
 
 use common::*;
 use finrs_frames::{
-    crc16, encode_dropped, encode_fault, encode_sample, frame_len, Dropped, EncodeError, Fault,
-    FaultCode, Sample, SampleFlags, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
+    crc16, encode_dropped, encode_fault, encode_sample, encode_tracking, frame_len,
+    tracking_frame_len, Decoder, Dropped, EncodeError, Event, Fault, FaultCode, Sample,
+    SampleFlags, Tracking, TrackingFlags, DROPPED_FRAME_LEN, FAULT_FRAME_LEN, MAX_FRAME_LEN,
 };
 
 #[test]
@@ -72,6 +73,43 @@ fn dropped_and_fault_layout_is_as_documented() {
         [0xF1, 0x5E, 3, 10, 9, 0, 0, 0, 10, 0, 0, 0, 3, 0xFF]
     );
     assert_eq!(f[14..], crc16(&f[2..14]).to_le_bytes());
+}
+
+#[test]
+fn tracking_layout_is_as_documented_and_decodes_back() {
+    let mut t = Tracking {
+        t_us: 0x0403_0201,
+        flags: TrackingFlags(TrackingFlags::AT_LIMIT),
+        n: 2,
+        gains: [0.0; 8],
+        phases_deg: [0.0; 8],
+    };
+    t.gains[..2].copy_from_slice(&[1.0, 2.0]);
+    t.phases_deg[..2].copy_from_slice(&[-2.0, 0.5]);
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let len = encode_tracking(&t, &mut buf).unwrap();
+    assert_eq!(len, tracking_frame_len(2));
+    let body = [
+        0x05, 0x15, // kind, len = 5 + 16
+        0x01, 0x02, 0x03, 0x04, // t_us
+        0x02, // flags: at the limit
+        0x00, 0x00, 0x80, 0x3F, // gain 1.0
+        0x00, 0x00, 0x00, 0x40, // gain 2.0
+        0x00, 0x00, 0x00, 0xC0, // phase -2.0
+        0x00, 0x00, 0x00, 0x3F, // phase 0.5
+    ];
+    assert_eq!(buf[..2], [0xF1, 0x5E]);
+    assert_eq!(buf[2..len - 2], body);
+    assert_eq!(buf[len - 2..len], crc16(&body).to_le_bytes());
+    let mut got = Vec::new();
+    Decoder::new().push(&buf[..len], &mut |e| got.push(e));
+    assert_eq!(got, vec![Event::Tracking(t)]);
+    // No segment, or more than 8: refused, not written.
+    for n in [0, 9] {
+        let bad = Tracking { n, ..t };
+        assert!(encode_tracking(&bad, &mut buf).is_err(), "{n} segments");
+    }
+    assert_eq!(tracking_frame_len(8), 4 + 69 + 2);
 }
 
 /// Values that a lossy conversion would change: NaN payloads, signed zero,

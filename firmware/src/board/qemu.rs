@@ -3,7 +3,8 @@
 //!
 //! - The segment outputs feed `model_core::Strip` (the example session's parameters,
 //!   blocked fixture, stepped once per sample with the voltages the
-//!   controller commanded; with `plant-damping`, a damped strip); the load-cell ADC reads the plant's blocking
+//!   controller commanded; with `plant-damping`, a damped strip; with
+//!   `plant-drying`, one that dries from boot); the load-cell ADC reads the plant's blocking
 //!   force in counts ([`NEWTONS_PER_COUNT`], zero at
 //!   [`sim::LOAD_CELL_ZERO_COUNTS`]) with deterministic xorshift noise of at
 //!   most [`sim::LOAD_CELL_NOISE_COUNTS`] before the rounding; the shunts
@@ -363,7 +364,8 @@ impl Io {
             }
             None => self.off(),
         }
-        let applied = self.segments.map(|s| s.v);
+        let dry = drying(self.tick);
+        let applied = self.segments.map(|s| dry * s.v);
         #[cfg(feature = "qemu-serial")]
         {
             // `read` counted this period already.
@@ -423,6 +425,18 @@ impl Io {
         let x = sim::xorshift32(&mut self.noise);
         (x as f32 / u32::MAX as f32 * 2.0 - 1.0) * amplitude
     }
+}
+
+/// The `plant-drying` strip's admittance factor at sample `tick` (1
+/// without the feature): `e^{−t/τ}`, t from boot. Scaling the voltage the
+/// strip sees scales its currents and its moments alike, which is what
+/// scaling every `1/R1`, `1/R2` and `C` does.
+fn drying(tick: u64) -> f32 {
+    if !cfg!(feature = "plant-drying") {
+        return 1.0;
+    }
+    let t_s = tick as f32 / SAMPLE_HZ as f32;
+    libm::expf(-t_s / sim::PLANT_DRYING_TIME_S)
 }
 
 /// Rounds to the 12-bit ADC's range.

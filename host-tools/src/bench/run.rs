@@ -238,6 +238,7 @@ pub fn run_session(
             last_seq,
             fault_seq,
             report,
+            tracking_csv,
         } = record_one(
             board,
             &mut stream,
@@ -256,6 +257,13 @@ pub fn run_session(
         recording.write(&path)?;
         monitor.line(&format!("wrote {}: {}", path.display(), report.trim_end()));
         written.push((path, report));
+        if let Some(csv) = tracking_csv {
+            let path = write_beside(out_dir, "tracking", &step.file_name(k), &csv)?;
+            monitor.line(&format!(
+                "wrote {} (the board's gain tracker, once a period)",
+                path.display()
+            ));
+        }
         if step.fixture == Fixture::Free {
             let stretch = TrackStretch {
                 sample_hz: f64::from(info.sample_hz),
@@ -263,7 +271,7 @@ pub fn run_session(
                 length_m: protocol.geometry.length_m,
             };
             if let Some(csv) = board.camera_track(first_seq, last_seq, &stretch) {
-                let path = write_track(out_dir, &step.file_name(k), &csv)?;
+                let path = write_beside(out_dir, "tracks", &step.file_name(k), &csv)?;
                 monitor.line(&format!(
                     "wrote {} (the virtual camera, {} m per pixel: finrs merge-camera --m-per-px {})",
                     path.display(),
@@ -289,10 +297,16 @@ pub fn run_session(
     })
 }
 
-/// Writes a camera track beside the session, in `tracks/` (not among the
-/// recordings, which `finrs diagnose` reads).
-fn write_track(out_dir: &Path, file_name: &str, csv: &str) -> Result<PathBuf, BenchError> {
-    let dir = out_dir.join("tracks");
+/// Writes a file beside the session's recordings, in the folder `folder`
+/// (`tracks/`, the camera's; `tracking/`, the gain tracker's), not among
+/// the recordings, which `finrs diagnose` reads.
+fn write_beside(
+    out_dir: &Path,
+    folder: &str,
+    file_name: &str,
+    csv: &str,
+) -> Result<PathBuf, BenchError> {
+    let dir = out_dir.join(folder);
     std::fs::create_dir_all(&dir).map_err(|source| BenchError::Folder {
         dir: dir.clone(),
         source,
@@ -414,6 +428,8 @@ struct Recorded {
     fault_seq: Option<u32>,
     /// The recorder's report.
     report: String,
+    /// The gain tracker's reports as CSV, if the board sent any.
+    tracking_csv: Option<String>,
 }
 
 /// One recording: rest, wave, rest, from the stream into a recorder.
@@ -443,7 +459,7 @@ fn record_one(
     rec.event(Event::Info(*info));
     // Events before this recording's first Sample (a Dropped frame for
     // periods missed while the operator was asked) belong to no recording.
-    let first_seq = loop {
+    let (first_seq, first_t_us) = loop {
         match stream.next(board, ctx.timeout, monitor)? {
             None => return Err(ctx.stalled()),
             // A fault latched before the recording: the board would refuse
@@ -457,7 +473,7 @@ fn record_one(
             }
             Some(Event::Sample(s)) => {
                 rec.event(Event::Sample(s));
-                break s.seq;
+                break (s.seq, s.t_us);
             }
             Some(_) => {}
         }
@@ -509,6 +525,7 @@ fn record_one(
     board.send(&Command::Stop)?;
     rec.finish();
     let report = crate::link::capture::report(&rec);
+    let tracking_csv = tracking_csv(rec.tracking(), first_t_us);
     let mut recording = rec.into_recording(&step.file_name(ctx.k))?;
     let t0 = recording.t_s.first().copied().unwrap_or(0.0);
     for t in &mut recording.t_s {
@@ -541,7 +558,31 @@ fn record_one(
         last_seq: first_seq.wrapping_add(last as u32),
         fault_seq,
         report,
+        tracking_csv,
     })
+}
+
+/// The gain tracker's reports as CSV (`t_s` from the recording's first
+/// sample, its flags, each segment's gain and phase), `None` without any.
+fn tracking_csv(reports: &[finrs_frames::Tracking], first_t_us: u32) -> Option<String> {
+    let n = reports.first()?.n;
+    let mut csv = String::from("t_s,flags");
+    for what in ["gain", "phase_deg"] {
+        for k in 1..=n {
+            csv.push_str(&format!(",{what}_{k}"));
+        }
+    }
+    csv.push('\n');
+    for t in reports {
+        // The board's µs clock wraps at 2³²: the difference does not.
+        let t_s = f64::from(t.t_us.wrapping_sub(first_t_us)) / 1e6;
+        csv.push_str(&format!("{t_s},{}", t.flags.0));
+        for v in t.gains[..t.n].iter().chain(&t.phases_deg[..t.n]) {
+            csv.push_str(&format!(",{v}"));
+        }
+        csv.push('\n');
+    }
+    Some(csv)
 }
 
 #[cfg(test)]

@@ -48,6 +48,7 @@ pub fn wave_command(
         tip_amp_m,
         frequency_hz,
         lag_deg,
+        tracked,
     } = *wave.kind()
     {
         // The voltages are the board's to find; frequency and envelope
@@ -67,6 +68,7 @@ pub fn wave_command(
                 lag_deg_per_segment: lag_deg as f32,
             },
             envelope: generator.envelope(),
+            tracked,
         });
     }
     let generator = wave.generator(segments, options)?;
@@ -148,9 +150,15 @@ mod tests {
     #[test]
     fn a_motion_is_sent_for_the_board_to_shape() {
         let req = WaveRequest::new("motion:0.0002,1.5,60", 3);
-        let Command::SetMotion { motion, envelope } = request(&req).unwrap() else {
+        let Command::SetMotion {
+            motion,
+            envelope,
+            tracked,
+        } = request(&req).unwrap()
+        else {
             panic!("a SetMotion")
         };
+        assert!(tracked, "motion: is tracked");
         assert_eq!(
             motion,
             Motion::Travelling {
@@ -160,6 +168,11 @@ mod tests {
             }
         );
         assert_eq!((envelope.ramp_in_s, envelope.hold_s), (1.0, f32::INFINITY));
+        let ff = request(&WaveRequest::new("motion-ff:0.0002,1.5,60", 3)).unwrap();
+        assert!(
+            matches!(ff, Command::SetMotion { tracked: false, .. }),
+            "motion-ff: is not tracked: {ff:?}"
+        );
         let e = request(&WaveRequest::new("motion:0.0002,300,60", 3)).unwrap_err();
         assert!(
             e.to_string().starts_with("wave `motion:0.0002,300,60`: ")

@@ -100,6 +100,7 @@ pub fn shaped(
         tip_amp_m,
         frequency_hz,
         lag_deg,
+        ..
     } = wave.kind()
     else {
         return Ok(wave.clone());
@@ -177,7 +178,7 @@ fn shape(
         let mut shaper = Shaper::<N, ELEMENTS, S>::new();
         shaper.install(Shaper::check(record, dt_s)?);
         motion
-            .map(|(m, limit_v)| shaper.program(m, limit_v))
+            .map(|(m, limit_v)| shaper.program(m, limit_v).map(|s| s.program))
             .transpose()
     }
     let dt_s = 1.0 / rate_hz;

@@ -202,6 +202,39 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         })
     }
 
+    /// Each segment's admittance at `hz` as a board's shunt samples it,
+    /// A/V: the current read at the end of a sample period (with the
+    /// capacitor's voltage then) over the voltage held through that period.
+    /// [`Strip::harmonic`]'s current is the one at a period's start, with
+    /// its new voltage; the two differ by a period's turn of the
+    /// capacitor's part, a third of a degree at 1 Hz and 1 kHz, but that
+    /// part nearly cancels the instant one (`(v − v_C)/R1`), so a gain
+    /// tracker comparing them would be off by percent. Refused as
+    /// [`Strip::harmonic`] refuses.
+    ///
+    /// ```
+    /// use model_core::{Fixture, Params, Strip};
+    /// let p = Params::main_m_2006();
+    /// let strip = Strip::<f64, 1, 1, 6>::new(&p, Fixture::Free, 1e-3).unwrap();
+    /// // Slow, the double layer is charged: only the leak, 1/R2.
+    /// let y = strip.sampled_admittance(1e-3).unwrap()[0];
+    /// assert!((y.re * p.r2_ohm - 1.0).abs() < 1e-3 && y.im.abs() < 1e-6);
+    /// ```
+    pub fn sampled_admittance(&self, hz: f64) -> Result<[Phasor; N], HarmonicError> {
+        // The same checks (frequency, linear model).
+        self.harmonic(hz, &[Phasor::real(1.0); N])?;
+        let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
+        Ok(core::array::from_fn(|i| {
+            let f = |v: f64, v_c: f64| {
+                self.circuit
+                    .current(i, T::from_f64(v), T::from_f64(v_c))
+                    .to_f64()
+            };
+            let vc = self.electrics(z, i)[0];
+            Phasor::real(f(1.0, 0.0)) + (vc * z).scale(f(0.0, 1.0))
+        }))
+    }
+
     /// The voltages (phasors, V) of a travelling bending wave at `hz`:
     /// every segment's moment of one amplitude, each `lag_rad` behind the
     /// one before it (from the clamp), scaled so that the free tip moves

@@ -67,6 +67,7 @@ pub fn frame_bytes(k: &Key) -> usize {
         Key::Dropped(_) => DROPPED_FRAME_LEN,
         Key::Fault(_) => FAULT_FRAME_LEN,
         Key::Info(_) => finrs_frames::INFO_FRAME_LEN,
+        Key::Tracking { n, .. } => finrs_frames::tracking_frame_len(*n),
         Key::Gap { .. } | Key::Corrupt { .. } => 0,
     }
 }
@@ -100,6 +101,14 @@ pub enum Key {
     Fault(Fault),
     /// The Info frame's bytes, as encoded.
     Info([u8; finrs_frames::INFO_FRAME_LEN]),
+    /// The Tracking frame, its floats as bits.
+    Tracking {
+        t_us: u32,
+        flags: u8,
+        n: usize,
+        gains: [u32; 8],
+        phases: [u32; 8],
+    },
     Gap {
         expected_seq: u32,
         got_seq: u32,
@@ -127,6 +136,13 @@ pub fn key(e: &Event) -> Key {
             finrs_frames::encode_info(&i, &mut frame).unwrap();
             Key::Info(frame)
         }
+        Event::Tracking(t) => Key::Tracking {
+            t_us: t.t_us,
+            flags: t.flags.0,
+            n: t.n,
+            gains: t.gains.map(f32::to_bits),
+            phases: t.phases_deg.map(f32::to_bits),
+        },
         Event::Gap {
             expected_seq,
             got_seq,
@@ -180,6 +196,7 @@ pub fn stats_of(keys: &[Key]) -> Stats {
             Key::Dropped(d) => s.dropped_reported += u64::from(d.count),
             Key::Fault(_) => s.faults += 1,
             Key::Info(_) => s.infos += 1,
+            Key::Tracking { .. } => {}
             Key::Gap {
                 expected_seq,
                 got_seq,

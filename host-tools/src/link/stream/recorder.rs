@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode, Info, SampleFlags};
+use finrs_frames::{DecodedSample, Decoder, Event, Fault, FaultCode, Info, SampleFlags, Tracking};
 
 use super::clock::{Clock, ClockError};
 use super::refusal::Refusal;
@@ -125,6 +125,8 @@ pub struct Recorder {
     infos: Vec<Info>,
     /// Events the operator marked, at the time of the last row then, s.
     marks: Vec<Option<f64>>,
+    /// The gain tracker's reports, as they came.
+    tracking: Vec<Tracking>,
 }
 
 impl Recorder {
@@ -147,6 +149,7 @@ impl Recorder {
             summary: Summary::default(),
             infos: Vec::new(),
             marks: Vec::new(),
+            tracking: Vec::new(),
         }
     }
 
@@ -220,6 +223,7 @@ impl Recorder {
                 self.summary.corrupt_runs += 1;
                 self.summary.corrupt_bytes += skipped_bytes as u64;
             }
+            Event::Tracking(t) => self.tracking.push(t),
             Event::Info(info) => {
                 let seen = self
                     .infos
@@ -230,6 +234,11 @@ impl Recorder {
                 }
             }
         }
+    }
+
+    /// The gain tracker's reports (Tracking frames), in the order they came.
+    pub fn tracking(&self) -> &[Tracking] {
+        &self.tracking
     }
 
     /// The firmware's Info frames: the first, then any whose configuration

@@ -1,15 +1,20 @@
-//! The board's shaper for N = 3, kept out of line so that its machine code
-//! can be counted (`scripts/count-step-cycles`): checking a SetModel (the
-//! model's strip built in `f32`, and its answer to a 1 Hz sine), then the
-//! program of a SetMotion, each run ten times in QEMU.
+//! The board's shaper and gain tracker for N = 3, kept out of line so that
+//! their machine code can be counted (`scripts/count-step-cycles`):
+//! checking a SetModel (the model's strip built in `f32`, and its answer to
+//! a 1 Hz sine), then the program of a SetMotion, each run ten times in
+//! QEMU; then the tracker's share of a sample tick, 2500 ordinary ticks of
+//! a 1 Hz motion, and 100 ticks that each end a period of the wave (the
+//! worst tick: the fit's update, the corrected program, its generator and
+//! its Tracking frame).
 #![no_std]
 #![no_main]
 #![deny(missing_docs)]
 
 use cortex_m_rt::entry;
-use finrs_controller::shaper::{CheckedModel, ShapeRefused, Shaper, ELEMENTS};
-use finrs_drive::Program;
-use finrs_frames::{ModelRecord, Motion, StripModel};
+use finrs_controller::shaper::{CheckedModel, ShapeRefused, ShapedMotion, Shaper, ELEMENTS};
+use finrs_controller::tracker::{self, Correction, Target, Tracker};
+use finrs_drive::{Envelope, Generator, Program};
+use finrs_frames::{encode_tracking, ModelRecord, Motion, StripModel, MAX_FRAME_LEN};
 use finrs_qemu_tests::exit;
 use model_core::{state_len, Extensions, Params};
 
@@ -31,8 +36,37 @@ pub fn finrs_shape_check_n3(
 pub fn finrs_shape_program_n3(
     shaper: &Shaper<N, ELEMENTS, S>,
     motion: &Motion,
-) -> Result<Program, ShapeRefused> {
+) -> Result<ShapedMotion<N>, ShapeRefused> {
     shaper.program(motion, 4.0)
+}
+
+/// The tracker's share of an ordinary tick, counted.
+#[no_mangle]
+#[inline(never)]
+pub fn finrs_track_tick_n3(
+    t: &mut Tracker<N>,
+    v: &[f32; N],
+    i: &[f32; N],
+) -> Option<Correction<N>> {
+    t.feed(v, i)
+}
+
+/// The tracker's share of a tick that ends a period, counted: the
+/// controller's work then (`Controller::track`).
+#[no_mangle]
+#[inline(never)]
+pub fn finrs_track_period_end_n3(t: &mut Tracker<N>, v: &[f32; N], i: &[f32; N]) -> usize {
+    let Some(c) = t.feed(v, i) else { return 0 };
+    let (program, flags) = t.program(&c, 4.0);
+    let steady = Envelope {
+        ramp_in_s: 0.0,
+        hold_s: f32::INFINITY,
+        ramp_out_s: 0.0,
+    };
+    let made = Generator::<N>::new(program, steady).is_ok();
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let sent = encode_tracking(&tracker::frame(&c, flags, 0), &mut buf).unwrap_or(0);
+    usize::from(made) + sent
 }
 
 #[entry]
@@ -63,8 +97,38 @@ fn main() -> ! {
         // The seed's strip needs about 3.1 V on a segment for 0.2 mm at 1 Hz.
         ok &= matches!(
             finrs_shape_program_n3(&shaper, &motion),
-            Ok(Program::Harmonic { amplitudes_v, .. }) if amplitudes_v[0] > 1.0 && amplitudes_v[0] < 4.0
+            Ok(ShapedMotion { program: Program::Harmonic { amplitudes_v, .. }, .. })
+                if amplitudes_v[0] > 1.0 && amplitudes_v[0] < 4.0
         );
     }
+    let target = Target {
+        frequency_hz: 1.0,
+        amplitudes_v: [1.0, 0.8, 0.6],
+        phases_deg: [0.0, -60.0, -120.0],
+        admittance_a_per_v: [[2e-3, 1e-4]; N],
+    };
+    let (v, i) = ([0.5, -0.3, 0.2], [1e-3, -6e-4, 4e-4]);
+    let mut ordinary = Tracker::new(target, 1000);
+    let mut ends = 0;
+    for _ in 0..2500 {
+        ends += usize::from(finrs_track_tick_n3(&mut ordinary, &v, &i).is_some());
+    }
+    // 2500 ticks hold two periods' ends; the first is the settling one's.
+    ok &= ends == 1;
+    // A 1.37 kHz "wave" at 1 kHz: every tick ends a period, with the
+    // reference's phase set afresh at an angle that is not 0 (libm's fast
+    // path).
+    let mut every = Tracker::new(
+        Target {
+            frequency_hz: 1370.0,
+            ..target
+        },
+        1000,
+    );
+    let mut done = 0;
+    for _ in 0..100 {
+        done += usize::from(finrs_track_period_end_n3(&mut every, &v, &i) > 0);
+    }
+    ok &= done == 99;
     exit(ok)
 }

@@ -1,0 +1,257 @@
+//! The gain tracker (#16): holds a shaped motion where the model put it
+//! while the strip drifts from its model (it dries, or the fit was off).
+//!
+//! The model's inverse gives each segment a voltage phasor `V`; in the
+//! model its current is then `I = Y V`, `Y` the segment's admittance at
+//! the wave's frequency. The tracker measures each segment's own
+//! admittance `Ŷ` as it drives: a lock-in of the voltage the segment had
+//! and of the current it drew over each period of the wave, then a least
+//! squares fit of `I = Ŷ V` over the periods with exponential forgetting,
+//! `λ = e^{−1/M}` for a memory of `M` = [`MEMORY_PERIODS`] periods:
+//!
+//! `P ← λ P + |V|²`, `S ← λ S + I V̄`, `Ŷ = S / P`.
+//!
+//! Each segment's voltage phasor becomes the model's times `c = Y / Ŷ`,
+//! so that the segment draws the current, and so takes the charge, the
+//! model asked of it, whatever its `R1`, `R2` and `C` have become. The
+//! voltage does not enter `Ŷ`'s estimate except as the input it is: the
+//! correction changes no estimate, so nothing here can oscillate.
+//!
+//! What the currents cannot see is a change of the moment per charge (in
+//! the model, the dehydration extension's moment gain): on a free strip
+//! nothing the board measures sees it. It is the load cell's to measure in
+//! blocked runs (not done here, see docs/model.md).
+//!
+//! Bounds: a correction's gain stays within `[1/B, B]`, `B` =
+//! [`MAX_CORRECTION`] (a strip further off is not the model's: refit it),
+//! and a corrected amplitude is held at the voltage limit in force; either
+//! is flagged ([`TrackingFlags`]) in the Tracking frame sent at the end of
+//! each period. The first [`SETTLE_PERIODS`] periods after the motion
+//! starts are not used: the electrics settle from rest in them.
+//!
+//! ```
+//! use finrs_controller::tracker::{Target, Tracker};
+//! // One segment whose admittance is half the model's (its R1 doubled,
+//! // say): the tracker finds twice the model's voltage.
+//! let target = Target::<1> {
+//!     frequency_hz: 10.0,
+//!     amplitudes_v: [1.0],
+//!     phases_deg: [0.0],
+//!     admittance_a_per_v: [[0.02, 0.0]],
+//! };
+//! let mut tracker = Tracker::new(target, 1000);
+//! let mut last = None;
+//! for k in 0..1000 {
+//!     let v = libm::sinf(2.0 * core::f32::consts::PI * 10.0 * k as f32 / 1000.0);
+//!     if let Some(c) = tracker.feed(&[v], &[0.01 * v]) {
+//!         last = Some(c);
+//!     }
+//! }
+//! let c = last.unwrap();
+//! assert!((c.gains[0] - 2.0).abs() < 1e-3 && c.phases_deg[0].abs() < 0.1);
+//! ```
+
+use core::f32::consts::TAU;
+
+use finrs_drive::Program;
+use finrs_frames::{Tracking, TrackingFlags, MAX_SEGMENTS};
+
+/// The memory of the least-squares fit, periods of the wave: long enough
+/// to average the shunts' noise, short against drying (minutes).
+pub const MEMORY_PERIODS: f32 = 4.0;
+
+/// Largest gain of a correction (and 1/this the smallest).
+pub const MAX_CORRECTION: f32 = 2.0;
+
+/// Periods after the start of a motion that the fit does not use.
+pub const SETTLE_PERIODS: u32 = 1;
+
+/// What the tracker holds a motion to: the model's program and the
+/// model's admittances at its frequency (the shaper's, from the model the
+/// board holds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Target<const N: usize> {
+    /// The wave's frequency, Hz.
+    pub frequency_hz: f32,
+    /// Each segment's voltage amplitude in the model's program, V.
+    pub amplitudes_v: [f32; N],
+    /// Each segment's phase in the model's program, degrees.
+    pub phases_deg: [f32; N],
+    /// `Y`: each segment's admittance in the model at `frequency_hz`, A/V,
+    /// as (re, im) of the phasor ratio `I/V`.
+    pub admittance_a_per_v: [[f32; 2]; N],
+}
+
+/// A correction of the model's program: each segment's voltage phasor
+/// times `gains[k] · e^{j phases_deg[k]}`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Correction<const N: usize> {
+    /// `|c|` per segment.
+    pub gains: [f32; N],
+    /// `arg c` per segment, degrees.
+    pub phases_deg: [f32; N],
+    /// [`TrackingFlags::BOUNDED`] if a gain reached [`MAX_CORRECTION`].
+    pub flags: u8,
+}
+
+/// The tracker of one motion (see the module's description).
+#[derive(Clone, Copy, Debug)]
+pub struct Tracker<const N: usize> {
+    target: Target<N>,
+    /// The wave's cycles per sample.
+    cycles_per_tick: f32,
+    /// The lock-in's reference phase, cycles in [0, 1).
+    cycles: f32,
+    /// `(cos, sin)` of the reference phase, turned by `turn` each sample:
+    /// a recurrence, not a sine per sample (libm's `f32` sine works in
+    /// `f64`, soft-float on the M4F: 2300 instructions a tick); set afresh
+    /// from `cycles` at each period's end, so its rounding never builds up.
+    reference: [f32; 2],
+    /// `(cos, sin)` of a sample's turn of the reference.
+    turn: [f32; 2],
+    periods: u32,
+    /// This period's `Σ v e^{−jθ}` and `Σ i e^{−jθ}`.
+    v_sum: [[f32; 2]; N],
+    i_sum: [[f32; 2]; N],
+    /// The fit's `P` and `S`.
+    p: [f32; N],
+    s: [[f32; 2]; N],
+    /// `λ`.
+    forget: f32,
+}
+
+impl<const N: usize> Tracker<N> {
+    /// A tracker for `target` on a board sampling at `sample_hz`.
+    pub fn new(target: Target<N>, sample_hz: u32) -> Self {
+        const { assert!(N >= 1 && N <= MAX_SEGMENTS) };
+        let cycles_per_tick = target.frequency_hz / sample_hz as f32;
+        let (s, c) = libm::sincosf(TAU * cycles_per_tick);
+        Self {
+            target,
+            cycles_per_tick,
+            cycles: 0.0,
+            reference: [1.0, 0.0],
+            turn: [c, s],
+            periods: 0,
+            v_sum: [[0.0; 2]; N],
+            i_sum: [[0.0; 2]; N],
+            p: [0.0; N],
+            s: [[0.0; 2]; N],
+            forget: libm::expf(-1.0 / MEMORY_PERIODS),
+        }
+    }
+
+    /// The motion tracked.
+    pub fn target(&self) -> &Target<N> {
+        &self.target
+    }
+
+    /// One sample: `applied_v` the voltages the segments had over the
+    /// sample period that just ended, `currents_a` the currents read at
+    /// its end. At the end of each period of the wave (once the first
+    /// [`SETTLE_PERIODS`] are over), the correction from every period so
+    /// far.
+    pub fn feed(&mut self, applied_v: &[f32; N], currents_a: &[f32; N]) -> Option<Correction<N>> {
+        let [c, s] = self.reference;
+        for k in 0..N {
+            self.v_sum[k][0] += applied_v[k] * c;
+            self.v_sum[k][1] -= applied_v[k] * s;
+            self.i_sum[k][0] += currents_a[k] * c;
+            self.i_sum[k][1] -= currents_a[k] * s;
+        }
+        self.cycles += self.cycles_per_tick;
+        let [tc, ts] = self.turn;
+        self.reference = [c * tc - s * ts, s * tc + c * ts];
+        if self.cycles < 1.0 {
+            return None;
+        }
+        // A period's end: its phasors (unscaled: the scale cancels in Ŷ)
+        // go into the fit, and the next period starts from zero.
+        self.cycles -= 1.0;
+        let (s, c) = libm::sincosf(TAU * self.cycles);
+        self.reference = [c, s];
+        self.periods = self.periods.saturating_add(1);
+        let (v, i) = (self.v_sum, self.i_sum);
+        self.v_sum = [[0.0; 2]; N];
+        self.i_sum = [[0.0; 2]; N];
+        if self.periods <= SETTLE_PERIODS {
+            return None;
+        }
+        let mut out = Correction {
+            gains: [1.0; N],
+            phases_deg: [0.0; N],
+            flags: 0,
+        };
+        for k in 0..N {
+            let [vr, vi] = v[k];
+            let [ir, ii] = i[k];
+            self.p[k] = self.forget * self.p[k] + vr * vr + vi * vi;
+            // I V̄ = (ir + j ii)(vr − j vi).
+            self.s[k][0] = self.forget * self.s[k][0] + ir * vr + ii * vi;
+            self.s[k][1] = self.forget * self.s[k][1] + ii * vr - ir * vi;
+            // c = Y / Ŷ = Y P / S: no division by a small P.
+            let [sr, si] = self.s[k];
+            let den = sr * sr + si * si;
+            if den.is_nan() || den <= 0.0 {
+                // A segment not driven (or not drawing): nothing to correct.
+                continue;
+            }
+            let [yr, yi] = self.target.admittance_a_per_v[k];
+            // Y S̄ / |S|², times P.
+            let scale = self.p[k] / den;
+            let cr = (yr * sr + yi * si) * scale;
+            let ci = (yi * sr - yr * si) * scale;
+            let mut gain = libm::hypotf(cr, ci);
+            if !gain.is_finite() {
+                continue;
+            }
+            if !(1.0 / MAX_CORRECTION..=MAX_CORRECTION).contains(&gain) {
+                gain = gain.clamp(1.0 / MAX_CORRECTION, MAX_CORRECTION);
+                out.flags |= TrackingFlags::BOUNDED;
+            }
+            out.gains[k] = gain;
+            out.phases_deg[k] = libm::atan2f(ci, cr).to_degrees();
+        }
+        Some(out)
+    }
+
+    /// The model's program corrected by `c`, each amplitude held at
+    /// `limit_v`; and the flags of the Tracking frame
+    /// ([`TrackingFlags::AT_LIMIT`] if an amplitude was held).
+    pub fn program(&self, c: &Correction<N>, limit_v: f32) -> (Program, u8) {
+        let mut flags = c.flags;
+        let mut amplitudes_v = [0.0; MAX_SEGMENTS];
+        let mut phases_deg = [0.0; MAX_SEGMENTS];
+        for k in 0..N {
+            let a = self.target.amplitudes_v[k] * c.gains[k];
+            amplitudes_v[k] = if a > limit_v {
+                flags |= TrackingFlags::AT_LIMIT;
+                limit_v
+            } else {
+                a
+            };
+            phases_deg[k] = self.target.phases_deg[k] + c.phases_deg[k];
+        }
+        let program = Program::Harmonic {
+            frequency_hz: self.target.frequency_hz,
+            offset_v: 0.0,
+            amplitudes_v,
+            phases_deg,
+        };
+        (program, flags)
+    }
+}
+
+/// The Tracking frame of correction `c` (with `flags`) at `t_us`.
+pub fn frame<const N: usize>(c: &Correction<N>, flags: u8, t_us: u32) -> Tracking {
+    let mut t = Tracking {
+        t_us,
+        flags: TrackingFlags(flags),
+        n: N,
+        gains: [0.0; MAX_SEGMENTS],
+        phases_deg: [0.0; MAX_SEGMENTS],
+    };
+    t.gains[..N].copy_from_slice(&c.gains);
+    t.phases_deg[..N].copy_from_slice(&c.phases_deg);
+    t
+}

@@ -1,0 +1,252 @@
+//! The gain tracker in the controller's loop: a motion shaped by a model
+//! drives a strip that dries while it runs (every admittance down alike:
+//! the drift the tracker undoes exactly); tracked, the tip moves as asked,
+//! untracked it misses by the drying. And on a strip whose `R1` and `C`
+//! are off the model's in another proportion (which one sine cannot tell
+//! from a scale) the tracker corrects part of the error only.
+
+mod common;
+
+use common::{config, input, Channel};
+use finrs_controller::shaper::{command, Shaped, Shaper, ELEMENTS};
+use finrs_controller::tracker::MAX_CORRECTION;
+use finrs_controller::{Config, Controller};
+use finrs_drive::{Envelope, Limits};
+use finrs_frames::{Command, Event, ModelRecord, Motion, StripModel, TrackingFlags};
+use model_core::{state_len, Extensions, Fixture, Params, Phasor, Strip};
+use rtic_core::Exclusive;
+
+const N: usize = 3;
+const S: usize = state_len(N, ELEMENTS);
+const HZ: u32 = 1000;
+const TIP_M: f64 = 1e-4;
+
+/// The seed's `main.m` strip, damped.
+fn model() -> StripModel {
+    StripModel {
+        params: Params::main_m_2006(),
+        extensions: Extensions {
+            damping_ratio: 0.05,
+            ..Extensions::NONE
+        },
+        dehydration_per_s: 0.0,
+        dehydration_curvature: 0.0,
+    }
+}
+
+/// Shunts fine enough that their rounding is noise, not a bias; a 4 V
+/// limit.
+fn fine_config() -> Config {
+    Config {
+        amps_per_count: 2e-5,
+        overcurrent_a: 0.04,
+        limits: Limits::new(4.0, 100.0).unwrap(),
+        ..config()
+    }
+}
+
+/// What a run measured: the tip's phasor over the last 10 s (asked: `TIP_M`
+/// at phase 0) and the Tracking frames sent.
+struct Run {
+    tip: Phasor,
+    tracking: Vec<finrs_frames::Tracking>,
+}
+
+/// 60 s of `motion:TIP_M,1,60` (tracked or not) from `model()` on a free
+/// strip whose `R1` and `C` are the model's times `r1` and `c`, drying as
+/// it runs if `drying`: every admittance down by 0.3 % a second (applied
+/// as the voltage it sees, which scales `1/R1`, `1/R2` and `C` alike).
+fn run(tracked: bool, (r1, c_factor): (f64, f64), drying: bool) -> Run {
+    let mut c = Controller::<N>::new(fine_config()).unwrap();
+    let mut ch = Channel::default();
+    let zero = [2048u16; N];
+    let mut tick = 0u64;
+    while c.taring() {
+        c.tick(&input(tick, 1000, zero), &mut ch);
+        tick += 1;
+    }
+    let mut shaper = Shaper::<N, ELEMENTS, S>::new();
+    let record = ModelRecord::encode(&model());
+    let motion = Command::SetMotion {
+        motion: Motion::Travelling {
+            tip_amp_m: TIP_M as f32,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 60.0,
+        },
+        envelope: Envelope {
+            ramp_in_s: 0.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        },
+        tracked,
+    };
+    {
+        let mut lock = Exclusive(&mut c);
+        let set = Command::SetModel(record);
+        assert_eq!(
+            command(set, &mut shaper, 1e-3, &mut lock),
+            Ok(Shaped::ModelSet)
+        );
+        assert_eq!(
+            command(motion, &mut shaper, 1e-3, &mut lock),
+            Ok(Shaped::WaveSet)
+        );
+    }
+    assert_eq!(c.tracking(), tracked);
+    let m = model();
+    let params = Params {
+        r1_ohm: m.params.r1_ohm * r1,
+        c_f: m.params.c_f * c_factor,
+        ..m.params
+    };
+    let plant = Strip::<f64, N, 4, { state_len(N, 4) }>::with_extensions(
+        &params,
+        &m.extensions,
+        Fixture::Free,
+        1.0 / f64::from(HZ),
+    )
+    .unwrap();
+    let mut x = plant.rest();
+    let mut currents = [0.0f64; N];
+    let steps = 60 * u64::from(HZ);
+    let theta = 2.0 * core::f64::consts::PI / f64::from(HZ);
+    let mut tip = Phasor::ZERO;
+    let amps_per_count = f64::from(fine_config().amps_per_count);
+    for k in 0..steps {
+        let counts = currents.map(|i| (2048.0 + i / amps_per_count).round() as u16);
+        let out = c.tick(&input(tick + k, 1000, counts), &mut ch);
+        // The program's time 0 is this run's first tick.
+        let dry = if drying {
+            1.0 - 0.003 * k as f64 / f64::from(HZ)
+        } else {
+            1.0
+        };
+        let v = out.voltages_v.map(|v| dry * f64::from(v));
+        plant.step(&mut x, &v);
+        currents = plant.currents_a(&x, &v);
+        // The tip after step k holds the sample at k + 1.
+        if k + 1 >= steps - 10 * u64::from(HZ) {
+            let y = plant.tip_deflection_m(&x);
+            tip += Phasor::unit(-theta * (k + 1) as f64).scale(2.0 * y / 10_000.0);
+        }
+    }
+    let tracking = ch
+        .take_events()
+        .into_iter()
+        .filter_map(|e| match e {
+            Event::Tracking(t) => Some(t),
+            _ => None,
+        })
+        .collect();
+    Run { tip, tracking }
+}
+
+/// The tip's amplitude error (fraction) and phase error, degrees.
+fn err(r: &Run) -> (f64, f64) {
+    (
+        r.tip.amplitude() / TIP_M - 1.0,
+        r.tip.sine_phase_rad().to_degrees(),
+    )
+}
+
+#[test]
+fn a_tracked_motion_holds_its_tip_on_a_drying_strip() {
+    let tracked = run(true, (1.0, 1.0), true);
+    let plain = run(false, (1.0, 1.0), true);
+    let (a, p) = err(&tracked);
+    let (a0, p0) = err(&plain);
+    eprintln!(
+        "drying, last 10 of 60 s: tracked {:+.2} % {p:+.2}°, untracked {:+.2} % {p0:+.2}°",
+        100.0 * a,
+        100.0 * a0
+    );
+    // The fit's memory lags the drying: about (4 + ½) periods of 0.3 %/s.
+    assert!(a.abs() < 0.02 && p.abs() < 0.5, "tracked: {a} {p}°");
+    // The drying's 0.835 over the last 10 s.
+    assert!(a0 < -0.12, "untracked should miss: {a0} {p0}°");
+    // One Tracking frame a period after the first (59 of 60 s), none
+    // bounded or held at the limit; its gains undo the drying: at 60 s
+    // the strip draws 0.82 of what it drew at the start (the last
+    // estimate, a few periods' memory, a little less).
+    assert!(plain.tracking.is_empty());
+    assert!(
+        (58..=60).contains(&tracked.tracking.len()),
+        "{} frames",
+        tracked.tracking.len()
+    );
+    let last = tracked.tracking.last().unwrap();
+    assert_eq!(last.n, N);
+    assert!(!last.flags.has(TrackingFlags::BOUNDED) && !last.flags.has(TrackingFlags::AT_LIMIT));
+    for &g in &last.gains[..N] {
+        assert!(
+            (g * 0.82 - 1.0).abs() < 0.02 && g < MAX_CORRECTION,
+            "{:?}",
+            last.gains
+        );
+    }
+}
+
+/// `R1` 25 % up and `C` 15 % down, no drying: at 1 Hz most of this
+/// strip's current is the leak through `R2`, which one sine cannot tell
+/// from the double layer's, so holding the current holds the charge only
+/// in part. Measured: −13.0 % tracked against −15.0 % untracked (see
+/// docs/model.md); asserted: smaller, and of the same sign.
+#[test]
+fn off_the_scale_family_the_tracker_corrects_in_part() {
+    let (a, p) = err(&run(true, (1.25, 0.85), false));
+    let (a0, p0) = err(&run(false, (1.25, 0.85), false));
+    eprintln!(
+        "R1 +25 %, C -15 %: tracked {:+.2} % {p:+.2}°, untracked {:+.2} % {p0:+.2}°",
+        100.0 * a,
+        100.0 * a0
+    );
+    assert!(a0 < -0.1 && a < 0.0 && a > a0, "{a} against {a0}");
+}
+
+/// Unit test of the estimator alone: a known admittance ratio with a phase
+/// is found within a period, whatever the reference phase of the lock-in.
+#[test]
+fn the_tracker_finds_a_complex_admittance_ratio() {
+    use finrs_controller::tracker::{Target, Tracker};
+    // The model: 20 mA/V in phase; the strip: 10 mA/V leading by 30°.
+    let target = Target::<2> {
+        frequency_hz: 2.5,
+        amplitudes_v: [1.0, 0.5],
+        phases_deg: [0.0, -90.0],
+        admittance_a_per_v: [[0.02, 0.0], [0.02, 0.0]],
+    };
+    let mut t = Tracker::new(target, 1000);
+    let lead = 30f32.to_radians();
+    let mut last = None;
+    for k in 0..2000 {
+        let w = 2.0 * core::f32::consts::PI * 2.5 * k as f32 / 1000.0 + 0.7;
+        let v = [w.sin(), 0.5 * (w - core::f32::consts::FRAC_PI_2).sin()];
+        let i = [
+            0.01 * (w + lead).sin(),
+            0.005 * (w - core::f32::consts::FRAC_PI_2 + lead).sin(),
+        ];
+        if let Some(c) = t.feed(&v, &i) {
+            last = Some(c);
+        }
+    }
+    let c = last.unwrap();
+    for k in 0..2 {
+        assert!((c.gains[k] - 2.0).abs() < 2e-3, "{c:?}");
+        assert!((c.phases_deg[k] + 30.0).abs() < 0.1, "{c:?}");
+    }
+    // The corrected program: twice the amplitude, 30° later; at a 1.5 V
+    // limit the first segment is held there and flagged.
+    let (p, flags) = t.program(&c, 1.5);
+    let finrs_drive::Program::Harmonic {
+        amplitudes_v,
+        phases_deg,
+        ..
+    } = p
+    else {
+        panic!("{p:?}")
+    };
+    assert_eq!(amplitudes_v[0], 1.5);
+    assert!((amplitudes_v[1] - 1.0).abs() < 2e-3);
+    assert!((phases_deg[1] + 120.0).abs() < 0.1, "{phases_deg:?}");
+    assert!(TrackingFlags(flags).has(TrackingFlags::AT_LIMIT));
+}
