@@ -145,6 +145,13 @@ pub fn structure_of(s: &Scenario) -> anyhow::Result<Vec<&'static str>> {
         .collect())
 }
 
+/// The scenario's strip as its session draws it (its sample and what it
+/// hides), for runs beyond the session (`rig-motion`).
+pub fn strip_of(s: &Scenario) -> anyhow::Result<(Sample, Hidden)> {
+    let d = draw(s)?;
+    Ok((d.sample, d.hidden))
+}
+
 /// Writes the scenario's session into `dir` and says what a right
 /// diagnosis of it names.
 pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
