@@ -250,3 +250,124 @@ fn the_tracker_finds_a_complex_admittance_ratio() {
     assert!((phases_deg[1] + 120.0).abs() < 0.1, "{phases_deg:?}");
     assert!(TrackingFlags(flags).has(TrackingFlags::AT_LIMIT));
 }
+
+/// A controller past its tare with `model()` held and a tracked motion of
+/// `tip_m` set under a limit of `limit_v`; its channel and next tick.
+fn tracking_controller(tip_m: f32, limit_v: f32) -> (Controller<N>, Channel, u64) {
+    let mut c = Controller::<N>::new(Config {
+        limits: Limits::new(limit_v, 100.0).unwrap(),
+        ..fine_config()
+    })
+    .unwrap();
+    let mut ch = Channel::default();
+    let mut tick = 0;
+    while c.taring() {
+        c.tick(&input(tick, 1000, [2048; N]), &mut ch);
+        tick += 1;
+    }
+    let mut shaper = Shaper::<N, ELEMENTS, S>::new();
+    let mut lock = Exclusive(&mut c);
+    command(
+        Command::SetModel(ModelRecord::encode(&model())),
+        &mut shaper,
+        1e-3,
+        &mut lock,
+    )
+    .unwrap();
+    let motion = Command::SetMotion {
+        motion: Motion::Travelling {
+            tip_amp_m: tip_m,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 60.0,
+        },
+        envelope: Envelope {
+            ramp_in_s: 0.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        },
+        tracked: true,
+    };
+    command(motion, &mut shaper, 1e-3, &mut lock).unwrap();
+    assert!(c.tracking());
+    (c, ch, tick)
+}
+
+/// Stop, a plain wave and a fault each end the tracking; nothing is
+/// tracked afterwards.
+#[test]
+fn stop_a_plain_wave_or_a_fault_ends_the_tracking() {
+    let (mut c, _, _) = tracking_controller(1e-4, 4.0);
+    c.command(Command::Stop).unwrap();
+    assert!(!c.tracking());
+
+    let (mut c, _, _) = tracking_controller(1e-4, 4.0);
+    let (program, envelope) = finrs_drive::default_program();
+    c.command(Command::SetWave { program, envelope }).unwrap();
+    assert!(!c.tracking());
+
+    let (mut c, mut ch, _) = tracking_controller(1e-4, 4.0);
+    c.fault(finrs_frames::FaultCode::MissedDeadline, None, &mut ch);
+    assert!(!c.tracking());
+}
+
+/// A strip that draws a third of the model's current: the correction
+/// reaches its ×2 bound, and, the limit low, each corrected amplitude is
+/// held at the limit; both flagged, and no output ever beyond the limit.
+#[test]
+fn a_correction_is_bounded_and_never_drives_past_the_limit() {
+    let limit_v = 2.5;
+    let (mut c, mut ch, tick) = tracking_controller(1.2e-4, limit_v);
+    // The model's voltages are within the limit, twice them are not.
+    let finrs_drive::Program::Harmonic { amplitudes_v, .. } = c.generator().program() else {
+        panic!("a harmonic program")
+    };
+    let needs_v = amplitudes_v[..N].iter().fold(0.0f32, |m, &a| m.max(a));
+    assert!(needs_v <= limit_v && 2.0 * needs_v > limit_v, "{needs_v} V");
+    let m = model();
+    let plant = Strip::<f64, N, 1, { state_len(N, 1) }>::with_extensions(
+        &m.params,
+        &m.extensions,
+        Fixture::Free,
+        1e-3,
+    )
+    .unwrap();
+    let mut x = plant.rest();
+    let mut currents = [0.0f64; N];
+    let amps_per_count = f64::from(fine_config().amps_per_count);
+    let mut peak = 0.0f32;
+    for k in 0..10_000 {
+        let counts = currents.map(|i| (2048.0 + i / amps_per_count).round() as u16);
+        let out = c.tick(&input(tick + k, 1000, counts), &mut ch);
+        peak = out.voltages_v.iter().fold(peak, |p, v| p.max(v.abs()));
+        // A third of the voltage: a third of every current and moment.
+        let v = out.voltages_v.map(|v| f64::from(v) / 3.0);
+        plant.step(&mut x, &v);
+        currents = plant.currents_a(&x, &v);
+    }
+    assert!(peak <= limit_v, "peak {peak} V");
+    let last = ch
+        .take_events()
+        .into_iter()
+        .rev()
+        .find_map(|e| match e {
+            Event::Tracking(t) => Some(t),
+            _ => None,
+        })
+        .expect("Tracking frames");
+    assert!(
+        last.flags.has(TrackingFlags::BOUNDED) && last.flags.has(TrackingFlags::AT_LIMIT),
+        "{last:?}"
+    );
+    assert!(
+        last.gains[..N].iter().all(|&g| g == MAX_CORRECTION),
+        "{last:?}"
+    );
+    let finrs_drive::Program::Harmonic { amplitudes_v, .. } = c.generator().program() else {
+        panic!("a harmonic program")
+    };
+    assert!(amplitudes_v[..N].contains(&limit_v), "{amplitudes_v:?}");
+    assert!(
+        amplitudes_v[..N].iter().all(|&a| a <= limit_v),
+        "{amplitudes_v:?}"
+    );
+}
