@@ -366,8 +366,16 @@ impl FirmwareWaveArgs {
 pub struct WaveArgs {
     /// step:V[,V..], sine:AMP,HZ,LAG_DEG, chirp:AMP,HZ0,HZ1,
     /// pulses:AMP,ON_S,OFF_S, standing:AMP,HZ or
-    /// harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..] (each segment its own sine).
+    /// harmonic:HZ,AMP,PHASE_DEG[,AMP,PHASE_DEG..] (each segment its own
+    /// sine), motion:TIP_AMP_M,HZ,LAG_DEG (shaped by the board's model and
+    /// held by its gain tracker) or motion-ff:TIP_AMP_M,HZ,LAG_DEG (fed
+    /// forward only).
     pub wave: String,
+    /// For a motion: when it starts on the clock of the model's drying law
+    /// (the session's, from its first recording), s; needed when the
+    /// model the board holds dries.
+    #[arg(long)]
+    pub session_s: Option<f64>,
     #[command(flatten)]
     pub shaping: FirmwareWaveArgs,
     #[command(flatten)]
@@ -611,6 +619,10 @@ pub struct SimulateArgs {
     /// `finrs wave`, evaluated by the firmware's generator).
     #[arg(long)]
     pub wave: Option<String>,
+    /// For a motion whose model dries: when it starts on the session's
+    /// clock, s (the board's shaper needs it).
+    #[arg(long)]
+    pub session_s: Option<f64>,
     #[command(flatten)]
     pub drive: SimWaveArgs,
     /// Parameter file (TOML); default: the main_m_2006 preset.

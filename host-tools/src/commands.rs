@@ -46,7 +46,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         }
         (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
         (None, Some(spec)) => {
-            let (rec, tip) = wave_recording(spec, &args.drive, &model)?;
+            let (rec, tip) = wave_recording(spec, &args.drive, &model, args.session_s)?;
             asked_tip_m = tip;
             (spec.clone(), rec)
         }
@@ -115,6 +115,7 @@ fn wave_recording(
     spec: &str,
     args: &SimWaveArgs,
     model: &ModelFile,
+    session_s: Option<f64>,
 ) -> anyhow::Result<(Recording, Option<Vec<Option<f64>>>)> {
     let wave = Wave::parse(spec)?;
     let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
@@ -144,7 +145,7 @@ fn wave_recording(
     let shaped = match wave.kind() {
         WaveKind::Motion { .. } => {
             let spec = model.spec_for(&Geometry::THESIS_2006)?;
-            let shaped = motion::shaped(&wave, &spec, drive.segments, drive.rate_hz)?;
+            let shaped = motion::shaped(&wave, &spec, drive.segments, drive.rate_hz, session_s)?;
             eprintln!("{} is {}", wave.text(), shaped.text());
             shaped
         }
@@ -536,6 +537,10 @@ impl Drop for StatusLine {
 pub fn wave(args: WaveArgs) -> anyhow::Result<()> {
     // Refused here, before any probe is looked for.
     let command = firmware_wave(&args.wave, &args.shaping)?;
+    let command = match args.session_s {
+        Some(t) => finrs::link::command::at_session_time(command, t),
+        None => command,
+    };
     send(&args.send, &command)
 }
 

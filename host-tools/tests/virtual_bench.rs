@@ -395,7 +395,7 @@ fn shaped_phase_deg(file: &finrs::model::params::ModelFile, motion: &finrs_frame
         .spec_for(&finrs::recording::Geometry::THESIS_2006)
         .unwrap();
     let record = finrs::model::motion::record(&spec);
-    match finrs::model::motion::board_program(&record, 3, 1000.0, motion, 4.0).unwrap() {
+    match finrs::model::motion::board_program(&record, 3, 1000.0, motion, 4.0, f32::NAN).unwrap() {
         finrs_drive::Program::Harmonic { phases_deg, .. } => f64::from(phases_deg[0]),
         other => panic!("{other:?}"),
     }
@@ -514,7 +514,7 @@ fn feed_forward_from_a_fit_makes_the_motion_a_nominal_wave_misses() {
     let spec = nominal
         .spec_for(&finrs::recording::Geometry::THESIS_2006)
         .unwrap();
-    let plain = finrs::model::motion::shaped(&Wave::parse(&text).unwrap(), &spec, 3, 1000.0)
+    let plain = finrs::model::motion::shaped(&Wave::parse(&text).unwrap(), &spec, 3, 1000.0, None)
         .unwrap()
         .text()
         .to_string();
@@ -638,6 +638,7 @@ fn a_tracked_motion_holds_on_a_drying_strip_where_feed_forward_drifts() {
         &spec,
         3,
         1000.0,
+        None,
     )
     .unwrap()
     .text()

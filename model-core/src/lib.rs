@@ -24,6 +24,7 @@
 mod beam;
 mod beam_modes;
 mod circuit;
+mod drying;
 mod extensions;
 pub mod matrix;
 mod params;
@@ -36,6 +37,7 @@ pub mod zoh;
 
 pub use beam_modes::BeamModes;
 pub use circuit::Circuit;
+pub use drying::drying_gain;
 pub use extensions::{Extensions, ModalDamping, SegmentVariation, DAMPED_MODES, MAX_SEGMENTS};
 pub use params::{Laminate, ParamError, Params};
 pub use phasor::Phasor;

@@ -50,7 +50,7 @@
 //! // 0.2 mm at 1 Hz, 60° a segment: within the seed's strip's reach.
 //! let motion = Motion::Travelling { tip_amp_m: 2e-4, frequency_hz: 1.0, lag_deg_per_segment: 60.0 };
 //! let envelope = Envelope { ramp_in_s: 1.0, hold_s: f32::INFINITY, ramp_out_s: 1.0 };
-//! let set_motion = Command::SetMotion { motion, envelope, tracked: true };
+//! let set_motion = Command::SetMotion { motion, envelope, t_session_s: f32::NAN, tracked: true };
 //! assert_eq!(command(set_motion, &mut shaper, 1e-3, &mut lock), Ok(Shaped::WaveSet));
 //! assert!(controller.tracking());
 //! ```
@@ -58,14 +58,14 @@
 use core::fmt;
 
 use finrs_drive::{Envelope, Program, WaveError};
-use finrs_frames::{Command, ModelFormatError, ModelRecord, Motion};
+use finrs_frames::{Command, ModelFormatError, ModelRecord, Motion, StripModel};
 use model_core::{Fixture, HarmonicError, ParamError, Strip};
 /// The lock [`command`] takes the controller through (RTIC's), and its
 /// plain form for a controller owned outright.
 pub use rtic_core::{Exclusive, Mutex};
 
 use crate::controller::{CommandRefused, Controller};
-use crate::tracker::Target;
+use crate::tracker::{Drying, Target};
 
 /// Elements per segment of the board's model: one, whose cubic shape
 /// functions give a piecewise-constant moment's static deflection exactly
@@ -114,6 +114,9 @@ pub enum ShapeRefused {
     },
     /// SetMotion: the voltages break a wave rule (field and rule).
     Wave(WaveError),
+    /// SetMotion without its session time, on a model that dries: the
+    /// moment it would drive for is unknown.
+    NoSessionTime,
     /// The controller refused what the model gave (a fault latched, the
     /// outputs driven while a model was sent, …).
     Controller(CommandRefused),
@@ -140,6 +143,7 @@ impl fmt::Display for ShapeRefused {
                 reachable_m,
             } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
             Self::Wave(e) => write!(f, "SetMotion refused: {e}"),
+            Self::NoSessionTime => f.write_str(NO_SESSION_TIME),
             Self::Controller(e) => write!(f, "{e}"),
         }
     }
@@ -148,6 +152,9 @@ impl fmt::Display for ShapeRefused {
 impl core::error::Error for ShapeRefused {}
 
 const NO_MODEL: &str = "SetMotion refused: no model (finrs tune FIT.toml first)";
+
+const NO_SESSION_TIME: &str = "SetMotion refused: the model dries (dehydration_per_s), and the \
+     motion came without its session time (finrs wave --session-s)";
 
 fn too_many(f: &mut fmt::Formatter<'_>, n: usize) -> fmt::Result {
     write!(
@@ -235,6 +242,7 @@ impl fmt::Display for Brief<'_> {
                 reachable_m,
             } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
             ShapeRefused::Wave(e) => write!(f, "SetMotion refused: {e}"),
+            ShapeRefused::NoSessionTime => f.write_str(NO_SESSION_TIME),
             ShapeRefused::Controller(e) => write!(f, "{e}"),
         }
     }
@@ -246,6 +254,9 @@ impl fmt::Display for Brief<'_> {
 pub struct CheckedModel<const N: usize, const E: usize, const S: usize> {
     record: ModelRecord,
     strip: Strip<f32, N, E, S>,
+    /// The drying law's rate, 1/s (0: the model does not dry), and
+    /// curvature.
+    drying: (f64, f64),
 }
 
 /// The model the board holds, for `N` segments of `E` elements (`S` the
@@ -273,19 +284,20 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         if N > MAX_SHAPED_SEGMENTS {
             return Err(ShapeRefused::TooManySegments(N));
         }
-        let strip = Self::build(record, dt_s)?;
+        let m = record.decode().map_err(ShapeRefused::Format)?;
+        let strip = Self::build(&m, dt_s)?;
         if CHECK_HZ < 0.5 / dt_s {
             Self::answers(&strip)?;
         }
         Ok(CheckedModel {
             record: *record,
             strip,
+            drying: (m.dehydration_per_s, m.dehydration_curvature),
         })
     }
 
     #[inline(never)]
-    fn build(record: &ModelRecord, dt_s: f64) -> Result<Strip<f32, N, E, S>, ShapeRefused> {
-        let m = record.decode().map_err(ShapeRefused::Format)?;
+    fn build(m: &StripModel, dt_s: f64) -> Result<Strip<f32, N, E, S>, ShapeRefused> {
         Strip::<f32, N, E, S>::with_extensions(&m.params, &m.extensions, Fixture::Free, dt_s)
             .map_err(ShapeRefused::Model)
     }
@@ -308,11 +320,33 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         self.model.as_ref().map(|m| &m.record)
     }
 
-    /// The program that makes `motion` on the model held, each segment's
-    /// amplitude at most `limit_v`, and what the gain tracker holds it to.
+    /// The program that makes `motion` on the model held, starting at
+    /// `t_session_s` on the clock of its drying law (a model that does not
+    /// dry takes any, NaN too), each segment's amplitude at most `limit_v`;
+    /// and what the controller holds it to (the model's admittances, the
+    /// drying law).
     #[inline(never)]
-    pub fn program(&self, motion: &Motion, limit_v: f32) -> Result<ShapedMotion<N>, ShapeRefused> {
+    pub fn program(
+        &self,
+        motion: &Motion,
+        limit_v: f32,
+        t_session_s: f32,
+    ) -> Result<ShapedMotion<N>, ShapeRefused> {
         let model = self.model.as_ref().ok_or(ShapeRefused::NoModel)?;
+        let (rate_per_s, curvature) = model.drying;
+        let drying = if rate_per_s == 0.0 {
+            None
+        } else if t_session_s.is_finite() && t_session_s >= 0.0 {
+            Some(Drying {
+                rate_per_s,
+                curvature,
+                t_start_s: f64::from(t_session_s),
+            })
+        } else {
+            return Err(ShapeRefused::NoSessionTime);
+        };
+        // The strip's moment gain is 1; dried, every voltage is 1/g.
+        let g0 = drying.map_or(1.0, |d| d.gain(0.0));
         let &Motion::Travelling {
             tip_amp_m,
             frequency_hz,
@@ -328,8 +362,10 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
             .map_err(ShapeRefused::Harmonic)?;
         let mut amplitudes_v = [0.0f32; 8];
         let mut phases_deg = [0.0f32; 8];
+        let mut undried_v = [0.0f32; N];
         for (k, p) in v.iter().enumerate() {
-            amplitudes_v[k] = p.amplitude() as f32;
+            undried_v[k] = p.amplitude() as f32;
+            amplitudes_v[k] = (p.amplitude() / g0) as f32;
             phases_deg[k] = p.sine_phase_rad().to_degrees() as f32;
         }
         // The f32 amplitudes, as the generator and the controller's limit
@@ -368,9 +404,11 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
             .map_err(ShapeRefused::Harmonic)?;
         let target = Target {
             frequency_hz,
-            amplitudes_v: core::array::from_fn(|k| amplitudes_v[k]),
+            amplitudes_v: undried_v,
             phases_deg: core::array::from_fn(|k| phases_deg[k]),
             admittance_a_per_v: currents.map(|y| [y.re as f32, y.im as f32]),
+            track_currents: false,
+            drying,
         };
         Ok(ShapedMotion { program, target })
     }
@@ -381,7 +419,9 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
 pub struct ShapedMotion<const N: usize> {
     /// Each segment's sine ([`Program::Harmonic`]).
     pub program: Program,
-    /// The same, with the model's admittances: what a gain tracker holds.
+    /// The same undried, with the model's admittances and drying law:
+    /// what the controller holds it to (its `track_currents` false: the
+    /// command says).
     pub target: Target<N>,
 }
 
@@ -416,11 +456,17 @@ pub fn command<const N: usize, const E: usize, const S: usize>(
         Command::SetMotion {
             motion,
             envelope,
+            t_session_s,
             tracked,
         } => {
             let limit_v = lock.lock(|ctl| ctl.limits().max_abs_v());
-            let shaped = shaper.program(&motion, limit_v)?;
-            let target = tracked.then_some(shaped.target);
+            let shaped = shaper.program(&motion, limit_v, t_session_s)?;
+            let target = Target {
+                track_currents: tracked,
+                ..shaped.target
+            };
+            // Held when tracked, or while the model dries; else as shaped.
+            let target = (tracked || target.drying.is_some()).then_some(target);
             lock.lock(|ctl| ctl.motion(shaped.program, envelope, target))
                 .map_err(ShapeRefused::Controller)?;
             Ok(Shaped::WaveSet)

@@ -22,6 +22,16 @@
 //! nothing the board measures sees it. It is the load cell's to measure in
 //! blocked runs (not done here, see docs/model.md).
 //!
+//! The drying law: where the model dries (the record's
+//! `dehydration_per_s`), the moment gain it predicts falls over the
+//! session, `g(t)` ([`model_core::drying_gain`]); the shaper drives the
+//! motion's start with `1/g(t₀)` and at each period's end the tracker
+//! multiplies every correction by `1/g(t)`, `t` the session time then (the
+//! motion's start, as the SetMotion said, plus the samples since). That is
+//! feed-forward from the fit, not a measurement: it holds a motion
+//! untracked too, and it is the only part that follows a moment per
+//! charge that weakens.
+//!
 //! Bounds: a correction's gain stays within `[1/B, B]`, `B` =
 //! [`MAX_CORRECTION`] (a strip further off is not the model's: refit it),
 //! and a corrected amplitude is held at the voltage limit in force; either
@@ -38,6 +48,8 @@
 //!     amplitudes_v: [1.0],
 //!     phases_deg: [0.0],
 //!     admittance_a_per_v: [[0.02, 0.0]],
+//!     track_currents: true,
+//!     drying: None,
 //! };
 //! let mut tracker = Tracker::new(target, 1000);
 //! let mut last = None;
@@ -80,6 +92,30 @@ pub struct Target<const N: usize> {
     /// `Y`: each segment's admittance in the model at `frequency_hz`, A/V,
     /// as (re, im) of the phasor ratio `I/V`.
     pub admittance_a_per_v: [[f32; 2]; N],
+    /// Whether the currents' admittance is tracked (`motion:`), or only
+    /// the drying law followed (`motion-ff:`).
+    pub track_currents: bool,
+    /// The model's drying law, if it dries.
+    pub drying: Option<Drying>,
+}
+
+/// A model's drying law ([`model_core::drying_gain`]) and the session
+/// time at which the motion started on its clock.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drying {
+    /// Initial rate, 1/s.
+    pub rate_per_s: f64,
+    /// Curvature (0 exponential, 1 hyperbolic).
+    pub curvature: f64,
+    /// The motion's start on the law's clock, s.
+    pub t_start_s: f64,
+}
+
+impl Drying {
+    /// The moment gain `since_s` seconds after the motion's start.
+    pub fn gain(&self, since_s: f64) -> f64 {
+        model_core::drying_gain(self.rate_per_s, self.curvature, self.t_start_s + since_s)
+    }
 }
 
 /// A correction of the model's program: each segment's voltage phasor
@@ -110,6 +146,9 @@ pub struct Tracker<const N: usize> {
     /// `(cos, sin)` of a sample's turn of the reference.
     turn: [f32; 2],
     periods: u32,
+    /// Samples fed since the motion started, and the rate they come at.
+    ticks: u64,
+    sample_hz: u32,
     /// This period's `Σ v e^{−jθ}` and `Σ i e^{−jθ}`.
     v_sum: [[f32; 2]; N],
     i_sum: [[f32; 2]; N],
@@ -130,6 +169,8 @@ impl<const N: usize> Tracker<N> {
             target,
             cycles_per_tick,
             cycles: 0.0,
+            ticks: 0,
+            sample_hz,
             reference: [1.0, 0.0],
             turn: [c, s],
             periods: 0,
@@ -148,10 +189,12 @@ impl<const N: usize> Tracker<N> {
 
     /// One sample: `applied_v` the voltages the segments had over the
     /// sample period that just ended, `currents_a` the currents read at
-    /// its end. At the end of each period of the wave (once the first
-    /// [`SETTLE_PERIODS`] are over), the correction from every period so
-    /// far.
+    /// its end. At the end of each period of the wave, the correction:
+    /// the admittance's from every period so far (once the first
+    /// [`SETTLE_PERIODS`] are over, if tracked), times the drying law's
+    /// (if the model dries).
     pub fn feed(&mut self, applied_v: &[f32; N], currents_a: &[f32; N]) -> Option<Correction<N>> {
+        self.ticks = self.ticks.saturating_add(1);
         let [c, s] = self.reference;
         for k in 0..N {
             self.v_sum[k][0] += applied_v[k] * c;
@@ -174,7 +217,8 @@ impl<const N: usize> Tracker<N> {
         let (v, i) = (self.v_sum, self.i_sum);
         self.v_sum = [[0.0; 2]; N];
         self.i_sum = [[0.0; 2]; N];
-        if self.periods <= SETTLE_PERIODS {
+        let tracked = self.target.track_currents && self.periods > SETTLE_PERIODS;
+        if !tracked && self.target.drying.is_none() {
             return None;
         }
         let mut out = Correction {
@@ -182,6 +226,20 @@ impl<const N: usize> Tracker<N> {
             phases_deg: [0.0; N],
             flags: 0,
         };
+        if tracked {
+            self.fit(&v, &i, &mut out);
+        }
+        if let Some(d) = self.target.drying {
+            let since_s = self.ticks as f64 / f64::from(self.sample_hz);
+            let dried = (1.0 / d.gain(since_s)) as f32;
+            out.gains.iter_mut().for_each(|g| *g *= dried);
+        }
+        Some(out)
+    }
+
+    /// The period's phasors `v`, `i` into the fit, and its correction of
+    /// each segment into `out`.
+    fn fit(&mut self, v: &[[f32; 2]; N], i: &[[f32; 2]; N], out: &mut Correction<N>) {
         for k in 0..N {
             let [vr, vi] = v[k];
             let [ir, ii] = i[k];
@@ -212,7 +270,6 @@ impl<const N: usize> Tracker<N> {
             out.gains[k] = gain;
             out.phases_deg[k] = libm::atan2f(ci, cr).to_degrees();
         }
-        Some(out)
     }
 
     /// The model's program corrected by `c`, each amplitude held at

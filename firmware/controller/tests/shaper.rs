@@ -42,6 +42,7 @@ fn motion(tip_amp_m: f32, frequency_hz: f32, lag_deg_per_segment: f32) -> Comman
             hold_s: f32::INFINITY,
             ramp_out_s: 0.0,
         },
+        t_session_s: f32::NAN,
         tracked: false,
     }
 }
@@ -70,7 +71,7 @@ fn the_shaped_voltages_move_the_models_tip_as_asked() {
         frequency_hz: 1.0,
         lag_deg_per_segment: 60.0,
     };
-    let program = shaper.program(&asked, 4.0).unwrap().program;
+    let program = shaper.program(&asked, 4.0, f32::NAN).unwrap().program;
     assert!(matches!(program, Program::Harmonic { .. }));
     let steady = Envelope {
         ramp_in_s: 0.0,

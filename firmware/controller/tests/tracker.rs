@@ -45,6 +45,47 @@ fn fine_config() -> Config {
     }
 }
 
+/// A controller on `config` past its tare, its channel and next tick,
+/// and a shaper holding `m` (the SetModel taken).
+fn tared_with_model(
+    config: Config,
+    m: &StripModel,
+) -> (Controller<N>, Channel, u64, Shaper<N, ELEMENTS, S>) {
+    let mut c = Controller::<N>::new(config).unwrap();
+    let mut ch = Channel::default();
+    let mut tick = 0;
+    while c.taring() {
+        c.tick(&input(tick, 1000, [2048; N]), &mut ch);
+        tick += 1;
+    }
+    let mut shaper = Shaper::<N, ELEMENTS, S>::new();
+    let set = Command::SetModel(ModelRecord::encode(m));
+    assert_eq!(
+        command(set, &mut shaper, 1e-3, &mut Exclusive(&mut c)),
+        Ok(Shaped::ModelSet)
+    );
+    (c, ch, tick, shaper)
+}
+
+/// `motion:TIP_M,1,60` (or `motion-ff:` if not `tracked`), steady, from
+/// `t_session_s`.
+fn motion_command(tip_m: f32, t_session_s: f32, tracked: bool) -> Command {
+    Command::SetMotion {
+        motion: Motion::Travelling {
+            tip_amp_m: tip_m,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 60.0,
+        },
+        envelope: Envelope {
+            ramp_in_s: 0.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        },
+        t_session_s,
+        tracked,
+    }
+}
+
 /// What a run measured: the tip's phasor over the last 10 s (asked: `TIP_M`
 /// at phase 0) and the Tracking frames sent.
 struct Run {
@@ -57,41 +98,12 @@ struct Run {
 /// it runs if `drying`: every admittance down by 0.3 % a second (applied
 /// as the voltage it sees, which scales `1/R1`, `1/R2` and `C` alike).
 fn run(tracked: bool, (r1, c_factor): (f64, f64), drying: bool) -> Run {
-    let mut c = Controller::<N>::new(fine_config()).unwrap();
-    let mut ch = Channel::default();
-    let zero = [2048u16; N];
-    let mut tick = 0u64;
-    while c.taring() {
-        c.tick(&input(tick, 1000, zero), &mut ch);
-        tick += 1;
-    }
-    let mut shaper = Shaper::<N, ELEMENTS, S>::new();
-    let record = ModelRecord::encode(&model());
-    let motion = Command::SetMotion {
-        motion: Motion::Travelling {
-            tip_amp_m: TIP_M as f32,
-            frequency_hz: 1.0,
-            lag_deg_per_segment: 60.0,
-        },
-        envelope: Envelope {
-            ramp_in_s: 0.0,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 0.0,
-        },
-        tracked,
-    };
-    {
-        let mut lock = Exclusive(&mut c);
-        let set = Command::SetModel(record);
-        assert_eq!(
-            command(set, &mut shaper, 1e-3, &mut lock),
-            Ok(Shaped::ModelSet)
-        );
-        assert_eq!(
-            command(motion, &mut shaper, 1e-3, &mut lock),
-            Ok(Shaped::WaveSet)
-        );
-    }
+    let (mut c, mut ch, tick, mut shaper) = tared_with_model(fine_config(), &model());
+    let motion = motion_command(TIP_M as f32, f32::NAN, tracked);
+    assert_eq!(
+        command(motion, &mut shaper, 1e-3, &mut Exclusive(&mut c)),
+        Ok(Shaped::WaveSet)
+    );
     assert_eq!(c.tracking(), tracked);
     let m = model();
     let params = Params {
@@ -214,6 +226,8 @@ fn the_tracker_finds_a_complex_admittance_ratio() {
         amplitudes_v: [1.0, 0.5],
         phases_deg: [0.0, -90.0],
         admittance_a_per_v: [[0.02, 0.0], [0.02, 0.0]],
+        track_currents: true,
+        drying: None,
     };
     let mut t = Tracker::new(target, 1000);
     let lead = 30f32.to_radians();
@@ -254,40 +268,13 @@ fn the_tracker_finds_a_complex_admittance_ratio() {
 /// A controller past its tare with `model()` held and a tracked motion of
 /// `tip_m` set under a limit of `limit_v`; its channel and next tick.
 fn tracking_controller(tip_m: f32, limit_v: f32) -> (Controller<N>, Channel, u64) {
-    let mut c = Controller::<N>::new(Config {
+    let config = Config {
         limits: Limits::new(limit_v, 100.0).unwrap(),
         ..fine_config()
-    })
-    .unwrap();
-    let mut ch = Channel::default();
-    let mut tick = 0;
-    while c.taring() {
-        c.tick(&input(tick, 1000, [2048; N]), &mut ch);
-        tick += 1;
-    }
-    let mut shaper = Shaper::<N, ELEMENTS, S>::new();
-    let mut lock = Exclusive(&mut c);
-    command(
-        Command::SetModel(ModelRecord::encode(&model())),
-        &mut shaper,
-        1e-3,
-        &mut lock,
-    )
-    .unwrap();
-    let motion = Command::SetMotion {
-        motion: Motion::Travelling {
-            tip_amp_m: tip_m,
-            frequency_hz: 1.0,
-            lag_deg_per_segment: 60.0,
-        },
-        envelope: Envelope {
-            ramp_in_s: 0.0,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 0.0,
-        },
-        tracked: true,
     };
-    command(motion, &mut shaper, 1e-3, &mut lock).unwrap();
+    let (mut c, ch, tick, mut shaper) = tared_with_model(config, &model());
+    let motion = motion_command(tip_m, f32::NAN, true);
+    command(motion, &mut shaper, 1e-3, &mut Exclusive(&mut c)).unwrap();
     assert!(c.tracking());
     (c, ch, tick)
 }
@@ -370,4 +357,73 @@ fn a_correction_is_bounded_and_never_drives_past_the_limit() {
         amplitudes_v[..N].iter().all(|&a| a <= limit_v),
         "{amplitudes_v:?}"
     );
+}
+
+/// A model that dries (the law of `finrs fit --effects dehydration`) and a
+/// strip that dries by it (its moment gain, which no current shows): a
+/// motion fed forward only (`motion-ff:`) that starts 300 s into the
+/// session follows the law once a period and holds the tip over 60 s; the
+/// same motion on the model without its law misses by the drying.
+#[test]
+fn the_drying_law_holds_a_motion_fed_forward() {
+    let (rate_per_s, curvature, t0_s) = (2e-3, 1.0, 300.0);
+    let run = |law: bool| {
+        let mut m = model();
+        if law {
+            m.dehydration_per_s = rate_per_s;
+            m.dehydration_curvature = curvature;
+        }
+        let (mut c, mut ch, tick, mut shaper) = tared_with_model(fine_config(), &m);
+        let mut lock = Exclusive(&mut c);
+        let motion = |t_session_s: f32| motion_command(TIP_M as f32, t_session_s, false);
+        if law {
+            // Without its session time a drying model cannot shape it.
+            assert_eq!(
+                command(motion(f32::NAN), &mut shaper, 1e-3, &mut lock),
+                Err(finrs_controller::shaper::ShapeRefused::NoSessionTime)
+            );
+        }
+        command(motion(t0_s as f32), &mut shaper, 1e-3, &mut lock).unwrap();
+        assert_eq!(c.tracking(), law, "held by the law only where it dries");
+        let plant = Strip::<f64, N, 4, { state_len(N, 4) }>::with_extensions(
+            &m.params,
+            &m.extensions,
+            Fixture::Free,
+            1e-3,
+        );
+        let mut plant = plant.unwrap();
+        let mut x = plant.rest();
+        let steps = 60_000u64;
+        let theta = 2.0 * core::f64::consts::PI / 1000.0;
+        let mut tip = Phasor::ZERO;
+        for k in 0..steps {
+            let out = c.tick(&input(tick + k, 1000, [2048; N]), &mut ch);
+            // The strip dries by the law whichever model drives it.
+            plant.set_moment_gain(model_core::drying_gain(
+                rate_per_s,
+                curvature,
+                t0_s + k as f64 / 1000.0,
+            ));
+            plant.step(&mut x, &out.voltages_v.map(f64::from));
+            if k + 1 >= steps - 10_000 {
+                let y = plant.tip_deflection_m(&x);
+                tip += Phasor::unit(-theta * (k + 1) as f64).scale(2.0 * y / 10_000.0);
+            }
+        }
+        (
+            tip.amplitude() / TIP_M - 1.0,
+            tip.sine_phase_rad().to_degrees(),
+        )
+    };
+    let (a, p) = run(true);
+    let (a0, p0) = run(false);
+    eprintln!(
+        "drying law, last 10 of 60 s from 300 s: followed {:+.2} % {p:+.2}°, without {:+.2} % {p0:+.2}°",
+        100.0 * a,
+        100.0 * a0
+    );
+    // Once a period: the law moves 0.05 % a period here.
+    assert!(a.abs() < 0.01 && p.abs() < 0.5, "followed: {a} {p}°");
+    // 1/(1 + 2e-3 · 355 s) = 0.585.
+    assert!(a0 < -0.35, "without the law: {a0}");
 }

@@ -51,9 +51,9 @@ const PROGRAM_CHIRP: u8 = 5;
 const PROGRAM_HARMONIC: u8 = 6;
 
 const MOTION_TRAVELLING: u8 = 1;
-/// SetMotion's payload: the motion kind, its three f32, the envelope,
-/// whether the tracker holds it.
-const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN + 1;
+/// SetMotion's payload: the motion kind, its three f32, the envelope, the
+/// session time, whether the tracker holds it.
+const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN + 4 + 1;
 
 /// Most f32 fields of a program: Harmonic's frequency, offset, and eight
 /// amplitudes and phases.
@@ -146,6 +146,10 @@ pub enum Command {
         motion: Motion,
         /// The gain over the voltages.
         envelope: Envelope,
+        /// When the motion starts on the clock of the model's drying law
+        /// (the session's, from its first recording), s; NaN if unknown
+        /// (a model that dries then refuses the motion).
+        t_session_s: f32,
         /// Whether the board's gain tracker holds the motion against the
         /// strip's drift (`finrs_controller::tracker`); else the model's
         /// voltages are driven as they are (feed-forward only).
@@ -277,6 +281,7 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
         Command::SetMotion {
             motion,
             envelope,
+            t_session_s,
             tracked,
         } => {
             let Motion::Travelling {
@@ -293,6 +298,7 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
                 envelope.ramp_in_s,
                 envelope.hold_s,
                 envelope.ramp_out_s,
+                t_session_s,
             ] {
                 w.put(&v.to_le_bytes());
             }
@@ -629,6 +635,7 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                     hold_s: field(4),
                     ramp_out_s: field(5),
                 },
+                t_session_s: field(6),
                 tracked,
             })
         }

@@ -31,9 +31,10 @@ impl TrackingFlags {
 }
 
 /// The gain tracker's correction at the end of a period of the wave: each
-/// segment's voltage phasor is the model's times `gains[k] · e^{j
-/// phases_deg[k]}`, the ratio of the model's admittance to the one
-/// measured.
+/// segment's voltage phasor is the (undried) model's times `gains[k] ·
+/// e^{j phases_deg[k]}`: the ratio of the model's admittance to the one
+/// measured (if tracked), times the drying law's `1/g(t)` (if the model
+/// dries).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tracking {
     /// Time since start, µs.

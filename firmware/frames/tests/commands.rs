@@ -120,7 +120,7 @@ fn layout_is_as_documented() {
     let record = ModelRecord(core::array::from_fn(|k| k as u8));
     assert_eq!(frame(&Command::SetModel(record)), framed(0x88, &record.0));
     let mut p = vec![1u8];
-    for v in [0.005f32, 1.0, 60.0, 2.0, f32::INFINITY, 1.5] {
+    for v in [0.005f32, 1.0, 60.0, 2.0, f32::INFINITY, 1.5, 120.0] {
         p.extend_from_slice(&v.to_le_bytes());
     }
     p.push(1);
@@ -135,6 +135,7 @@ fn layout_is_as_documented() {
             hold_s: f32::INFINITY,
             ramp_out_s: 1.5,
         },
+        t_session_s: 120.0,
         tracked: true,
     };
     assert_eq!(frame(&motion), framed(0x89, &p));
@@ -461,9 +462,9 @@ fn any_command() -> BoxedStrategy<Command> {
         1 => (
             (any_f32(), any_f32(), any_f32()),
             (any_f32(), any_f32(), any_f32()),
-            any::<bool>()
+            (any_f32(), any::<bool>())
         )
-            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), tracked)| {
+            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), (t_session_s, tracked))| {
                 Command::SetMotion {
                 motion: Motion::Travelling {
                     tip_amp_m,
@@ -475,6 +476,7 @@ fn any_command() -> BoxedStrategy<Command> {
                         hold_s: b,
                         ramp_out_s: c,
                     },
+                    t_session_s,
                     tracked,
                 }
             }),
@@ -575,6 +577,7 @@ fn bits(c: &Command) -> Vec<u32> {
         Command::SetMotion {
             motion,
             envelope,
+            t_session_s,
             tracked,
         } => {
             let Motion::Travelling {
@@ -590,6 +593,7 @@ fn bits(c: &Command) -> Vec<u32> {
                 envelope.ramp_in_s,
                 envelope.hold_s,
                 envelope.ramp_out_s,
+                t_session_s,
             ]));
             v.push(u32::from(tracked));
             v

@@ -19,7 +19,7 @@ use finrs_frames::{Command, Event, Info, SampleFlags};
 use crate::link::board::{request_info, Board, Frames, TrackStretch};
 use crate::link::calibrate::{apply_model, CalibrateOptions};
 use crate::link::capture::Monitor;
-use crate::link::command::wave_command;
+use crate::link::command::{at_session_time, wave_command};
 use crate::link::probe::ProbeError;
 use crate::link::qemu::world::VIRTUAL_M_PER_PX;
 use crate::link::stream::{Recorder, Setup};
@@ -246,6 +246,7 @@ pub fn run_session(
             step,
             command,
             &info_now,
+            session_first_seq,
             ctx,
             monitor,
         )?;
@@ -441,6 +442,7 @@ fn record_one(
     step: &Step,
     command: &Command,
     info: &Info,
+    session_first_seq: Option<u32>,
     ctx: Ctx<'_>,
     monitor: &dyn Monitor,
 ) -> Result<Recorded, BenchError> {
@@ -518,7 +520,15 @@ fn record_one(
         }
         rec.event(e);
         if !sent && last + 1 >= rest {
-            board.send(command)?;
+            // A motion's start on the session's clock (the drying law's):
+            // the sample just read is the session's first one's that many
+            // periods on; the board shapes it from the next.
+            let session_first = session_first_seq.unwrap_or(first_seq);
+            let now = first_seq
+                .wrapping_add(last as u32)
+                .wrapping_sub(session_first);
+            let t_session_s = f64::from(now + 1) / hz;
+            board.send(&at_session_time(*command, t_session_s))?;
             sent = true;
         }
     }

@@ -68,6 +68,8 @@ pub fn wave_command(
                 lag_deg_per_segment: lag_deg as f32,
             },
             envelope: generator.envelope(),
+            // Unknown here: see `at_session_time`.
+            t_session_s: f32::NAN,
             tracked,
         });
     }
@@ -76,6 +78,26 @@ pub fn wave_command(
         program: generator.program(),
         envelope: generator.envelope(),
     })
+}
+
+/// `command` with its motion's start set to `t_session_s` on the clock of
+/// the model's drying law (the session's, from its first recording): the
+/// board needs it for a model that dries. Any other command as it is.
+pub fn at_session_time(command: Command, t_session_s: f64) -> Command {
+    match command {
+        Command::SetMotion {
+            motion,
+            envelope,
+            tracked,
+            ..
+        } => Command::SetMotion {
+            motion,
+            envelope,
+            t_session_s: t_session_s as f32,
+            tracked,
+        },
+        other => other,
+    }
 }
 
 /// A voltage limit the firmware would refuse.
@@ -153,12 +175,19 @@ mod tests {
         let Command::SetMotion {
             motion,
             envelope,
+            t_session_s,
             tracked,
         } = request(&req).unwrap()
         else {
             panic!("a SetMotion")
         };
         assert!(tracked, "motion: is tracked");
+        assert!(t_session_s.is_nan(), "no session time yet");
+        let at = super::at_session_time(request(&req).unwrap(), 42.5);
+        assert!(
+            matches!(at, Command::SetMotion { t_session_s, .. } if t_session_s == 42.5),
+            "{at:?}"
+        );
         assert_eq!(
             motion,
             Motion::Travelling {

@@ -111,6 +111,18 @@ mod tests {
     }
 
     #[test]
+    fn the_boards_drying_law_is_the_hosts() {
+        // The board's (model_core, libm) and the fit's (std) agree to
+        // rounding, over the curvatures and times a fit meets.
+        for c in [0.0, 1e-6, 0.3, 1.0, 2.5] {
+            for t in [0.0, 1.0, 60.0, 600.0, 3600.0] {
+                let (host, board) = (drying_gain(2e-3, c, t), model_core::drying_gain(2e-3, c, t));
+                assert!((host - board).abs() <= 4.0 * f64::EPSILON * host, "{c} {t}");
+            }
+        }
+    }
+
+    #[test]
     fn the_drying_gain_is_exponential_at_zero_curvature_and_hyperbolic_at_one() {
         let (r, t) = (1e-2, 30.0);
         assert!((drying_gain(r, 0.0, t) - (-r * t).exp()).abs() < 1e-15);

@@ -23,10 +23,10 @@
 //!
 //! let spec = ModelFile::main_m_2006().spec_for(&Geometry::THESIS_2006).unwrap();
 //! // 0.2 mm at 1 Hz, 60° a segment: within 4 V for the seed's strip.
-//! let wave = shaped(&Wave::parse("motion:0.0002,1,60").unwrap(), &spec, 3, 1000.0).unwrap();
+//! let wave = shaped(&Wave::parse("motion:0.0002,1,60").unwrap(), &spec, 3, 1000.0, None).unwrap();
 //! assert!(matches!(wave.kind(), WaveKind::Harmonic { .. }));
 //! // 5 mm is not: refused with what 4 V reaches.
-//! let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0).unwrap_err();
+//! let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0, None).unwrap_err();
 //! assert!(e.to_string().contains("the model reaches 0.254 mm"), "{e}");
 //! ```
 
@@ -89,12 +89,16 @@ pub fn record(spec: &ModelSpec) -> ModelRecord {
 
 /// `wave` itself, or for a motion the `harmonic:` wave the board would
 /// drive for it on `segments` segments sampled at `rate_hz`, holding the
-/// model of `spec`.
+/// model of `spec`, starting at `t_session_s` on its drying law's clock
+/// (needed if the model dries: the wave is then the one the board starts
+/// with; its corrections as the strip dries are the controller's, once a
+/// period, not in a fixed wave).
 pub fn shaped(
     wave: &Wave,
     spec: &ModelSpec,
     segments: usize,
     rate_hz: f64,
+    t_session_s: Option<f64>,
 ) -> Result<Wave, MotionError> {
     let &WaveKind::Motion {
         tip_amp_m,
@@ -111,30 +115,37 @@ pub fn shaped(
         frequency_hz: frequency_hz as f32,
         lag_deg_per_segment: lag_deg as f32,
     };
-    let program = board_program(&record(spec), segments, rate_hz, &motion, HARD_LIMIT_V).map_err(
-        |e| match e {
-            BoardRefused::Shape(ShapeRefused::Unreachable {
-                needs_v,
-                segment,
-                limit_v,
-                ..
-            }) => MotionError::Unreachable {
-                wave: text.to_string(),
-                needs_v: f64::from(needs_v),
-                segment: usize::from(segment),
-                // From the amplitude asked, not its f32: the same ratio.
-                reachable_mm: 1e3 * tip_amp_m.abs() * f64::from(limit_v) / f64::from(needs_v),
-            },
-            BoardRefused::Shape(source) => MotionError::Shape {
-                wave: text.to_string(),
-                source,
-            },
-            BoardRefused::Segments(segments) => MotionError::Segments {
-                wave: text.to_string(),
-                segments,
-            },
+    let t_session_s = t_session_s.map_or(f32::NAN, |t| t as f32);
+    let program = board_program(
+        &record(spec),
+        segments,
+        rate_hz,
+        &motion,
+        HARD_LIMIT_V,
+        t_session_s,
+    )
+    .map_err(|e| match e {
+        BoardRefused::Shape(ShapeRefused::Unreachable {
+            needs_v,
+            segment,
+            limit_v,
+            ..
+        }) => MotionError::Unreachable {
+            wave: text.to_string(),
+            needs_v: f64::from(needs_v),
+            segment: usize::from(segment),
+            // From the amplitude asked, not its f32: the same ratio.
+            reachable_mm: 1e3 * tip_amp_m.abs() * f64::from(limit_v) / f64::from(needs_v),
         },
-    )?;
+        BoardRefused::Shape(source) => MotionError::Shape {
+            wave: text.to_string(),
+            source,
+        },
+        BoardRefused::Segments(segments) => MotionError::Segments {
+            wave: text.to_string(),
+            segments,
+        },
+    })?;
     let Program::Harmonic {
         amplitudes_v,
         phases_deg,
@@ -168,17 +179,19 @@ fn shape(
     record: &ModelRecord,
     segments: usize,
     rate_hz: f64,
-    motion: Option<(&Motion, f32)>,
+    motion: Option<(&Motion, f32, f32)>,
 ) -> Result<Option<Program>, BoardRefused> {
     fn go<const N: usize, const S: usize>(
         record: &ModelRecord,
         dt_s: f64,
-        motion: Option<(&Motion, f32)>,
+        motion: Option<(&Motion, f32, f32)>,
     ) -> Result<Option<Program>, ShapeRefused> {
         let mut shaper = Shaper::<N, ELEMENTS, S>::new();
         shaper.install(Shaper::check(record, dt_s)?);
         motion
-            .map(|(m, limit_v)| shaper.program(m, limit_v).map(|s| s.program))
+            .map(|(m, limit_v, t_session_s)| {
+                shaper.program(m, limit_v, t_session_s).map(|s| s.program)
+            })
             .transpose()
     }
     let dt_s = 1.0 / rate_hz;
@@ -204,16 +217,23 @@ pub fn board_check(
     shape(record, segments, rate_hz, None).map(|_| ())
 }
 
-/// The program the board's shaper makes of `motion` under `limit_v`.
+/// The program the board's shaper makes of `motion` under `limit_v`,
+/// starting at `t_session_s` on the drying law's clock (NaN unknown).
 pub fn board_program(
     record: &ModelRecord,
     segments: usize,
     rate_hz: f64,
     motion: &Motion,
     limit_v: f32,
+    t_session_s: f32,
 ) -> Result<Program, BoardRefused> {
-    shape(record, segments, rate_hz, Some((motion, limit_v)))?
-        .ok_or(BoardRefused::Segments(segments))
+    shape(
+        record,
+        segments,
+        rate_hz,
+        Some((motion, limit_v, t_session_s)),
+    )?
+    .ok_or(BoardRefused::Segments(segments))
 }
 
 /// The tip a motion asks, m, at each of `t_s` (`None` for another wave):
@@ -268,7 +288,7 @@ mod tests {
         file.extensions = Some(ext);
         let spec = file.spec_for(&Geometry::THESIS_2006).unwrap();
         let wave = Wave::parse("motion:0.0002,1,60").unwrap();
-        let shaped = shaped(&wave, &spec, 3, 1000.0).unwrap();
+        let shaped = shaped(&wave, &spec, 3, 1000.0, None).unwrap();
         let drive = Drive {
             segments: 3,
             fixture: Fixture::Free,
@@ -324,7 +344,14 @@ mod tests {
         let spec = ModelFile::main_m_2006()
             .spec_for(&Geometry::THESIS_2006)
             .unwrap();
-        let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0).unwrap_err();
+        let e = shaped(
+            &Wave::parse("motion:0.005,1,60").unwrap(),
+            &spec,
+            3,
+            1000.0,
+            None,
+        )
+        .unwrap_err();
         let MotionError::Unreachable {
             needs_v,
             reachable_mm,
@@ -337,7 +364,7 @@ mod tests {
         // Other waves pass through untouched; a motion's own generator is
         // refused without a model.
         let sine = Wave::parse("sine:1,1,0").unwrap();
-        assert_eq!(shaped(&sine, &spec, 3, 1000.0).unwrap(), sine);
+        assert_eq!(shaped(&sine, &spec, 3, 1000.0, None).unwrap(), sine);
         let motion = Wave::parse("motion:0.0002,1,60").unwrap();
         assert!(motion
             .generator(3, &WaveOptions::steady(1.0))
@@ -345,7 +372,7 @@ mod tests {
             .to_string()
             .contains("needs the strip's model"));
         assert!(matches!(
-            shaped(&motion, &spec, 9, 1000.0),
+            shaped(&motion, &spec, 9, 1000.0, None),
             Err(MotionError::Segments { .. })
         ));
     }

@@ -7,7 +7,9 @@
 //! (drying goes on), driven 60 s by a travelling motion at 1 Hz, 60° a
 //! segment, three times: the plain wave the nominal model (the example
 //! session's strip) shapes for it, and the waves the board's shaper makes
-//! from each fit (the same code, `finrs::model::motion::shaped`). The tip
+//! from each fit (the same code: `finrs_controller`'s shaper, and where
+//! the fit dries, its tracker following the drying law once a period, as
+//! the controller does for `motion-ff:`). The tip
 //! (true, no camera) by lock-in over each 5 s against the motion asked.
 //! The amplitude asked: 5 mm, or 80 % of what the diagnosed fit says 4 V
 //! reach, the smaller; a wave that needs more than 4 V for it is not
@@ -24,11 +26,14 @@ use std::process::Command;
 
 use anyhow::Context;
 use clap::Parser;
-use finrs::model::motion::{shaped, MotionError};
+use finrs::model::motion::record;
 use finrs::model::params::{ModelFile, Relaxation};
 use finrs::model::predict::ModelSpec;
 use finrs::recording::{Recording, Voltages};
-use finrs::wave::{Wave, WaveOptions};
+use finrs_controller::shaper::{ShapeRefused, Shaper, ELEMENTS};
+use finrs_controller::tracker::Tracker;
+use finrs_drive::{Envelope, Generator};
+use finrs_frames::Motion;
 use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::strip::{run, MESH};
 use finrs_rig::sweep::{plan, strip_of, write_scenario, Scenario};
@@ -53,6 +58,7 @@ const REST_S: f64 = 1.0;
 const RATE_HZ: f64 = 1000.0;
 const WINDOW_S: f64 = 5.0;
 const WANTED_M: f64 = 5e-3;
+const LIMIT_V: f32 = 4.0;
 
 /// One drive's errors per window: amplitude (a fraction), phase, degrees.
 type Windows = Vec<(f64, f64)>;
@@ -105,33 +111,94 @@ fn session_facts(dir: &Path) -> anyhow::Result<(finrs::recording::Geometry, usiz
     Ok((geometry, segments, end_s))
 }
 
-/// The shaped wave of `motion:ASKED,HZ,LAG` for `spec`, on `segments`.
-fn shape(spec: &ModelSpec, segments: usize, asked_m: f64) -> Result<Wave, MotionError> {
-    let motion = Wave::parse(&format!("motion:{asked_m},{HZ},{LAG_DEG}"))?;
-    shaped(&motion, spec, segments, RATE_HZ)
+/// The rig's segments, the board's build for them.
+const N: usize = 3;
+
+/// The board's shaper holding `spec`'s model.
+fn shaper(
+    spec: &ModelSpec,
+) -> anyhow::Result<Shaper<N, ELEMENTS, { model_core::state_len(N, ELEMENTS) }>> {
+    let mut shaper = Shaper::new();
+    shaper
+        .install(Shaper::check(&record(spec), 1.0 / RATE_HZ).map_err(|e| anyhow::anyhow!("{e}"))?);
+    Ok(shaper)
 }
 
-/// The rig strip of `s` driven by `wave` from `t_session_s` on: the tip's
-/// errors against `asked_m · sin(2π HZ τ)`, τ from the wave's start, per
-/// window.
+/// The motion asked, `asked_m` at the tip.
+fn motion(asked_m: f64) -> Motion {
+    Motion::Travelling {
+        tip_amp_m: asked_m as f32,
+        frequency_hz: HZ as f32,
+        lag_deg_per_segment: LAG_DEG as f32,
+    }
+}
+
+/// The voltages the board drives for `motion(asked_m)` with `spec`'s model
+/// from `t_session_s` on, `rows` samples: the shaper's program, and where
+/// the model dries, its correction once a period (the tracker fed no
+/// current: `motion-ff:`). `None` where the motion needs more than 4 V.
+fn board_drive(
+    spec: &ModelSpec,
+    asked_m: f64,
+    t_session_s: f64,
+    rows: u64,
+) -> anyhow::Result<Option<Vec<[f64; N]>>> {
+    let shaped = match shaper(spec)?.program(&motion(asked_m), LIMIT_V, t_session_s as f32) {
+        Ok(s) => s,
+        Err(ShapeRefused::Unreachable { .. }) => return Ok(None),
+        Err(e) => anyhow::bail!("{e}"),
+    };
+    let steady = Envelope {
+        ramp_in_s: 0.0,
+        hold_s: f32::INFINITY,
+        ramp_out_s: 0.0,
+    };
+    let mut generator =
+        Generator::<N>::new(shaped.program, steady).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut tracker = shaped
+        .target
+        .drying
+        .map(|_| Tracker::new(shaped.target, RATE_HZ as u32));
+    let mut out = Vec::with_capacity(rows as usize);
+    for tick in 0..rows {
+        let v = generator.voltages_at_tick_v(tick, RATE_HZ as u32);
+        out.push(v.map(f64::from));
+        if let Some(c) = tracker.as_mut().and_then(|t| t.feed(&v, &[0.0; N])) {
+            let (program, _) = tracker.as_ref().map(|t| t.program(&c, LIMIT_V)).unwrap();
+            generator = Generator::new(program, steady).map_err(|e| anyhow::anyhow!("{e}"))?;
+        }
+    }
+    Ok(Some(out))
+}
+
+/// The tip amplitude the limit lets `spec`'s model reach, m, if 5 mm is
+/// beyond it.
+fn reachable_m(spec: &ModelSpec, t_session_s: f64) -> anyhow::Result<Option<f64>> {
+    match shaper(spec)?.program(&motion(WANTED_M), LIMIT_V, t_session_s as f32) {
+        Ok(_) => Ok(None),
+        Err(ShapeRefused::Unreachable { reachable_m, .. }) => Ok(Some(f64::from(reachable_m))),
+        Err(e) => anyhow::bail!("{e}"),
+    }
+}
+
+/// The rig strip of `s` at rest for `REST_S`, then driven by `wave` (a
+/// row a sample) from `t_session_s` on: the tip's errors against
+/// `asked_m · sin(2π HZ τ)`, τ from the wave's start, per window.
 fn drive(
     s: &Scenario,
-    wave: &Wave,
-    segments: usize,
+    wave: &[[f64; N]],
     t_session_s: f64,
     asked_m: f64,
 ) -> anyhow::Result<Windows> {
     let (sample, hidden) = strip_of(s)?;
-    let generator = wave.generator(segments, &WaveOptions::steady(HOLD_S))?;
     let rest = (REST_S * RATE_HZ) as u64;
-    let rows = rest + (HOLD_S * RATE_HZ) as u64;
-    let mut volts = Voltages::with_capacity(segments, rows as usize);
-    for r in 0..rows {
-        if r < rest {
-            volts.push(&vec![0.0; segments]);
-        } else {
-            volts.push(&generator.voltages_at_tick_v(r - rest, RATE_HZ as u32));
-        }
+    let rows = rest + wave.len() as u64;
+    let mut volts = Voltages::with_capacity(N, rows as usize);
+    for _ in 0..rest {
+        volts.push(&[0.0; N]);
+    }
+    for v in wave {
+        volts.push(v);
     }
     let camera = vec![true; rows as usize];
     let truth = run(
@@ -141,7 +208,7 @@ fn drive(
         Tip::Free,
         &volts,
         1.0 / RATE_HZ,
-        t_session_s,
+        t_session_s - REST_S,
         &camera,
         &[sample.length_m],
     );
@@ -237,22 +304,24 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         &fits.join(format!("seed-{}-diagnosed.toml", s.seed)),
     )?;
     std::fs::remove_dir_all(&dir).ok();
+    anyhow::ensure!(
+        segments == N,
+        "{segments} segments: the rig's board has {N}"
+    );
     let specs = [
         nominal().spec_for(&geometry)?,
         baseline.spec_for(&geometry)?,
         diagnosed.spec_for(&geometry)?,
     ];
-    let asked_m = match shape(&specs[2], segments, WANTED_M) {
-        Ok(_) => WANTED_M,
-        Err(MotionError::Unreachable { reachable_mm, .. }) => 0.8 * reachable_mm * 1e-3,
-        Err(e) => return Err(e.into()),
-    };
+    // The motion starts at the session's end (after a second's rest).
+    let t_start_s = end_s + REST_S;
+    let asked_m = reachable_m(&specs[2], t_start_s)?.map_or(WANTED_M, |r| 0.8 * r);
+    let rows = (HOLD_S * RATE_HZ) as u64;
     let mut drives = [None, None, None];
     for (d, spec) in drives.iter_mut().zip(&specs) {
-        *d = match shape(spec, segments, asked_m) {
-            Ok(w) => Some(drive(s, &w, segments, end_s, asked_m)?),
-            Err(MotionError::Unreachable { .. }) => None,
-            Err(e) => return Err(e.into()),
+        *d = match board_drive(spec, asked_m, t_start_s, rows)? {
+            Some(wave) => Some(drive(s, &wave, t_start_s, asked_m)?),
+            None => None,
         };
     }
     Ok(Outcome {
