@@ -190,7 +190,8 @@ pub struct Controller<const N: usize> {
     model_crc: Option<u16>,
     /// A model the host set, for the board to store in flash.
     model_to_store: Option<ModelRecord>,
-    /// The gain tracker of the running motion, if it is tracked.
+    /// The tracker holding the running motion, if it is held (tracked, or
+    /// its model dries).
     tracker: Option<Tracker<N>>,
 }
 
@@ -306,7 +307,8 @@ impl<const N: usize> Controller<N> {
 
     /// A shaped motion (`shaper::command` calls this under the lock): its
     /// `program` as a SetWave with `envelope` (refused as one), then held
-    /// by a gain tracker if `target` is given.
+    /// by a tracker if `target` is given (the currents' admittance, the
+    /// model's drying law, as the target says).
     pub fn motion(
         &mut self,
         program: Program,
@@ -318,7 +320,7 @@ impl<const N: usize> Controller<N> {
         Ok(())
     }
 
-    /// Whether a gain tracker holds the running motion.
+    /// Whether a tracker holds the running motion.
     pub fn tracking(&self) -> bool {
         self.tracker.is_some()
     }

@@ -12,6 +12,9 @@
 //! board's sample time, so that the sampled sine the generator writes is
 //! what the inverse assumed). A motion that needs more than the limit in
 //! force is refused with the amplitude that is reachable, never clipped.
+//! Where the model dries, the motion starts at `1/g(t₀)` of its undried
+//! voltages, `t₀` the session time the SetMotion carries; the controller's
+//! [`crate::tracker`] then follows the law, and the currents if tracked.
 //!
 //! Building the model's strip takes milliseconds of `f64` arithmetic
 //! (soft-float on the M4F), so [`command`] shapes outside the
