@@ -182,11 +182,6 @@ impl<const N: usize> Tracker<N> {
         }
     }
 
-    /// The motion tracked.
-    pub fn target(&self) -> &Target<N> {
-        &self.target
-    }
-
     /// One sample: `applied_v` the voltages the segments had over the
     /// sample period that just ended, `currents_a` the currents read at
     /// its end. At the end of each period of the wave, the correction:
@@ -196,11 +191,14 @@ impl<const N: usize> Tracker<N> {
     pub fn feed(&mut self, applied_v: &[f32; N], currents_a: &[f32; N]) -> Option<Correction<N>> {
         self.ticks = self.ticks.saturating_add(1);
         let [c, s] = self.reference;
-        for k in 0..N {
-            self.v_sum[k][0] += applied_v[k] * c;
-            self.v_sum[k][1] -= applied_v[k] * s;
-            self.i_sum[k][0] += currents_a[k] * c;
-            self.i_sum[k][1] -= currents_a[k] * s;
+        // Only a tracked motion's fit reads the lock-in.
+        if self.target.track_currents {
+            for k in 0..N {
+                self.v_sum[k][0] += applied_v[k] * c;
+                self.v_sum[k][1] -= applied_v[k] * s;
+                self.i_sum[k][0] += currents_a[k] * c;
+                self.i_sum[k][1] -= currents_a[k] * s;
+            }
         }
         self.cycles += self.cycles_per_tick;
         let [tc, ts] = self.turn;

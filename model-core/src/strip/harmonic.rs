@@ -109,20 +109,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// e^{jθk})` at step `k`) settle to at `hz`, Hz: see the module's
     /// description. Computed in `f64` from the stored blocks (of `T`).
     pub fn harmonic(&self, hz: f64, v: &[Phasor; N]) -> Result<Harmonic<N>, HarmonicError> {
-        let nyquist_hz = 0.5 / self.dt_s;
-        if !(hz.is_finite() && hz > 0.0 && hz < nyquist_hz) {
-            return Err(HarmonicError::Frequency { hz, nyquist_hz });
-        }
-        if self.ext.charge_cubic_per_v2 != 0.0 {
-            return Err(HarmonicError::Nonlinear {
-                field: "charge_cubic_per_v2",
-            });
-        }
-        if self.ext.leak_cubic_per_v2 != 0.0 {
-            return Err(HarmonicError::Nonlinear {
-                field: "leak_cubic_per_v2",
-            });
-        }
+        self.has_sine_response(hz)?;
         let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
         let f = |x: T| x.to_f64();
         let gain = f(self.moment_gain);
@@ -221,8 +208,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// assert!((y.re * p.r2_ohm - 1.0).abs() < 1e-3 && y.im.abs() < 1e-6);
     /// ```
     pub fn sampled_admittance(&self, hz: f64) -> Result<[Phasor; N], HarmonicError> {
-        // The same checks (frequency, linear model).
-        self.harmonic(hz, &[Phasor::real(1.0); N])?;
+        self.has_sine_response(hz)?;
         let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
         Ok(core::array::from_fn(|i| {
             let f = |v: f64, v_c: f64| {
@@ -301,6 +287,26 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         // Linear: scale every voltage by what turns `got` into the sine asked.
         let c = Phasor::from_sine(amplitude, 0.0) / got;
         Ok(v.map(|vi| vi * c))
+    }
+
+    /// Whether the strip has one steady sine at `hz`: a frequency inside
+    /// `(0, Nyquist)` and no electrochemical cubic.
+    fn has_sine_response(&self, hz: f64) -> Result<(), HarmonicError> {
+        let nyquist_hz = 0.5 / self.dt_s;
+        if !(hz.is_finite() && hz > 0.0 && hz < nyquist_hz) {
+            return Err(HarmonicError::Frequency { hz, nyquist_hz });
+        }
+        if self.ext.charge_cubic_per_v2 != 0.0 {
+            return Err(HarmonicError::Nonlinear {
+                field: "charge_cubic_per_v2",
+            });
+        }
+        if self.ext.leak_cubic_per_v2 != 0.0 {
+            return Err(HarmonicError::Nonlinear {
+                field: "leak_cubic_per_v2",
+            });
+        }
+        Ok(())
     }
 
     /// Segment `i`'s own moment (before crosstalk and the moment gain)

@@ -114,10 +114,11 @@ fn session_facts(dir: &Path) -> anyhow::Result<(finrs::recording::Geometry, usiz
 /// The rig's segments, the board's build for them.
 const N: usize = 3;
 
+/// The board's shaper for the rig's segments.
+type BoardShaper = Shaper<N, ELEMENTS, { model_core::state_len(N, ELEMENTS) }>;
+
 /// The board's shaper holding `spec`'s model.
-fn shaper(
-    spec: &ModelSpec,
-) -> anyhow::Result<Shaper<N, ELEMENTS, { model_core::state_len(N, ELEMENTS) }>> {
+fn shaper(spec: &ModelSpec) -> anyhow::Result<BoardShaper> {
     let mut shaper = Shaper::new();
     shaper
         .install(Shaper::check(&record(spec), 1.0 / RATE_HZ).map_err(|e| anyhow::anyhow!("{e}"))?);
@@ -133,17 +134,17 @@ fn motion(asked_m: f64) -> Motion {
     }
 }
 
-/// The voltages the board drives for `motion(asked_m)` with `spec`'s model
-/// from `t_session_s` on, `rows` samples: the shaper's program, and where
-/// the model dries, its correction once a period (the tracker fed no
-/// current: `motion-ff:`). `None` where the motion needs more than 4 V.
+/// The voltages the board drives for `motion(asked_m)` with `shaper`'s
+/// model from `t_session_s` on, `rows` samples: the shaper's program, and
+/// where the model dries, its correction once a period (the tracker fed
+/// no current: `motion-ff:`). `None` where the motion needs more than 4 V.
 fn board_drive(
-    spec: &ModelSpec,
+    shaper: &BoardShaper,
     asked_m: f64,
     t_session_s: f64,
     rows: u64,
 ) -> anyhow::Result<Option<Vec<[f64; N]>>> {
-    let shaped = match shaper(spec)?.program(&motion(asked_m), LIMIT_V, t_session_s as f32) {
+    let shaped = match shaper.program(&motion(asked_m), LIMIT_V, t_session_s as f32) {
         Ok(s) => s,
         Err(ShapeRefused::Unreachable { .. }) => return Ok(None),
         Err(e) => anyhow::bail!("{e}"),
@@ -163,18 +164,19 @@ fn board_drive(
     for tick in 0..rows {
         let v = generator.voltages_at_tick_v(tick, RATE_HZ as u32);
         out.push(v.map(f64::from));
-        if let Some(c) = tracker.as_mut().and_then(|t| t.feed(&v, &[0.0; N])) {
-            let (program, _) = tracker.as_ref().map(|t| t.program(&c, LIMIT_V)).unwrap();
+        let Some(t) = tracker.as_mut() else { continue };
+        if let Some(c) = t.feed(&v, &[0.0; N]) {
+            let (program, _) = t.program(&c, LIMIT_V);
             generator = Generator::new(program, steady).map_err(|e| anyhow::anyhow!("{e}"))?;
         }
     }
     Ok(Some(out))
 }
 
-/// The tip amplitude the limit lets `spec`'s model reach, m, if 5 mm is
+/// The tip amplitude the limit lets `shaper`'s model reach, m, if 5 mm is
 /// beyond it.
-fn reachable_m(spec: &ModelSpec, t_session_s: f64) -> anyhow::Result<Option<f64>> {
-    match shaper(spec)?.program(&motion(WANTED_M), LIMIT_V, t_session_s as f32) {
+fn reachable_m(shaper: &BoardShaper, t_session_s: f64) -> anyhow::Result<Option<f64>> {
+    match shaper.program(&motion(WANTED_M), LIMIT_V, t_session_s as f32) {
         Ok(_) => Ok(None),
         Err(ShapeRefused::Unreachable { reachable_m, .. }) => Ok(Some(f64::from(reachable_m))),
         Err(e) => anyhow::bail!("{e}"),
@@ -308,18 +310,19 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         segments == N,
         "{segments} segments: the rig's board has {N}"
     );
-    let specs = [
-        nominal().spec_for(&geometry)?,
-        baseline.spec_for(&geometry)?,
-        diagnosed.spec_for(&geometry)?,
+    // Each model checked and built once, as the board holds it.
+    let shapers = [
+        shaper(&nominal().spec_for(&geometry)?)?,
+        shaper(&baseline.spec_for(&geometry)?)?,
+        shaper(&diagnosed.spec_for(&geometry)?)?,
     ];
     // The motion starts at the session's end (after a second's rest).
     let t_start_s = end_s + REST_S;
-    let asked_m = reachable_m(&specs[2], t_start_s)?.map_or(WANTED_M, |r| 0.8 * r);
+    let asked_m = reachable_m(&shapers[2], t_start_s)?.map_or(WANTED_M, |r| 0.8 * r);
     let rows = (HOLD_S * RATE_HZ) as u64;
     let mut drives = [None, None, None];
-    for (d, spec) in drives.iter_mut().zip(&specs) {
-        *d = match board_drive(spec, asked_m, t_start_s, rows)? {
+    for (d, shaper) in drives.iter_mut().zip(&shapers) {
+        *d = match board_drive(shaper, asked_m, t_start_s, rows)? {
             Some(wave) => Some(drive(s, &wave, t_start_s, asked_m)?),
             None => None,
         };
