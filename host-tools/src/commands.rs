@@ -142,17 +142,25 @@ fn wave_recording(
         ramp_out_s: args.shape.ramp_out_s.unwrap_or(0.0),
         ..WaveOptions::steady(args.shape.sweep_s.unwrap_or(duration_s))
     };
-    let shaped = match wave.kind() {
-        WaveKind::Motion { .. } => {
+    let (shaped, shaped_options) = match wave.kind() {
+        WaveKind::Motion { .. } | WaveKind::MotionStep { .. } => {
             let spec = model.spec_for(&Geometry::THESIS_2006)?;
-            let shaped = motion::shaped(&wave, &spec, drive.segments, drive.rate_hz, session_s)?;
+            let (shaped, shaped_options) = motion::shaped(
+                &wave,
+                &spec,
+                drive.segments,
+                drive.rate_hz,
+                session_s,
+                &options,
+            )?;
             eprintln!("{} is {}", wave.text(), shaped.text());
-            shaped
+            (shaped, shaped_options)
         }
-        _ => wave.clone(),
+        _ => (wave.clone(), options),
     };
-    let rec =
-        synth::drive_recording_shaped(&shaped, &drive, &options, limits).map_err(drive_flags)?;
+    let rec = synth::drive_recording_shaped(&shaped, &drive, &shaped_options, limits)
+        .map_err(drive_flags)?;
+    // Asked once the ramp-in (a step's rise) is over.
     let start_s = drive.start_row() as f64 / drive.rate_hz;
     let hold_s = (
         start_s + options.ramp_in_s,

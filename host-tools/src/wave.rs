@@ -6,7 +6,13 @@
 //! free tip, which only the strip's model turns into voltages:
 //! `finrs::model::motion`; the board's gain tracker holds it against the
 //! strip's drift), `motion-ff:TIP_AMP_M,HZ,LAG_DEG` (the same, feed-forward
-//! only: the model's voltages as they are).
+//! only: the model's voltages as they are), `motion-step:TIP_M` (the free
+//! tip stepped to `TIP_M` over the ramp-in and held there against the
+//! strip's relaxation, through the model), and
+//! `held:RISE_S,POLE_PER_S,ZERO_PER_S,V[,V..]` (the voltages a
+//! `motion-step:` becomes: each segment's level times the inverse of the
+//! relaxation `(s + z)/(s + p)` over a raised-cosine rise; `ZERO_PER_S` may
+//! be `inf`, a pure lag).
 //!
 //! [`Wave::parse`] checks the syntax only (kind, number of values, finite
 //! numbers). [`Wave::generator`] maps the wave, with its [`WaveOptions`]
@@ -67,7 +73,7 @@ pub enum WaveError {
     },
     /// No such kind.
     #[error(
-        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, motion, motion-ff)"
+        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, held, motion, motion-ff, motion-step)"
     )]
     UnknownKind {
         /// The wave's text.
@@ -75,8 +81,8 @@ pub enum WaveError {
         /// The kind given.
         kind: String,
     },
-    /// A step names neither one level nor one per segment.
-    #[error("wave `{wave}`: step has {levels} levels for {segments} segments")]
+    /// A step or held step names neither one level nor one per segment.
+    #[error("wave `{wave}`: {levels} levels for {segments} segments")]
     Levels {
         /// The wave's text.
         wave: String,
@@ -200,6 +206,24 @@ pub enum WaveKind {
         /// model's voltages are driven as they are (`motion-ff:`).
         tracked: bool,
     },
+    /// A step of the free tip held against the strip's relaxation
+    /// (`model_core::Strip::tip_step`), rising over the ramp-in.
+    MotionStep {
+        /// The tip's deflection once settled, m.
+        tip_m: f64,
+    },
+    /// A held step's voltages (see [`Program::HeldStep`]); one level means
+    /// every segment.
+    HeldStep {
+        /// The raised-cosine rise, s.
+        rise_s: f64,
+        /// The relaxation's pole, 1/s.
+        pole_per_s: f64,
+        /// Its zero, 1/s (`+∞` for a pure lag).
+        zero_per_s: f64,
+        /// Each segment's level, V.
+        levels_v: Vec<f64>,
+    },
     /// Each segment its own sine (see [`Program::Harmonic`]); one pair
     /// means every segment.
     Harmonic {
@@ -260,11 +284,14 @@ impl Wave {
         })?;
         let values = args
             .split(',')
-            .map(|a| {
+            .enumerate()
+            .map(|(i, a)| {
+                // A held step's zero alone may be `inf`: a pure lag.
+                let infinite_ok = kind == "held" && i == 2;
                 a.trim()
                     .parse::<f64>()
                     .ok()
-                    .filter(|v| v.is_finite())
+                    .filter(|v| v.is_finite() || (infinite_ok && *v == f64::INFINITY))
                     .ok_or_else(|| WaveError::NotANumber {
                         wave: spec.to_string(),
                         value: a.to_string(),
@@ -333,6 +360,26 @@ impl Wave {
                     phases_deg: values[2..].iter().step_by(2).copied().collect(),
                 }
             }
+            "held" => {
+                if values.len() < 4 {
+                    return Err(WaveError::Count {
+                        wave: spec.to_string(),
+                        kind: kind.to_string(),
+                        usage: "RISE_S,POLE_PER_S,ZERO_PER_S then V per segment (or one for all)",
+                        got: values.len(),
+                    });
+                }
+                WaveKind::HeldStep {
+                    rise_s: values[0],
+                    pole_per_s: values[1],
+                    zero_per_s: values[2],
+                    levels_v: values[3..].to_vec(),
+                }
+            }
+            "motion-step" => {
+                need(1, "TIP_M")?;
+                WaveKind::MotionStep { tip_m: values[0] }
+            }
             "motion" | "motion-ff" => {
                 need(3, "TIP_AMPLITUDE_M,FREQUENCY_HZ,LAG_DEG")?;
                 WaveKind::Motion {
@@ -368,7 +415,9 @@ impl Wave {
     /// Checks that a step names one level or one per segment.
     pub fn check_segments(&self, segments: usize) -> Result<(), WaveError> {
         match &self.kind {
-            WaveKind::Step { levels_v } if levels_v.len() != 1 && levels_v.len() != segments => {
+            WaveKind::Step { levels_v } | WaveKind::HeldStep { levels_v, .. }
+                if levels_v.len() != 1 && levels_v.len() != segments =>
+            {
                 Err(WaveError::Levels {
                     wave: self.text.clone(),
                     levels: levels_v.len(),
@@ -452,15 +501,42 @@ impl Wave {
         sweep_s: f64,
     ) -> Option<(Program, f64, &'static str)> {
         let f = |x: f64| x as f32;
+        let per_segment = |values: &[f64]| {
+            let mut out = [0.0f32; MAX_SEGMENTS];
+            for (k, v) in out.iter_mut().take(segments).enumerate() {
+                *v = f(values[if values.len() == 1 { 0 } else { k }]);
+            }
+            out
+        };
         Some(match &self.kind {
-            WaveKind::Motion { .. } => return None,
+            WaveKind::Motion { .. } | WaveKind::MotionStep { .. } => return None,
+            &WaveKind::HeldStep {
+                rise_s,
+                pole_per_s,
+                zero_per_s,
+                ref levels_v,
+            } => {
+                let program = Program::HeldStep {
+                    levels_v: per_segment(levels_v),
+                    rise_s: f(rise_s),
+                    pole_per_s: f(pole_per_s),
+                    zero_per_s: f(zero_per_s),
+                };
+                // The generator's own peak (its rules are checked before the
+                // peak is: a refused program's NaN is never read).
+                let peak = Generator::<MAX_SEGMENTS>::new(program, STEADY)
+                    .map_or(f64::NAN, |g| f64::from(g.peak_abs_v()));
+                (program, peak, "largest level times the step's peak")
+            }
             WaveKind::Step { levels_v } => {
-                let mut levels = [0.0f32; MAX_SEGMENTS];
-                for (k, level) in levels.iter_mut().take(segments).enumerate() {
-                    *level = f(levels_v[if levels_v.len() == 1 { 0 } else { k }]);
-                }
                 let peak = levels_v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                (Program::Steps { levels_v: levels }, peak, "largest level")
+                (
+                    Program::Steps {
+                        levels_v: per_segment(levels_v),
+                    },
+                    peak,
+                    "largest level",
+                )
             }
             &WaveKind::Sine {
                 amplitude_v,
@@ -541,6 +617,13 @@ impl Wave {
         })
     }
 }
+
+/// Full gain from the start, for ever: a program's peak is its own.
+const STEADY: Envelope = Envelope {
+    ramp_in_s: 0.0,
+    hold_s: f32::INFINITY,
+    ramp_out_s: 0.0,
+};
 
 /// The firmware's [`Generator<N>`] for a segment count known at run time
 /// (N = 1..=8). Built only through [`Generator::new`], so it holds a
@@ -760,13 +843,26 @@ mod tests {
             ),
             (
                 "wobble:1",
-                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, motion, motion-ff)",
+                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, held, motion, motion-ff, motion-step)",
             ),
             ("step:x", "wave `step:x`: `x` is not a finite number"),
             ("step:nan", "wave `step:nan`: `nan` is not a finite number"),
             (
                 "step:1,inf",
                 "wave `step:1,inf`: `inf` is not a finite number",
+            ),
+            // Only a held step's zero may be infinite.
+            (
+                "held:inf,0.1,inf,1",
+                "wave `held:inf,0.1,inf,1`: `inf` is not a finite number",
+            ),
+            (
+                "held:1,0.1,0.2",
+                "wave `held:1,0.1,0.2`: held takes RISE_S,POLE_PER_S,ZERO_PER_S then V per segment (or one for all), got 3 value(s)",
+            ),
+            (
+                "motion-step:0.001,1",
+                "wave `motion-step:0.001,1`: motion-step takes TIP_M, got 2 value(s)",
             ),
         ] {
             assert_eq!(Wave::parse(spec).unwrap_err().to_string(), message);
@@ -803,7 +899,19 @@ mod tests {
             ),
             (
                 "step:1,2",
-                "wave `step:1,2`: step has 2 levels for 3 segments",
+                "wave `step:1,2`: 2 levels for 3 segments",
+            ),
+            (
+                "held:1,0.1,0.24,1,2",
+                "wave `held:1,0.1,0.24,1,2`: 2 levels for 3 segments",
+            ),
+            (
+                "held:0,0.1,inf,1",
+                "wave `held:0,0.1,inf,1`: HeldStep.rise_s must be above 0",
+            ),
+            (
+                "held:0,0.1,10,1",
+                "wave `held:0,0.1,10,1`: peak 100 V (largest level times the step's peak) exceeds the hard limit of ±4 V",
             ),
             (
                 "step:1e40",
@@ -825,6 +933,39 @@ mod tests {
             wave.generator(3, &offset).unwrap_err().to_string(),
             "offset_v applies to sine:, standing: and harmonic: waves only, not `pulses:1,1,1`"
         );
+    }
+
+    /// A held step: the firmware's program, one level for every segment or
+    /// one each, a pure lag's zero written `inf`; a motion step needs the
+    /// model.
+    #[test]
+    fn a_held_step_is_the_firmwares_program() {
+        // The pure lag's rise peaks near 1 + π/(2 T p) = 8.9 times the level.
+        let g = generator("held:2,0.1,inf,0.4,-0.2,0.125", 3).unwrap();
+        assert_eq!(
+            g.program(),
+            Program::HeldStep {
+                levels_v: [0.4, -0.2, 0.125, 0.0, 0.0, 0.0, 0.0, 0.0],
+                rise_s: 2.0,
+                pole_per_s: 0.1,
+                zero_per_s: f32::INFINITY,
+            }
+        );
+        // Settled, the levels.
+        assert_eq!(
+            g.voltages_at_tick_v(60_000, 1000),
+            vec![0.4f32 as f64, -0.2f32 as f64, 0.125]
+        );
+        let one = generator("held:0,0.1,0.24,0.5", 2).unwrap();
+        // A creep's start: z/p times the level.
+        let start = one.voltages_at_tick_v(0, 1000);
+        assert!(start.iter().all(|v| (v - 1.2).abs() < 1e-6), "{start:?}");
+        let step = Wave::parse("motion-step:0.001").unwrap();
+        assert_eq!(step.kind(), &WaveKind::MotionStep { tip_m: 0.001 });
+        assert!(matches!(
+            step.generator(3, &WaveOptions::steady(1.0)),
+            Err(WaveError::NeedsModel { .. })
+        ));
     }
 
     #[test]

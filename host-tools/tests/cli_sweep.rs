@@ -211,14 +211,24 @@ fn number() -> impl Strategy<Value = String> {
 /// A wave as `finrs wave` and `simulate --wave` take it.
 fn wave_spec() -> impl Strategy<Value = String> {
     let kind = prop::sample::select(vec![
-        "step", "sine", "standing", "chirp", "pulses", "square", "", "STEP",
+        "step",
+        "sine",
+        "standing",
+        "chirp",
+        "pulses",
+        "held",
+        "motion-step",
+        "square",
+        "",
+        "STEP",
     ]);
     prop_oneof![
         4 => (kind, prop::collection::vec(number(), 0..5))
             .prop_map(|(k, v)| format!("{k}:{}", v.join(","))),
         1 => prop::sample::select(vec![
             "step:1", "sine:2.5,1,120", "standing:1,0.5", "chirp:2,0.1,20",
-            "pulses:2.5,0.2,0.2", "step:0,2.5,0", "step", ":", "sine:", "",
+            "pulses:2.5,0.2,0.2", "step:0,2.5,0", "held:1,0.1,inf,0.3", "motion-step:0.001",
+            "step", ":", "sine:", "",
         ])
         .prop_map(String::from),
     ]

@@ -42,7 +42,9 @@ use crate::rounding::round_block;
 use crate::zoh::discretise;
 
 mod harmonic;
+mod step;
 pub use harmonic::{Harmonic, HarmonicError};
+pub use step::{StepError, TipStep};
 
 /// How the tip is held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,7 +10,11 @@
 //! each segment's electrics and relaxation, the crosstalk and the beam's
 //! modes at the motion's frequency, on the strip discretised at the
 //! board's sample time, so that the sampled sine the generator writes is
-//! what the inverse assumed). A motion that needs more than the limit in
+//! what the inverse assumed). A step of the tip ([`Motion::Step`])
+//! becomes a [`Program::HeldStep`]: each segment's level from the model's
+//! static inverse (`model_core::Strip::tip_step`) times the relaxation's
+//! inverse over a raised-cosine rise, the motion's ramp-in (the envelope
+//! then starts at full gain). A motion that needs more than the limit in
 //! force is refused with the amplitude that is reachable, never clipped.
 //! Where the model dries, the motion starts at `1/g(t₀)` of its undried
 //! voltages, `t₀` the session time the SetMotion carries; the controller's
@@ -62,13 +66,13 @@ use core::fmt;
 
 use finrs_drive::{Envelope, Program, WaveError};
 use finrs_frames::{Command, ModelFormatError, ModelRecord, Motion, StripModel};
-use model_core::{Fixture, HarmonicError, ParamError, Strip};
+use model_core::{Fixture, HarmonicError, ParamError, StepError, Strip};
 /// The lock [`command`] takes the controller through (RTIC's), and its
 /// plain form for a controller owned outright.
 pub use rtic_core::{Exclusive, Mutex};
 
 use crate::controller::{CommandRefused, Controller};
-use crate::tracker::{Drying, Target};
+use crate::tracker::{Drying, HeldStep, Shape, Sine, Target, STEP_UPDATE_S};
 
 /// Elements per segment of the board's model: one, whose cubic shape
 /// functions give a piecewise-constant moment's static deflection exactly
@@ -104,6 +108,15 @@ pub enum ShapeRefused {
     NoModel,
     /// SetMotion: the model has no steady sine for this motion (why).
     Harmonic(HarmonicError),
+    /// SetMotion: the model cannot hold this step (why).
+    Step(StepError),
+    /// SetMotion: a step on a model with no instant moment (`a = 0`),
+    /// without a rise (the envelope's ramp-in): its inverse would be an
+    /// impulse.
+    NeedsRise,
+    /// SetMotion: a step asked to be tracked (a step has no sine for the
+    /// currents' lock-in).
+    StepTracked,
     /// SetMotion: the motion needs more than the limit in force.
     Unreachable {
         /// The largest amplitude it needs, V.
@@ -139,6 +152,9 @@ impl fmt::Display for ShapeRefused {
             }
             Self::NoModel => f.write_str(NO_MODEL),
             Self::Harmonic(e) => write!(f, "SetMotion refused: {e}"),
+            Self::Step(e) => write!(f, "SetMotion refused: {e}"),
+            Self::NeedsRise => f.write_str(NEEDS_RISE),
+            Self::StepTracked => f.write_str(STEP_TRACKED),
             Self::Unreachable {
                 needs_v,
                 segment,
@@ -155,6 +171,12 @@ impl fmt::Display for ShapeRefused {
 impl core::error::Error for ShapeRefused {}
 
 const NO_MODEL: &str = "SetMotion refused: no model (finrs tune FIT.toml first)";
+
+const NEEDS_RISE: &str = "SetMotion refused: the model has no instant moment (a = 0): a held \
+     step needs a rise (a ramp-in above 0)";
+
+const STEP_TRACKED: &str =
+    "SetMotion refused: a step cannot be tracked (no sine for the currents' lock-in)";
 
 const NO_SESSION_TIME: &str = "SetMotion refused: the model dries (dehydration_per_s), and the \
      motion came without its session time (finrs wave --session-s)";
@@ -233,6 +255,18 @@ impl fmt::Display for Brief<'_> {
                 f.write_str("SetMotion refused: ")?;
                 harmonic(f, e)
             }
+            ShapeRefused::Step(e) => f.write_str(match e {
+                StepError::Nonlinear { .. } => {
+                    "SetMotion refused: an electrochemical cubic is on: no level holds a step"
+                }
+                StepError::BackRelaxation { .. } => {
+                    "SetMotion refused: the moment relaxes back: a held tip needs a voltage \
+                     that grows without bound"
+                }
+                StepError::NoResponse => "SetMotion refused: no held voltage moves the tip",
+            }),
+            ShapeRefused::NeedsRise => f.write_str(NEEDS_RISE),
+            ShapeRefused::StepTracked => f.write_str(STEP_TRACKED),
             // The others' own words hold no float (written out: a call to
             // the whole `Display` would link the float formatting anyway).
             ShapeRefused::Format(e) => write!(f, "SetModel refused: {e}"),
@@ -323,15 +357,16 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         self.model.as_ref().map(|m| &m.record)
     }
 
-    /// The program that makes `motion` on the model held, starting at
-    /// `t_session_s` on the clock of its drying law (a model that does not
-    /// dry takes any, NaN too), each segment's amplitude at most `limit_v`;
-    /// and what the controller holds it to (the model's admittances, the
-    /// drying law).
+    /// The program that makes `motion` under `envelope` on the model held,
+    /// starting at `t_session_s` on the clock of its drying law (a model
+    /// that does not dry takes any, NaN too), each segment within
+    /// `limit_v`; the envelope to drive it with; and what the controller
+    /// holds it to (the model's admittances, the drying law).
     #[inline(never)]
     pub fn program(
         &self,
         motion: &Motion,
+        envelope: Envelope,
         limit_v: f32,
         t_session_s: f32,
     ) -> Result<ShapedMotion<N>, ShapeRefused> {
@@ -348,15 +383,63 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         } else {
             return Err(ShapeRefused::NoSessionTime);
         };
-        // The strip's moment gain is 1; dried, every voltage is 1/g.
-        let g0 = drying.map_or(1.0, |d| d.gain(0.0));
-        let &Motion::Travelling {
-            tip_amp_m,
-            frequency_hz,
-            lag_deg_per_segment,
-        } = motion;
-        let v = model
-            .strip
+        let (program, envelope, shape, drying) = match *motion {
+            Motion::Travelling {
+                tip_amp_m,
+                frequency_hz,
+                lag_deg_per_segment,
+            } => {
+                // The strip's moment gain is 1; dried, every voltage is 1/g.
+                let g0 = drying.map_or(1.0, |d| d.gain(0.0));
+                let (program, sine) = Self::sines(
+                    &model.strip,
+                    tip_amp_m,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                    limit_v,
+                    g0,
+                )?;
+                (program, envelope, Shape::Sine(sine), drying)
+            }
+            Motion::Step { tip_m } => {
+                let (program, step, drying) =
+                    Self::held_step(&model.strip, tip_m, envelope.ramp_in_s, limit_v, drying)?;
+                // The rise is the program's own: the envelope only ends it.
+                let envelope = Envelope {
+                    ramp_in_s: 0.0,
+                    ..envelope
+                };
+                (program, envelope, Shape::Step(step), drying)
+            }
+        };
+        let target = Target {
+            shape,
+            track_currents: false,
+            drying,
+        };
+        Ok(ShapedMotion {
+            program,
+            envelope,
+            target,
+        })
+    }
+
+    /// A travelling wave's sines (`Strip::tip_wave`), each amplitude
+    /// `1/g0` of the undried one, and the sines undried with each
+    /// segment's admittance.
+    // Not inlined, nor is `held_step`: each has its own solve's arrays, and
+    // inlined side by side their frames would add up on the command
+    // task's stack.
+    #[inline(never)]
+    fn sines(
+        strip: &Strip<f32, N, E, S>,
+        tip_amp_m: f32,
+        frequency_hz: f32,
+        lag_deg_per_segment: f32,
+        limit_v: f32,
+        g0: f64,
+    ) -> Result<(Program, Sine<N>), ShapeRefused> {
+        let v = strip
             .tip_wave(
                 f64::from(frequency_hz),
                 f64::from(tip_amp_m),
@@ -373,19 +456,8 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         }
         // The f32 amplitudes, as the generator and the controller's limit
         // check will see them.
-        let (k, needs_v) = amplitudes_v
-            .iter()
-            .enumerate()
-            .fold((0, 0.0f32), |m, (k, &a)| if a > m.1 { (k, a) } else { m });
-        if needs_v > limit_v {
-            return Err(ShapeRefused::Unreachable {
-                needs_v,
-                segment: k as u8 + 1,
-                limit_v,
-                // Linear: the voltages scale with the amplitude asked.
-                reachable_m: tip_amp_m.abs() * limit_v / needs_v,
-            });
-        }
+        let (k, needs_v) = largest(&amplitudes_v[..N]);
+        within(needs_v, k, limit_v, tip_amp_m)?;
         let program = Program::Harmonic {
             frequency_hz,
             offset_v: 0.0,
@@ -394,34 +466,122 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         };
         // The generator's own rules (frequency range, finite values); the
         // envelope is the command's, checked where it is used.
-        let steady = Envelope {
-            ramp_in_s: 0.0,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 0.0,
-        };
-        finrs_drive::Generator::<N>::new(program, steady).map_err(ShapeRefused::Wave)?;
+        finrs_drive::Generator::<N>::new(program, STEADY).map_err(ShapeRefused::Wave)?;
         // Each segment's admittance as its shunt samples it.
-        let currents = model
-            .strip
+        let currents = strip
             .sampled_admittance(f64::from(frequency_hz))
             .map_err(ShapeRefused::Harmonic)?;
-        let target = Target {
+        let sine = Sine {
             frequency_hz,
             amplitudes_v: undried_v,
             phases_deg: core::array::from_fn(|k| phases_deg[k]),
             admittance_a_per_v: currents.map(|y| [y.re as f32, y.im as f32]),
-            track_currents: false,
-            drying,
         };
-        Ok(ShapedMotion { program, target })
+        Ok((program, sine))
     }
+
+    /// A held step (`Strip::tip_step`) rising over `rise_s`, its levels
+    /// undried and as driven, and the drying law it follows.
+    ///
+    /// A level's change reaches the moment through the relaxation: at
+    /// once by `p/z` of it, the rest with `e^{−z t}`. For the slow drying
+    /// the inverse `(s + p) z/((s + z) p) ≈ 1 + (1/p − 1/z) s` is a lead:
+    /// the levels follow the law `1/p − 1/z` ahead (and half an update
+    /// more, each correction being held for [`STEP_UPDATE_S`]); a law
+    /// followed on time leaves a creeping strip's tip 0.9 % behind.
+    #[inline(never)]
+    fn held_step(
+        strip: &Strip<f32, N, E, S>,
+        tip_m: f32,
+        rise_s: f32,
+        limit_v: f32,
+        drying: Option<Drying>,
+    ) -> Result<(Program, HeldStep<N>, Option<Drying>), ShapeRefused> {
+        let step = strip
+            .tip_step(f64::from(tip_m))
+            .map_err(ShapeRefused::Step)?;
+        // A rise that is not a duration is the generator's to refuse.
+        if step.zero_per_s.is_infinite() && rise_s == 0.0 {
+            return Err(ShapeRefused::NeedsRise);
+        }
+        let lead_s = 1.0 / step.pole_per_s - 1.0 / step.zero_per_s + 0.5 * f64::from(STEP_UPDATE_S);
+        let drying = drying.map(|d| Drying {
+            t_start_s: d.t_start_s + lead_s,
+            ..d
+        });
+        let g0 = drying.map_or(1.0, |d| d.gain(0.0));
+        let mut levels_v = [0.0f32; 8];
+        for (l, &v) in levels_v.iter_mut().zip(&step.levels_v) {
+            *l = (v / g0) as f32;
+        }
+        let program = Program::HeldStep {
+            levels_v,
+            rise_s,
+            pole_per_s: step.pole_per_s as f32,
+            zero_per_s: step.zero_per_s as f32,
+        };
+        let generator =
+            finrs_drive::Generator::<N>::new(program, STEADY).map_err(ShapeRefused::Wave)?;
+        // The peak of the whole program (a creep's start, a pure lag's
+        // rise), on the segment of the largest level.
+        let needs_v = generator.peak_abs_v();
+        let magnitudes: [f32; N] = core::array::from_fn(|k| levels_v[k].abs());
+        let (k, largest_v) = largest(&magnitudes);
+        within(needs_v, k, limit_v, tip_m)?;
+        let held = HeldStep {
+            levels_v: step.levels_v.map(|v| v as f32),
+            rise_s,
+            pole_per_s: step.pole_per_s as f32,
+            zero_per_s: step.zero_per_s as f32,
+            peak_per_level: if largest_v > 0.0 {
+                needs_v / largest_v
+            } else {
+                1.0
+            },
+        };
+        Ok((program, held, drying))
+    }
+}
+
+/// A program's own envelope while it is checked: full from the start.
+const STEADY: Envelope = Envelope {
+    ramp_in_s: 0.0,
+    hold_s: f32::INFINITY,
+    ramp_out_s: 0.0,
+};
+
+/// Refuses a motion of `asked_m` whose largest voltage, `needs_v` on
+/// segment `k` (from 0), is above `limit_v`, with the motion the limit
+/// reaches: the voltages scale with the motion asked.
+fn within(needs_v: f32, k: usize, limit_v: f32, asked_m: f32) -> Result<(), ShapeRefused> {
+    if needs_v > limit_v {
+        return Err(ShapeRefused::Unreachable {
+            needs_v,
+            segment: k as u8 + 1,
+            limit_v,
+            reachable_m: asked_m.abs() * limit_v / needs_v,
+        });
+    }
+    Ok(())
+}
+
+/// The index and value of the largest of `values` (the first if tied).
+fn largest(values: &[f32]) -> (usize, f32) {
+    values
+        .iter()
+        .enumerate()
+        .fold((0, 0.0f32), |m, (k, &a)| if a > m.1 { (k, a) } else { m })
 }
 
 /// A motion as the model held shapes it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapedMotion<const N: usize> {
-    /// Each segment's sine ([`Program::Harmonic`]).
+    /// The voltages: each segment's sine ([`Program::Harmonic`]) or a held
+    /// step ([`Program::HeldStep`]).
     pub program: Program,
+    /// The envelope to drive it with (a step's ramp-in is its program's
+    /// rise).
+    pub envelope: Envelope,
     /// The same undried, with the model's admittances and drying law:
     /// what the controller holds it to (its `track_currents` false: the
     /// command says).
@@ -462,15 +622,19 @@ pub fn command<const N: usize, const E: usize, const S: usize>(
             t_session_s,
             tracked,
         } => {
+            // A step has no sine whose currents the tracker could lock in to.
+            if tracked && matches!(motion, Motion::Step { .. }) {
+                return Err(ShapeRefused::StepTracked);
+            }
             let limit_v = lock.lock(|ctl| ctl.limits().max_abs_v());
-            let shaped = shaper.program(&motion, limit_v, t_session_s)?;
+            let shaped = shaper.program(&motion, envelope, limit_v, t_session_s)?;
             let target = Target {
                 track_currents: tracked,
                 ..shaped.target
             };
             // Held when tracked, or while the model dries; else as shaped.
             let target = (tracked || target.drying.is_some()).then_some(target);
-            lock.lock(|ctl| ctl.motion(shaped.program, envelope, target))
+            lock.lock(|ctl| ctl.motion(shaped.program, shaped.envelope, target))
                 .map_err(ShapeRefused::Controller)?;
             Ok(Shaped::WaveSet)
         }

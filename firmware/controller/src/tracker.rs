@@ -32,6 +32,9 @@
 //! untracked too, and it is the only part that follows a moment per
 //! charge that weakens.
 //!
+//! A held step (`motion-step:`, [`Shape::Step`]) has no sine to lock in
+//! to: only the drying law holds it, every [`STEP_UPDATE_S`].
+//!
 //! Bounds: a correction's gain stays within `[1/B, B]`, `B` =
 //! [`MAX_CORRECTION`] (a strip further off is not the model's: refit it),
 //! and a corrected amplitude is held at the voltage limit in force; either
@@ -40,14 +43,16 @@
 //! starts are not used: the electrics settle from rest in them.
 //!
 //! ```
-//! use finrs_controller::tracker::{Target, Tracker};
+//! use finrs_controller::tracker::{Shape, Sine, Target, Tracker};
 //! // One segment whose admittance is half the model's (its R1 doubled,
 //! // say): the tracker finds twice the model's voltage.
 //! let target = Target::<1> {
-//!     frequency_hz: 10.0,
-//!     amplitudes_v: [1.0],
-//!     phases_deg: [0.0],
-//!     admittance_a_per_v: [[0.02, 0.0]],
+//!     shape: Shape::Sine(Sine {
+//!         frequency_hz: 10.0,
+//!         amplitudes_v: [1.0],
+//!         phases_deg: [0.0],
+//!         admittance_a_per_v: [[0.02, 0.0]],
+//!     }),
 //!     track_currents: true,
 //!     drying: None,
 //! };
@@ -78,11 +83,35 @@ pub const MAX_CORRECTION: f32 = 2.0;
 /// Periods after the start of a motion that the fit does not use.
 pub const SETTLE_PERIODS: u32 = 1;
 
-/// What the tracker holds a motion to: the model's program and the
-/// model's admittances at its frequency (the shaper's, from the model the
-/// board holds).
+/// How often a held step's levels follow the drying law, s: drying takes
+/// minutes.
+pub const STEP_UPDATE_S: f32 = 1.0;
+
+/// What the tracker holds a motion to: the model's program (the shaper's,
+/// from the model the board holds), and what it follows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Target<const N: usize> {
+    /// The model's program.
+    pub shape: Shape<N>,
+    /// Whether the currents' admittance is tracked (`motion:`; a sine
+    /// only), or only the drying law followed (`motion-ff:`).
+    pub track_currents: bool,
+    /// The model's drying law, if it dries.
+    pub drying: Option<Drying>,
+}
+
+/// The model's program of a motion, as the tracker corrects it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape<const N: usize> {
+    /// A travelling wave's sines ([`Program::Harmonic`]).
+    Sine(Sine<N>),
+    /// A held step ([`Program::HeldStep`]).
+    Step(HeldStep<N>),
+}
+
+/// Each segment's sine, and its admittance at the sine's frequency.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sine<const N: usize> {
     /// The wave's frequency, Hz.
     pub frequency_hz: f32,
     /// Each segment's voltage amplitude in the model's program, V.
@@ -92,11 +121,23 @@ pub struct Target<const N: usize> {
     /// `Y`: each segment's admittance in the model at `frequency_hz`, A/V,
     /// as (re, im) of the phasor ratio `I/V`.
     pub admittance_a_per_v: [[f32; 2]; N],
-    /// Whether the currents' admittance is tracked (`motion:`), or only
-    /// the drying law followed (`motion-ff:`).
-    pub track_currents: bool,
-    /// The model's drying law, if it dries.
-    pub drying: Option<Drying>,
+}
+
+/// A held step's program ([`Program::HeldStep`]'s fields).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldStep<const N: usize> {
+    /// Each segment's level, V.
+    pub levels_v: [f32; N],
+    /// The rise, s.
+    pub rise_s: f32,
+    /// The relaxation's pole, 1/s.
+    pub pole_per_s: f32,
+    /// Its zero, 1/s.
+    pub zero_per_s: f32,
+    /// The largest voltage per volt of level (the generator's peak over
+    /// the largest level): a corrected level is held so that its peak
+    /// stays within the limit.
+    pub peak_per_level: f32,
 }
 
 /// A model's drying law ([`model_core::drying_gain`]) and the session
@@ -163,7 +204,11 @@ impl<const N: usize> Tracker<N> {
     /// A tracker for `target` on a board sampling at `sample_hz`.
     pub fn new(target: Target<N>, sample_hz: u32) -> Self {
         const { assert!(N >= 1 && N <= MAX_SEGMENTS) };
-        let cycles_per_tick = target.frequency_hz / sample_hz as f32;
+        // A step's "period" is the drying law's update.
+        let cycles_per_tick = match target.shape {
+            Shape::Sine(s) => s.frequency_hz,
+            Shape::Step(_) => 1.0 / STEP_UPDATE_S,
+        } / sample_hz as f32;
         let (s, c) = libm::sincosf(TAU * cycles_per_tick);
         Self {
             target,
@@ -192,7 +237,7 @@ impl<const N: usize> Tracker<N> {
         self.ticks = self.ticks.saturating_add(1);
         let [c, s] = self.reference;
         // Only a tracked motion's fit reads the lock-in.
-        if self.target.track_currents {
+        if self.tracks_currents() {
             for k in 0..N {
                 self.v_sum[k][0] += applied_v[k] * c;
                 self.v_sum[k][1] -= applied_v[k] * s;
@@ -215,7 +260,7 @@ impl<const N: usize> Tracker<N> {
         let (v, i) = (self.v_sum, self.i_sum);
         self.v_sum = [[0.0; 2]; N];
         self.i_sum = [[0.0; 2]; N];
-        let tracked = self.target.track_currents && self.periods > SETTLE_PERIODS;
+        let tracked = self.tracks_currents() && self.periods > SETTLE_PERIODS;
         if !tracked && self.target.drying.is_none() {
             return None;
         }
@@ -235,9 +280,17 @@ impl<const N: usize> Tracker<N> {
         Some(out)
     }
 
+    /// Whether the currents are tracked: asked, and a sine to lock in to.
+    fn tracks_currents(&self) -> bool {
+        self.target.track_currents && matches!(self.target.shape, Shape::Sine(_))
+    }
+
     /// The period's phasors `v`, `i` into the fit, and its correction of
     /// each segment into `out`.
     fn fit(&mut self, v: &[[f32; 2]; N], i: &[[f32; 2]; N], out: &mut Correction<N>) {
+        let Shape::Sine(sine) = self.target.shape else {
+            return;
+        };
         for k in 0..N {
             let [vr, vi] = v[k];
             let [ir, ii] = i[k];
@@ -252,7 +305,7 @@ impl<const N: usize> Tracker<N> {
                 // A segment not driven (or not drawing): nothing to correct.
                 continue;
             }
-            let [yr, yi] = self.target.admittance_a_per_v[k];
+            let [yr, yi] = sine.admittance_a_per_v[k];
             // Y S̄ / |S|², times P.
             let scale = self.p[k] / den;
             let cr = (yr * sr + yi * si) * scale;
@@ -275,23 +328,45 @@ impl<const N: usize> Tracker<N> {
     /// ([`TrackingFlags::AT_LIMIT`] if an amplitude was held).
     pub fn program(&self, c: &Correction<N>, limit_v: f32) -> (Program, u8) {
         let mut flags = c.flags;
-        let mut amplitudes_v = [0.0; MAX_SEGMENTS];
-        let mut phases_deg = [0.0; MAX_SEGMENTS];
-        for k in 0..N {
-            let a = self.target.amplitudes_v[k] * c.gains[k];
-            amplitudes_v[k] = if a > limit_v {
+        let mut at_limit = |a: f32, most: f32| {
+            if a > most {
                 flags |= TrackingFlags::AT_LIMIT;
-                limit_v
+                most
             } else {
                 a
-            };
-            phases_deg[k] = self.target.phases_deg[k] + c.phases_deg[k];
-        }
-        let program = Program::Harmonic {
-            frequency_hz: self.target.frequency_hz,
-            offset_v: 0.0,
-            amplitudes_v,
-            phases_deg,
+            }
+        };
+        let program = match self.target.shape {
+            Shape::Sine(sine) => {
+                let mut amplitudes_v = [0.0; MAX_SEGMENTS];
+                let mut phases_deg = [0.0; MAX_SEGMENTS];
+                for k in 0..N {
+                    amplitudes_v[k] = at_limit(sine.amplitudes_v[k] * c.gains[k], limit_v);
+                    phases_deg[k] = sine.phases_deg[k] + c.phases_deg[k];
+                }
+                Program::Harmonic {
+                    frequency_hz: sine.frequency_hz,
+                    offset_v: 0.0,
+                    amplitudes_v,
+                    phases_deg,
+                }
+            }
+            Shape::Step(step) => {
+                // Each level's magnitude held so that its peak is within
+                // the limit; its sign kept.
+                let most = limit_v / step.peak_per_level;
+                let mut levels_v = [0.0; MAX_SEGMENTS];
+                for ((out, level), gain) in levels_v.iter_mut().zip(step.levels_v).zip(c.gains) {
+                    let l = level * gain;
+                    *out = libm::copysignf(at_limit(libm::fabsf(l), most), l);
+                }
+                Program::HeldStep {
+                    levels_v,
+                    rise_s: step.rise_s,
+                    pole_per_s: step.pole_per_s,
+                    zero_per_s: step.zero_per_s,
+                }
+            }
         };
         (program, flags)
     }

@@ -71,13 +71,16 @@ fn the_shaped_voltages_move_the_models_tip_as_asked() {
         frequency_hz: 1.0,
         lag_deg_per_segment: 60.0,
     };
-    let program = shaper.program(&asked, 4.0, f32::NAN).unwrap().program;
-    assert!(matches!(program, Program::Harmonic { .. }));
     let steady = Envelope {
         ramp_in_s: 0.0,
         hold_s: f32::INFINITY,
         ramp_out_s: 0.0,
     };
+    let program = shaper
+        .program(&asked, steady, 4.0, f32::NAN)
+        .unwrap()
+        .program;
+    assert!(matches!(program, Program::Harmonic { .. }));
     let generator = Generator::<N>::new(program, steady).unwrap();
     // The plant: the model decoded from the record, in f64.
     let m = record.decode().unwrap();

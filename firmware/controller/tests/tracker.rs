@@ -7,17 +7,16 @@
 
 mod common;
 
-use common::{config, input, Channel};
-use finrs_controller::shaper::{command, Shaped, Shaper, ELEMENTS};
+use common::{config, input, tared_with_model, Channel};
+use finrs_controller::shaper::{command, Shaped};
 use finrs_controller::tracker::MAX_CORRECTION;
 use finrs_controller::{Config, Controller};
 use finrs_drive::{Envelope, Limits};
-use finrs_frames::{Command, Event, ModelRecord, Motion, StripModel, TrackingFlags};
+use finrs_frames::{Command, Event, Motion, StripModel, TrackingFlags};
 use model_core::{state_len, Extensions, Fixture, Params, Phasor, Strip};
 use rtic_core::Exclusive;
 
 const N: usize = 3;
-const S: usize = state_len(N, ELEMENTS);
 const HZ: u32 = 1000;
 const TIP_M: f64 = 1e-4;
 
@@ -43,28 +42,6 @@ fn fine_config() -> Config {
         limits: Limits::new(4.0, 100.0).unwrap(),
         ..config()
     }
-}
-
-/// A controller on `config` past its tare, its channel and next tick,
-/// and a shaper holding `m` (the SetModel taken).
-fn tared_with_model(
-    config: Config,
-    m: &StripModel,
-) -> (Controller<N>, Channel, u64, Shaper<N, ELEMENTS, S>) {
-    let mut c = Controller::<N>::new(config).unwrap();
-    let mut ch = Channel::default();
-    let mut tick = 0;
-    while c.taring() {
-        c.tick(&input(tick, 1000, [2048; N]), &mut ch);
-        tick += 1;
-    }
-    let mut shaper = Shaper::<N, ELEMENTS, S>::new();
-    let set = Command::SetModel(ModelRecord::encode(m));
-    assert_eq!(
-        command(set, &mut shaper, 1e-3, &mut Exclusive(&mut c)),
-        Ok(Shaped::ModelSet)
-    );
-    (c, ch, tick, shaper)
 }
 
 /// `motion:TIP_M,1,60` (or `motion-ff:` if not `tracked`), steady, from
@@ -219,13 +196,15 @@ fn off_the_scale_family_the_tracker_corrects_in_part() {
 /// is found within a period, whatever the reference phase of the lock-in.
 #[test]
 fn the_tracker_finds_a_complex_admittance_ratio() {
-    use finrs_controller::tracker::{Target, Tracker};
+    use finrs_controller::tracker::{Shape, Sine, Target, Tracker};
     // The model: 20 mA/V in phase; the strip: 10 mA/V leading by 30°.
     let target = Target::<2> {
-        frequency_hz: 2.5,
-        amplitudes_v: [1.0, 0.5],
-        phases_deg: [0.0, -90.0],
-        admittance_a_per_v: [[0.02, 0.0], [0.02, 0.0]],
+        shape: Shape::Sine(Sine {
+            frequency_hz: 2.5,
+            amplitudes_v: [1.0, 0.5],
+            phases_deg: [0.0, -90.0],
+            admittance_a_per_v: [[0.02, 0.0], [0.02, 0.0]],
+        }),
         track_currents: true,
         drying: None,
     };

@@ -85,6 +85,16 @@ pub(crate) fn expm1_over(u: f32) -> f32 {
     }
 }
 
+/// `e^{−x}` for `x ≥ 0` (+∞ too), to a few ulps; 0 above 80, where it is
+/// below 2e-35.
+pub(crate) fn exp_neg(x: f32) -> f32 {
+    if x > 80.0 {
+        0.0
+    } else {
+        1.0 / exp(x)
+    }
+}
+
 /// eᵘ for 0 ≤ u ≤ 80: u = k ln 2 + y with |y| ≤ ln2/2, eʸ by its Taylor
 /// series to y⁸ (the rest is below 2e-10), then scaled by 2ᵏ exactly.
 fn exp(u: f32) -> f32 {

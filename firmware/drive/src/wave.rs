@@ -27,8 +27,10 @@ pub const MAX_PROGRAM_V: f32 = 1000.0;
 /// What each segment does. The host's one `--wave` parser (`finrs::wave`)
 /// maps its texts onto these kinds one to one (`step:` → `Steps`, `sine:`
 /// → `Travelling`, `standing:` → `Standing`, `chirp:` → `Chirp`,
-/// `pulses:` → `Pulses`, `harmonic:` → `Harmonic`), and the host evaluates them with this generator
-/// too: `finrs simulate` and the firmware drive the same voltages.
+/// `pulses:` → `Pulses`, `harmonic:` → `Harmonic`; `HeldStep` comes only
+/// from a `motion-step:` through the strip's model), and the host
+/// evaluates them with this generator too: `finrs simulate` and the
+/// firmware drive the same voltages.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Program {
     /// Travelling sine: segment k gets `offset_v + amplitude_v · sin(2π
@@ -105,6 +107,25 @@ pub enum Program {
         amplitudes_v: [f32; 8],
         /// Each segment's phase, degrees (ahead for a positive one).
         phases_deg: [f32; 8],
+    },
+    /// A step held against the strip's relaxation (`motion-step:`,
+    /// `model_core::Strip::tip_step`): segment k gets `levels_v[k] · y(t)`,
+    /// `y` the inverse of a relaxation `(s + z)/(s + p)` (pole `p`, zero
+    /// `z`) applied to a raised-cosine rise `ρ` from 0 to 1 over `rise_s`:
+    /// `y = ρ + (z − p)/p · (e^{−z t} ∗ ρ′)`, in closed form. `y` ends at 1;
+    /// it starts above it for a creep (`z > p`: more voltage while the
+    /// moment has not yet grown) and below it for a partial relaxation.
+    /// Entries beyond the generator's N segments are ignored.
+    HeldStep {
+        /// Each segment's voltage once settled, V.
+        levels_v: [f32; 8],
+        /// Length of the raised-cosine rise, s (≥ 0; above 0 for `z = ∞`).
+        rise_s: f32,
+        /// The relaxation's pole `p`, 1/s (above 0).
+        pole_per_s: f32,
+        /// Its zero `z`, 1/s (above 0; `+∞` for a pure lag, whose inverse
+        /// is `ρ + ρ′/p`).
+        zero_per_s: f32,
     },
 }
 
@@ -200,6 +221,8 @@ pub struct Generator<const N: usize> {
     per_segment: [f32; N],
     /// Chirp: ln(end_hz / start_hz).
     chirp_ln_ratio: f32,
+    /// HeldStep: the largest `y` (see [`Program::HeldStep`]).
+    held_peak: f32,
 }
 
 impl<const N: usize> Generator<N> {
@@ -211,6 +234,7 @@ impl<const N: usize> Generator<N> {
         check_envelope(&envelope)?;
         let mut per_segment = [0.0; N];
         let mut chirp_ln_ratio = 0.0;
+        let mut held_peak = 0.0;
         match program {
             Program::Travelling {
                 lag_deg_per_segment,
@@ -238,6 +262,21 @@ impl<const N: usize> Generator<N> {
             Program::Chirp {
                 start_hz, end_hz, ..
             } => chirp_ln_ratio = math::ln(end_hz / start_hz),
+            Program::HeldStep {
+                levels_v,
+                rise_s,
+                pole_per_s,
+                zero_per_s,
+            } => {
+                held_peak = held_step_peak(rise_s, pole_per_s, zero_per_s);
+                let level = levels_v[..N]
+                    .iter()
+                    .fold(0.0, |m: f32, &v| m.max(math::abs(v)));
+                let peak = held_peak * level;
+                if peak.is_nan() || peak > MAX_PROGRAM_V {
+                    return Err(err("HeldStep.levels_v", WaveRule::ProgramRange));
+                }
+            }
             Program::Steps { .. } | Program::Pulses { .. } => {}
         }
         Ok(Generator {
@@ -245,6 +284,7 @@ impl<const N: usize> Generator<N> {
             envelope,
             per_segment,
             chirp_ln_ratio,
+            held_peak,
         })
     }
 
@@ -268,6 +308,12 @@ impl<const N: usize> Generator<N> {
             Program::Steps { levels_v } => levels_v[..N]
                 .iter()
                 .fold(0.0, |peak: f32, &v| peak.max(math::abs(v))),
+            Program::HeldStep { levels_v, .. } => {
+                self.held_peak
+                    * levels_v[..N]
+                        .iter()
+                        .fold(0.0, |peak: f32, &v| peak.max(math::abs(v)))
+            }
             Program::Pulses {
                 amplitude_v, on_s, ..
             } => {
@@ -371,6 +417,19 @@ impl<const N: usize> Generator<N> {
                 }
             }
             Program::Steps { levels_v } => v.copy_from_slice(&levels_v[..N]),
+            Program::HeldStep {
+                levels_v,
+                rise_s,
+                pole_per_s,
+                zero_per_s,
+            } => {
+                // Past the rise, the part of a second is enough: e^{−z t}
+                // has decayed long before an f32 time loses its ms.
+                let y = held_step(whole_s as f32 + frac_s, rise_s, pole_per_s, zero_per_s);
+                for (out, level) in v.iter_mut().zip(levels_v) {
+                    *out = level * y;
+                }
+            }
             Program::Pulses {
                 amplitude_v,
                 on_s,
@@ -417,6 +476,71 @@ impl<const N: usize> Generator<N> {
         }
         0.0
     }
+}
+
+/// `y(t)` of [`Program::HeldStep`] (checked values): with `ω = π/T`,
+/// `u = ω/z` (0 for `z = ∞`), for `t ≤ T`
+///
+/// `z E = ½(1 − e^{−zt}) − ½(cos ωt + u sin ωt − e^{−zt})/(1 + u²)`,
+/// `(z/p) D = ω/(2p) · (sin ωt − u cos ωt + u e^{−zt})/(1 + u²)`,
+///
+/// `E = e^{−z·} ∗ ρ` and `D = e^{−z·} ∗ ρ′`; `y = z E + (z/p) D`, written
+/// in `u` so that a pure lag (`z = ∞`) is the same formula, without the
+/// cancellation `ρ − z E` would have for a large `z`. After the rise both
+/// parts relax to their ends with `e^{−z(t − T)}`: `z E` to 1, `D` to 0.
+/// With no rise (`T = 0`, `z` finite): `y = 1 + (z/p − 1) e^{−zt}`.
+fn held_step(t_s: f32, rise_s: f32, p: f32, z: f32) -> f32 {
+    if rise_s == 0.0 {
+        return 1.0 + (z / p - 1.0) * math::exp_neg(z * t_s);
+    }
+    let w = PI / rise_s;
+    let u = w / z;
+    let k = 1.0 / (1.0 + u * u);
+    let tr = t_s.min(rise_s);
+    // At t = 0 and z = ∞, z t is NaN: e^{−z·0} is 1.
+    let e = if tr == 0.0 {
+        1.0
+    } else {
+        math::exp_neg(z * tr)
+    };
+    // At the rise's end exactly: sin π = 0, cos π = −1 (micromath's are
+    // off by 1e-3).
+    let (s, c) = if t_s >= rise_s {
+        (0.0, -1.0)
+    } else {
+        (F32Ext::sin(w * tr), F32Ext::cos(w * tr))
+    };
+    let ze = 0.5 * (1.0 - e) - 0.5 * (c + u * s - e) * k;
+    let d = w / (2.0 * p) * (s - u * c + u * e) * k;
+    if t_s <= rise_s {
+        return ze + d;
+    }
+    let f = math::exp_neg(z * (t_s - rise_s));
+    (ze + d - 1.0) * f + 1.0
+}
+
+/// The largest `y` of a [`Program::HeldStep`] (checked values): `y` ends
+/// at 1 and, after the rise, moves monotonically from its value at the
+/// rise's end to 1, so the peak is 1, the start (no rise), or in the rise:
+/// the best of 64 points and the end, then refined between its
+/// neighbours by ternary search (`y` is smooth there).
+fn held_step_peak(rise_s: f32, p: f32, z: f32) -> f32 {
+    let y = |t: f32| held_step(t, rise_s, p, z);
+    if rise_s == 0.0 {
+        return y(0.0).max(1.0);
+    }
+    let at = |i: u32| rise_s * i as f32 / 64.0;
+    let best = (0..=64).fold(0, |b, i| if y(at(i)) > y(at(b)) { i } else { b });
+    let (mut lo, mut hi) = (at(best.saturating_sub(1)), at((best + 1).min(64)));
+    for _ in 0..24 {
+        let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+        if y(a) < y(b) {
+            lo = a;
+        } else {
+            hi = b;
+        }
+    }
+    y(at(best)).max(y(0.5 * (lo + hi))).max(1.0)
 }
 
 /// ½ − ½ cos(π x) for x in [0, 1): from 0 to 1 with zero slope at both
@@ -543,6 +667,32 @@ fn check_program<const N: usize>(program: &Program) -> Result<(), WaveError> {
             phases_deg[..N]
                 .iter()
                 .try_for_each(|&p| finite("Harmonic.phases_deg", p))
+        }
+        Program::HeldStep {
+            levels_v,
+            rise_s,
+            pole_per_s,
+            zero_per_s,
+        } => {
+            levels_v[..N]
+                .iter()
+                .try_for_each(|&v| volts("HeldStep.levels_v", v))?;
+            duration("HeldStep.rise_s", rise_s)?;
+            finite("HeldStep.pole_per_s", pole_per_s)?;
+            if pole_per_s <= 0.0 {
+                return Err(err("HeldStep.pole_per_s", WaveRule::Positive));
+            }
+            if zero_per_s.is_nan() {
+                return Err(err("HeldStep.zero_per_s", WaveRule::NotNan));
+            }
+            if zero_per_s <= 0.0 {
+                return Err(err("HeldStep.zero_per_s", WaveRule::Positive));
+            }
+            // The pure lag's inverse of an instant step is an impulse.
+            if zero_per_s.is_infinite() && rise_s == 0.0 {
+                return Err(err("HeldStep.rise_s", WaveRule::Positive));
+            }
+            Ok(())
         }
         Program::Pulses {
             amplitude_v,

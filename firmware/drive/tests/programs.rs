@@ -519,13 +519,43 @@ fn refuses_each_broken_field_by_name_and_rule() {
     // Exactly at the ends of the ranges is accepted.
     assert!(Generator::<4>::new(travelling(0.0, 100.0), e).is_ok());
     assert!(Generator::<4>::new(travelling(1000.0, 0.001), e).is_ok());
+    // A held step: each field, and a peak (the start of a creep, z/p
+    // times the level) beyond the program's range.
+    let mut nan_level = held(0.5, 0.1, 0.24);
+    if let Program::HeldStep { levels_v, .. } = &mut nan_level {
+        levels_v[2] = f32::NAN;
+    }
+    for (p, want) in [
+        (nan_level, is("HeldStep.levels_v", Finite)),
+        (held(-0.1, 0.1, 0.24), is("HeldStep.rise_s", NonNegative)),
+        (
+            held(f32::INFINITY, 0.1, 0.24),
+            is("HeldStep.rise_s", Finite),
+        ),
+        (held(0.5, 0.0, 0.24), is("HeldStep.pole_per_s", Positive)),
+        (
+            held(0.5, f32::INFINITY, 0.24),
+            is("HeldStep.pole_per_s", Finite),
+        ),
+        (held(0.5, 0.1, f32::NAN), is("HeldStep.zero_per_s", NotNan)),
+        (held(0.5, 0.1, -0.2), is("HeldStep.zero_per_s", Positive)),
+        (
+            held(0.0, 0.1, f32::INFINITY),
+            is("HeldStep.rise_s", Positive),
+        ),
+        (held(0.0, 1e-3, 1e3), is("HeldStep.levels_v", ProgramRange)),
+    ] {
+        assert_eq!(Generator::<3>::new(p, e).unwrap_err(), want, "{p:?}");
+    }
 }
 
 /// The peak each kind asks for is the largest voltage it reaches on a fine
 /// grid of times, and no voltage on the grid is above it.
 #[test]
 fn peak_is_the_largest_voltage_each_kind_reaches() {
-    let grid = times(2.0, 1e-4);
+    // And late, where a held step of a partial relaxation reaches its level.
+    let mut grid = times(2.0, 1e-4);
+    grid.extend([30.0, 60.0, 200.0]);
     let check = |g: &dyn Fn(f32) -> Vec<f32>, peak: f32, name: &str| {
         let reached = grid
             .iter()
@@ -569,6 +599,10 @@ fn peak_is_the_largest_voltage_each_kind_reaches() {
         ),
         // The largest amplitude of the three driven, not of the eight.
         ("harmonic", HARMONIC),
+        ("held creep", held(0.5, 0.1, 0.24)),
+        ("held relaxation", held(0.3, 2.0, 0.5)),
+        ("held pure lag", held(1.0, 0.5, f32::INFINITY)),
+        ("held instant", held(0.0, 0.1, 0.24)),
     ];
     for (name, p) in kinds {
         let g = Generator::<3>::new(p, ALWAYS).unwrap();
@@ -584,4 +618,54 @@ fn peak_is_the_largest_voltage_each_kind_reaches() {
         Generator::<3>::new(never, ALWAYS).unwrap().peak_abs_v(),
         0.0
     );
+}
+
+/// A held step on three segments of unequal levels (the entries past them
+/// never driven).
+fn held(rise_s: f32, pole_per_s: f32, zero_per_s: f32) -> Program {
+    Program::HeldStep {
+        levels_v: [0.5, -1.5, 1.0, 9.0, 9.0, 9.0, 9.0, 9.0],
+        rise_s,
+        pole_per_s,
+        zero_per_s,
+    }
+}
+
+/// The held step's closed form against the reference's numerical
+/// convolution, for a creep, a partial relaxation, a pure lag and an
+/// instant rise, through the rise and long after it; and it ends at the
+/// levels.
+#[test]
+fn held_step_matches_the_convolution_and_ends_at_its_levels() {
+    for (rise_s, p, z) in [
+        (0.5, 0.1, 0.24),
+        (0.3, 2.0, 0.5),
+        (1.0, 0.5, f32::INFINITY),
+        (2.0, 0.1, 40.0),
+        (0.0, 0.1, 0.24),
+    ] {
+        let step = held(rise_s, p, z);
+        let g = Generator::<3>::new(step, ALWAYS).unwrap();
+        // The sines' error times the derivative's weight ω/(2p), and f32.
+        let weight = if rise_s > 0.0 {
+            std::f64::consts::PI / (2.0 * rise_s as f64 * p as f64)
+        } else {
+            0.0
+        };
+        let tol = 1.5 * (1.0 + weight) * SINE_MAX_ERROR as f64 + 1e-5;
+        let mut grid = times(rise_s as f64 * 1.5 + 0.2, 1e-3);
+        grid.extend([5.0, 20.0, 60.0]);
+        for &t in &grid {
+            let got = g.voltages_v(t as f32);
+            for (k, &v) in got.iter().enumerate() {
+                let want = common::reference_v(&step, &ALWAYS, 3, k, t as f32 as f64);
+                assert!(
+                    (v as f64 - want).abs() <= 1.5 * tol,
+                    "rise {rise_s}, p {p}, z {z}, t {t}: segment {k} {v} against {want}"
+                );
+            }
+        }
+        let end = g.voltages_v(1000.0);
+        assert_eq!(end, [0.5, -1.5, 1.0], "rise {rise_s}, p {p}, z {z}");
+    }
 }

@@ -27,7 +27,7 @@ fn any_f32() -> impl Strategy<Value = f32> {
 }
 
 fn program() -> impl Strategy<Value = Program> {
-    (0..6u8, prop::array::uniform8(any_f32())).prop_map(|(kind, v)| match kind {
+    (0..7u8, prop::array::uniform8(any_f32())).prop_map(|(kind, v)| match kind {
         0 => Program::Travelling {
             amplitude_v: v[0],
             frequency_hz: v[1],
@@ -51,11 +51,17 @@ fn program() -> impl Strategy<Value = Program> {
             end_hz: v[2],
             duration_s: v[3],
         },
-        _ => Program::Harmonic {
+        5 => Program::Harmonic {
             frequency_hz: v[0],
             offset_v: v[1],
             amplitudes_v: v,
             phases_deg: [v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]],
+        },
+        _ => Program::HeldStep {
+            levels_v: v,
+            rise_s: v[7],
+            pole_per_s: v[6],
+            zero_per_s: v[5],
         },
     })
 }
@@ -188,7 +194,7 @@ proptest! {
     /// requests) are what the limiter sees.
     #[test]
     fn limiter_bounds_valid_programs_too(
-        kind in 0..6u8,
+        kind in 0..7u8,
         amplitude_v in 0.0f32..20.0,
         frequency_hz in 0.001f32..100.0,
         offset_v in -5.0f32..5.0,
@@ -202,11 +208,18 @@ proptest! {
             2 => Program::Steps { levels_v: [offset_v, -amplitude_v, amplitude_v, 0.0, 1.0, -1.0, 3.5, -3.5] },
             3 => Program::Pulses { amplitude_v, on_s: 1.0 / frequency_hz, off_s: 0.5 },
             4 => Program::Chirp { amplitude_v, start_hz: frequency_hz.max(0.002) * 0.5, end_hz: frequency_hz, duration_s: 10.0 },
-            _ => Program::Harmonic {
+            5 => Program::Harmonic {
                 frequency_hz,
                 offset_v,
                 amplitudes_v: [amplitude_v, 0.5 * amplitude_v, 0.0, 3.5, 1.0, 2.0, amplitude_v, 0.1],
                 phases_deg: [0.0, -60.0, 721.0, 90.0, -1e4, 33.0, 180.0, -180.0],
+            },
+            // A creep's start (z/p up to 41), its rise the ramp's.
+            _ => Program::HeldStep {
+                levels_v: [offset_v, -amplitude_v, amplitude_v, 0.0, 1.0, -1.0, 3.5, -3.5],
+                rise_s: ramp_in_s,
+                pole_per_s: 0.1,
+                zero_per_s: 0.1 + 0.04 * frequency_hz,
             },
         };
         let envelope = Envelope { ramp_in_s, hold_s: f32::INFINITY, ramp_out_s: 0.0 };

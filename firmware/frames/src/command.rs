@@ -49,8 +49,10 @@ const PROGRAM_STEPS: u8 = 3;
 const PROGRAM_PULSES: u8 = 4;
 const PROGRAM_CHIRP: u8 = 5;
 const PROGRAM_HARMONIC: u8 = 6;
+const PROGRAM_HELD_STEP: u8 = 7;
 
 const MOTION_TRAVELLING: u8 = 1;
+const MOTION_STEP: u8 = 2;
 /// SetMotion's payload: the motion kind, its three f32, the envelope, the
 /// session time, whether the tracker holds it.
 const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN + 4 + 1;
@@ -58,6 +60,8 @@ const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN + 4 + 1;
 /// Most f32 fields of a program: Harmonic's frequency, offset, and eight
 /// amplitudes and phases.
 const MAX_PROGRAM_FIELDS: usize = 18;
+/// A held step's: eight levels, the rise, the pole and the zero.
+const HELD_STEP_FIELDS: usize = 11;
 
 /// The envelope's three f32 after the program's fields.
 const ENVELOPE_LEN: usize = 12;
@@ -72,6 +76,7 @@ const fn program_fields(program_kind: u8) -> Option<usize> {
         PROGRAM_PULSES => Some(3),
         PROGRAM_CHIRP => Some(4),
         PROGRAM_HARMONIC => Some(MAX_PROGRAM_FIELDS),
+        PROGRAM_HELD_STEP => Some(HELD_STEP_FIELDS),
         _ => None,
     }
 }
@@ -97,6 +102,7 @@ const fn command_len_ok(kind: u8, len: usize) -> bool {
             len == set_wave_payload_len(3)
                 || len == set_wave_payload_len(4)
                 || len == set_wave_payload_len(8)
+                || len == set_wave_payload_len(HELD_STEP_FIELDS)
                 || len == set_wave_payload_len(MAX_PROGRAM_FIELDS)
         }
         KIND_TARE | KIND_STOP | KIND_CLEAR_FAULT | KIND_REQUEST_INFO => len == 0,
@@ -172,6 +178,14 @@ pub enum Motion {
         /// Phase lag of each segment's moment behind the one before, degrees.
         lag_deg_per_segment: f32,
     },
+    /// A step of the free tip held against the strip's relaxation: every
+    /// segment's moment on the beam one and the same, the tip moving to
+    /// `tip_m` over the envelope's ramp-in (its rise) and held there
+    /// (`model_core::Strip::tip_step`).
+    Step {
+        /// The tip's deflection once settled, m.
+        tip_m: f32,
+    },
 }
 
 /// Why bytes on the down channel were not a command.
@@ -197,10 +211,13 @@ pub enum CommandError {
         /// The command kind in the (possibly damaged) header.
         kind: u8,
     },
-    /// A SetWave's program kind is not 1..=6.
+    /// A SetWave's program kind is not 1..=7.
     BadProgramKind(u8),
-    /// A SetMotion's motion kind is not 1.
+    /// A SetMotion's motion kind is not 1 or 2.
     BadMotionKind(u8),
+    /// A SetMotion's motion (its kind) has non-zero bytes in a field its
+    /// kind does not use.
+    MotionUnused(u8),
     /// A SetMotion's tracking byte is neither 0 nor 1.
     BadTracking(u8),
     /// The stream ended ([`CommandDecoder::finish`]) inside a frame.
@@ -221,8 +238,14 @@ impl fmt::Display for CommandError {
                 write!(f, "length {len} does not fit command kind {kind:#04x}")
             }
             Self::BadCrc { kind } => write!(f, "CRC mismatch in command kind {kind:#04x}"),
-            Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=6"),
-            Self::BadMotionKind(m) => write!(f, "motion kind {m} is not 1"),
+            Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=7"),
+            Self::BadMotionKind(m) => write!(f, "motion kind {m} is not 1 or 2"),
+            Self::MotionUnused(m) => {
+                write!(
+                    f,
+                    "motion kind {m} carries values in fields it does not use"
+                )
+            }
             Self::BadTracking(t) => write!(f, "motion tracking byte {t} is neither 0 nor 1"),
             Self::Truncated { kind } => write!(f, "command kind {kind:#04x} cut short"),
         }
@@ -284,17 +307,24 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
             t_session_s,
             tracked,
         } => {
-            let Motion::Travelling {
-                tip_amp_m,
-                frequency_hz,
-                lag_deg_per_segment,
-            } = motion;
+            // A step's two unused fields go as zeros.
+            let (motion_kind, [a, b, c]) = match motion {
+                Motion::Travelling {
+                    tip_amp_m,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                } => (
+                    MOTION_TRAVELLING,
+                    [tip_amp_m, frequency_hz, lag_deg_per_segment],
+                ),
+                Motion::Step { tip_m } => (MOTION_STEP, [tip_m, 0.0, 0.0]),
+            };
             let mut w = Writer::start(out, KIND_SET_MOTION, SET_MOTION_PAYLOAD_LEN)?;
-            w.put(&[MOTION_TRAVELLING]);
+            w.put(&[motion_kind]);
             for v in [
-                tip_amp_m,
-                frequency_hz,
-                lag_deg_per_segment,
+                a,
+                b,
+                c,
                 envelope.ramp_in_s,
                 envelope.hold_s,
                 envelope.ramp_out_s,
@@ -361,6 +391,16 @@ fn program_to_fields(p: &Program) -> (u8, [f32; MAX_PROGRAM_FIELDS], usize) {
         } => {
             f[..4].copy_from_slice(&[amplitude_v, start_hz, end_hz, duration_s]);
             (PROGRAM_CHIRP, f, 4)
+        }
+        Program::HeldStep {
+            levels_v,
+            rise_s,
+            pole_per_s,
+            zero_per_s,
+        } => {
+            f[..8].copy_from_slice(&levels_v);
+            f[8..11].copy_from_slice(&[rise_s, pole_per_s, zero_per_s]);
+            (PROGRAM_HELD_STEP, f, HELD_STEP_FIELDS)
         }
     }
 }
@@ -579,6 +619,12 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                     end_hz: field(2),
                     duration_s: field(3),
                 },
+                PROGRAM_HELD_STEP => Program::HeldStep {
+                    levels_v: core::array::from_fn(field),
+                    rise_s: field(8),
+                    pole_per_s: field(9),
+                    zero_per_s: field(10),
+                },
                 _ => Program::Harmonic {
                     frequency_hz: field(0),
                     offset_v: field(1),
@@ -615,21 +661,25 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                 len: p.len() as u8,
             }),
         KIND_SET_MOTION => {
-            if p[0] != MOTION_TRAVELLING {
-                return Err(CommandError::BadMotionKind(p[0]));
-            }
             let field = |k: usize| f32_at(1 + 4 * k);
+            let motion = match p[0] {
+                MOTION_TRAVELLING => Motion::Travelling {
+                    tip_amp_m: field(0),
+                    frequency_hz: field(1),
+                    lag_deg_per_segment: field(2),
+                },
+                // Bits, not values: a −0.0 or NaN there is not a zero sent.
+                MOTION_STEP if p[5..13].iter().all(|&b| b == 0) => Motion::Step { tip_m: field(0) },
+                MOTION_STEP => return Err(CommandError::MotionUnused(MOTION_STEP)),
+                m => return Err(CommandError::BadMotionKind(m)),
+            };
             let tracked = match p[SET_MOTION_PAYLOAD_LEN - 1] {
                 0 => false,
                 1 => true,
                 t => return Err(CommandError::BadTracking(t)),
             };
             Ok(Command::SetMotion {
-                motion: Motion::Travelling {
-                    tip_amp_m: field(0),
-                    frequency_hz: field(1),
-                    lag_deg_per_segment: field(2),
-                },
+                motion,
                 envelope: Envelope {
                     ramp_in_s: field(3),
                     hold_s: field(4),

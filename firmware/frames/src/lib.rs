@@ -59,7 +59,7 @@
 //!
 //! | kind | command | `len` | payload |
 //! |------|---------|-------|---------|
-//! | 0x81 | SetWave | 25, 29, 45 or 85 | program kind u8 (1 Travelling, 2 Standing, 3 Steps, 4 Pulses, 5 Chirp, 6 Harmonic), the program's f32 fields in declaration order, then the envelope's `ramp_in_s`, `hold_s` (may be +inf), `ramp_out_s` f32 |
+//! | 0x81 | SetWave | 25, 29, 45, 57 or 85 | program kind u8 (1 Travelling, 2 Standing, 3 Steps, 4 Pulses, 5 Chirp, 6 Harmonic, 7 HeldStep), the program's f32 fields in declaration order, then the envelope's `ramp_in_s`, `hold_s` (may be +inf), `ramp_out_s` f32 |
 //! | 0x82 | Tare | 0 | |
 //! | 0x83 | Stop | 0 | |
 //! | 0x84 | SetLimit | 4 | `max_abs_v` f32 (may only lower the limit) |
@@ -67,13 +67,14 @@
 //! | 0x86 | RequestInfo | 0 | |
 //! | 0x87 | SetCalibration | 20 | [`Calibration`]: `newtons_per_count` f32, 8 shunt zeros u16 (counts); the board stores it in flash |
 //! | 0x88 | SetModel | 238 | [`ModelRecord`]: layout version u8 (1), flags u8, 59 f32 (the fitted [`StripModel`]); the board stores it and shapes motions with it |
-//! | 0x89 | SetMotion | 30 | motion kind u8 (1 Travelling: `tip_amp_m`, `frequency_hz`, `lag_deg_per_segment` f32), then the envelope's three f32, `t_session_s` f32 (the motion's start on the drying law's clock; NaN unknown), then tracked u8 (0 feed-forward only, 1 held by the gain tracker) |
+//! | 0x89 | SetMotion | 30 | motion kind u8 (1 Travelling: `tip_amp_m`, `frequency_hz`, `lag_deg_per_segment` f32; 2 Step: `tip_m` f32, then 8 zero bytes), then the envelope's three f32, `t_session_s` f32 (the motion's start on the drying law's clock; NaN unknown), then tracked u8 (0 feed-forward only, 1 held by the gain tracker) |
 //!
 //! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,
 //! `frequency_hz`, `lag_deg_per_segment`, `offset_v`) and Chirp
 //! (`amplitude_v`, `start_hz`, `end_hz`, `duration_s`) 29; Standing
 //! (`amplitude_v`, `frequency_hz`, `offset_v`) and Pulses (`amplitude_v`,
-//! `on_s`, `off_s`) 25; Steps (8 levels, V) 45; Harmonic (`frequency_hz`,
+//! `on_s`, `off_s`) 25; Steps (8 levels, V) 45; HeldStep (8 levels, V,
+//! `rise_s`, `pole_per_s`, `zero_per_s`, which may be +inf) 57; Harmonic (`frequency_hz`,
 //! `offset_v`, 8 amplitudes, V, 8 phases, degrees) 85, longer than the
 //! board's 64-byte RTT down buffer: the host writes it as the buffer
 //! drains, and the decoder takes it in pieces (as it takes SetModel).

@@ -139,11 +139,34 @@ fn layout_is_as_documented() {
         tracked: true,
     };
     assert_eq!(frame(&motion), framed(0x89, &p));
-    // A motion kind that is not 1.
-    p[0] = 2;
+    // A step: kind 2, its tip, then two unused fields of zero bytes.
+    let step = Command::SetMotion {
+        motion: Motion::Step { tip_m: 0.005 },
+        envelope: Envelope {
+            ramp_in_s: 2.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 1.5,
+        },
+        t_session_s: 120.0,
+        tracked: false,
+    };
+    let mut q = p.clone();
+    q[0] = 2;
+    q[5..13].fill(0);
+    *q.last_mut().unwrap() = 0;
+    assert_eq!(frame(&step), framed(0x89, &q));
+    assert_eq!(decode(&framed(0x89, &q)), vec![CommandEvent::Command(step)]);
+    // A step with anything in an unused field, even a −0.
+    q[12] = 0x80;
+    assert_eq!(
+        decode(&framed(0x89, &q)),
+        vec![CommandEvent::Refused(CommandError::MotionUnused(2))]
+    );
+    // A motion kind that is not 1 or 2.
+    p[0] = 3;
     assert_eq!(
         decode(&framed(0x89, &p)),
-        vec![CommandEvent::Refused(CommandError::BadMotionKind(2))]
+        vec![CommandEvent::Refused(CommandError::BadMotionKind(3))]
     );
     // A tracking byte that is neither 0 nor 1.
     p[0] = 1;
@@ -222,6 +245,19 @@ fn set_wave_lengths_per_program_kind() {
             },
             6,
             85,
+        ),
+        (
+            Command::SetWave {
+                program: Program::HeldStep {
+                    levels_v: [1.0, 2.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.5],
+                    rise_s: 1.0,
+                    pole_per_s: 0.1,
+                    zero_per_s: f32::INFINITY,
+                },
+                envelope: env,
+            },
+            7,
+            57,
         ),
     ];
     for (c, program_kind, len) in cases {
@@ -427,6 +463,18 @@ fn any_program() -> BoxedStrategy<Program> {
                     phases_deg,
                 }
             }),
+        // Boxed: the union's value tree of two arrays' arms is deep enough
+        // to overflow a test thread's stack in a debug build.
+        (prop::array::uniform8(f()), f(), f(), f())
+            .prop_map(
+                |(levels_v, rise_s, pole_per_s, zero_per_s)| Program::HeldStep {
+                    levels_v,
+                    rise_s,
+                    pole_per_s,
+                    zero_per_s,
+                }
+            )
+            .boxed(),
     ]
     .boxed()
 }
@@ -462,14 +510,18 @@ fn any_command() -> BoxedStrategy<Command> {
         1 => (
             (any_f32(), any_f32(), any_f32()),
             (any_f32(), any_f32(), any_f32()),
-            (any_f32(), any::<bool>())
+            (any_f32(), any::<bool>(), any::<bool>())
         )
-            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), (t_session_s, tracked))| {
+            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), (t_session_s, tracked, step))| {
                 Command::SetMotion {
-                motion: Motion::Travelling {
-                    tip_amp_m,
-                    frequency_hz,
-                    lag_deg_per_segment,
+                motion: if step {
+                    Motion::Step { tip_m: tip_amp_m }
+                } else {
+                    Motion::Travelling {
+                        tip_amp_m,
+                        frequency_hz,
+                        lag_deg_per_segment,
+                    }
                 },
                     envelope: Envelope {
                         ramp_in_s: a,
@@ -551,6 +603,17 @@ fn bits(c: &Command) -> Vec<u32> {
                     v.extend(b(&phases_deg));
                     v
                 }
+                Program::HeldStep {
+                    levels_v,
+                    rise_s,
+                    pole_per_s,
+                    zero_per_s,
+                } => {
+                    let mut v = vec![7];
+                    v.extend(b(&levels_v));
+                    v.extend(b(&[rise_s, pole_per_s, zero_per_s]));
+                    v
+                }
             };
             out.extend(b(&[
                 envelope.ramp_in_s,
@@ -580,16 +643,17 @@ fn bits(c: &Command) -> Vec<u32> {
             t_session_s,
             tracked,
         } => {
-            let Motion::Travelling {
-                tip_amp_m,
-                frequency_hz,
-                lag_deg_per_segment,
-            } = motion;
-            let mut v = vec![17, 1];
+            let (kind, fields) = match motion {
+                Motion::Travelling {
+                    tip_amp_m,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                } => (1, b(&[tip_amp_m, frequency_hz, lag_deg_per_segment])),
+                Motion::Step { tip_m } => (2, b(&[tip_m])),
+            };
+            let mut v = vec![17, kind];
+            v.extend(fields);
             v.extend(b(&[
-                tip_amp_m,
-                frequency_hz,
-                lag_deg_per_segment,
                 envelope.ramp_in_s,
                 envelope.hold_s,
                 envelope.ramp_out_s,

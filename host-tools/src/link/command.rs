@@ -44,39 +44,54 @@ pub fn wave_command(
     options: &WaveOptions,
 ) -> Result<Command, WaveError> {
     let wave = Wave::parse(spec)?;
-    if let WaveKind::Motion {
-        tip_amp_m,
-        frequency_hz,
-        lag_deg,
-        tracked,
-    } = *wave.kind()
-    {
-        // The voltages are the board's to find; frequency and envelope
-        // follow the rules of the harmonic wave they become.
-        let silent = Wave::parse(&format!("harmonic:{frequency_hz},0,0"))?;
-        let generator = silent.generator(segments, options).map_err(|e| match e {
+    let (motion, silent, tracked) = match *wave.kind() {
+        WaveKind::Motion {
+            tip_amp_m,
+            frequency_hz,
+            lag_deg,
+            tracked,
+        } => (
+            Motion::Travelling {
+                tip_amp_m: tip_amp_m as f32,
+                frequency_hz: frequency_hz as f32,
+                lag_deg_per_segment: lag_deg as f32,
+            },
+            format!("harmonic:{frequency_hz},0,0"),
+            tracked,
+        ),
+        // Held by the drying law alone: a step has no sine to track.
+        WaveKind::MotionStep { tip_m } => (
+            Motion::Step {
+                tip_m: tip_m as f32,
+            },
+            "step:0".to_string(),
+            false,
+        ),
+        _ => {
+            let generator = wave.generator(segments, options)?;
+            return Ok(Command::SetWave {
+                program: generator.program(),
+                envelope: generator.envelope(),
+            });
+        }
+    };
+    // The voltages are the board's to find; the envelope (and a sine's
+    // frequency) follow the rules of a silent wave of the same kind.
+    let generator = Wave::parse(&silent)?
+        .generator(segments, options)
+        .map_err(|e| match e {
             WaveError::Firmware { rule, .. } => WaveError::Firmware {
                 wave: spec.to_string(),
                 rule,
             },
             other => other,
         })?;
-        return Ok(Command::SetMotion {
-            motion: Motion::Travelling {
-                tip_amp_m: tip_amp_m as f32,
-                frequency_hz: frequency_hz as f32,
-                lag_deg_per_segment: lag_deg as f32,
-            },
-            envelope: generator.envelope(),
-            // Unknown here: see `at_session_time`.
-            t_session_s: f32::NAN,
-            tracked,
-        });
-    }
-    let generator = wave.generator(segments, options)?;
-    Ok(Command::SetWave {
-        program: generator.program(),
+    Ok(Command::SetMotion {
+        motion,
         envelope: generator.envelope(),
+        // Unknown here: see `at_session_time`.
+        t_session_s: f32::NAN,
+        tracked,
     })
 }
 
@@ -208,6 +223,28 @@ mod tests {
                 && e.to_string().contains("frequency_hz"),
             "{e}"
         );
+        // A step goes as itself, untracked, its rise the ramp-in asked; a
+        // bad envelope is refused here, naming the step.
+        let step = request(&WaveRequest::new("motion-step:0.001", 3)).unwrap();
+        let Command::SetMotion {
+            motion,
+            envelope,
+            tracked,
+            ..
+        } = step
+        else {
+            panic!("a SetMotion: {step:?}")
+        };
+        assert_eq!(motion, Motion::Step { tip_m: 1e-3 });
+        assert!(!tracked && envelope.ramp_in_s == 1.0, "{step:?}");
+        let mut bad = WaveRequest::new("motion-step:0.001", 3);
+        bad.options.ramp_in_s = -1.0;
+        let e = request(&bad).unwrap_err();
+        assert!(
+            e.to_string().starts_with("wave `motion-step:0.001`: ")
+                && e.to_string().contains("ramp_in_s"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -311,7 +348,7 @@ mod tests {
         );
         assert_eq!(
             refuse(WaveRequest::new("step:1,2", 3)),
-            "wave `step:1,2`: step has 2 levels for 3 segments"
+            "wave `step:1,2`: 2 levels for 3 segments"
         );
         assert_eq!(
             refuse(WaveRequest::new("standing:1", 3)),

@@ -15,28 +15,42 @@
 //! the amplitude the limit allows, never clipped (a clipped sine is not the
 //! motion asked).
 //!
+//! `motion-step:TIP_M` asks the free tip to step to `TIP_M` over the
+//! ramp-in and stay there: the board's shaper gives each segment the level
+//! that holds it once settled (the model's static inverse) times the
+//! inverse of the relaxation over a raised-cosine rise
+//! (`model_core::Strip::tip_step`), a `held:` wave whose rise is the
+//! ramp-in (the envelope then starts at full gain).
+//!
 //! ```
 //! use finrs::model::motion::shaped;
 //! use finrs::model::params::ModelFile;
 //! use finrs::recording::Geometry;
-//! use finrs::wave::{Wave, WaveKind};
+//! use finrs::wave::{Wave, WaveKind, WaveOptions};
 //!
 //! let spec = ModelFile::main_m_2006().spec_for(&Geometry::THESIS_2006).unwrap();
 //! // 0.2 mm at 1 Hz, 60° a segment: within 4 V for the seed's strip.
-//! let wave = shaped(&Wave::parse("motion:0.0002,1,60").unwrap(), &spec, 3, 1000.0, None).unwrap();
+//! let steady = WaveOptions::steady(10.0);
+//! let (wave, _) = shaped(&Wave::parse("motion:0.0002,1,60").unwrap(), &spec, 3, 1000.0, None, &steady).unwrap();
 //! assert!(matches!(wave.kind(), WaveKind::Harmonic { .. }));
 //! // 5 mm is not: refused with what 4 V reaches.
-//! let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0, None).unwrap_err();
+//! let e = shaped(&Wave::parse("motion:0.005,1,60").unwrap(), &spec, 3, 1000.0, None, &steady).unwrap_err();
 //! assert!(e.to_string().contains("the model reaches 0.254 mm"), "{e}");
+//! // A 2 mm step rising over 2 s: 0.38 V once settled (13 mm at 2.5 V),
+//! // the seed's pure lag driven up to 8.9 times that while it rises.
+//! let rising = WaveOptions { ramp_in_s: 2.0, ..steady };
+//! let (wave, options) = shaped(&Wave::parse("motion-step:0.002").unwrap(), &spec, 3, 1000.0, None, &rising).unwrap();
+//! assert!(wave.text().starts_with("held:2,0.1,inf,0.38"), "{}", wave.text());
+//! assert_eq!(options.ramp_in_s, 0.0);
 //! ```
 
 use finrs_controller::shaper::{ShapeRefused, Shaper, ELEMENTS};
-use finrs_drive::{Program, HARD_LIMIT_V};
+use finrs_drive::{Envelope, Program, HARD_LIMIT_V};
 use finrs_frames::{ModelRecord, Motion, StripModel};
 use model_core::state_len;
 
 use super::predict::ModelSpec;
-use crate::wave::{Wave, WaveError, WaveKind};
+use crate::wave::{Wave, WaveError, WaveKind, WaveOptions};
 
 /// Why a motion has no voltages.
 #[derive(Debug, thiserror::Error)]
@@ -87,40 +101,57 @@ pub fn record(spec: &ModelSpec) -> ModelRecord {
     })
 }
 
-/// `wave` itself, or for a motion the `harmonic:` wave the board would
-/// drive for it on `segments` segments sampled at `rate_hz`, holding the
-/// model of `spec`, starting at `t_session_s` on its drying law's clock
-/// (needed if the model dries: the wave is then the one the board starts
-/// with; its corrections as the strip dries are the controller's, once a
-/// period, not in a fixed wave).
+/// `wave` itself under `options`, or for a motion the wave the board
+/// would drive for it (`harmonic:` for a `motion:`, `held:` for a
+/// `motion-step:`) on `segments` segments sampled at `rate_hz`, holding
+/// the model of `spec`, starting at `t_session_s` on its drying law's
+/// clock (needed if the model dries: the wave is then the one the board
+/// starts with; its corrections as the strip dries are the controller's,
+/// in time, not in a fixed wave), and the options to drive it with (a
+/// step's ramp-in is its rise, inside the `held:` wave).
 pub fn shaped(
     wave: &Wave,
     spec: &ModelSpec,
     segments: usize,
     rate_hz: f64,
     t_session_s: Option<f64>,
-) -> Result<Wave, MotionError> {
-    let &WaveKind::Motion {
-        tip_amp_m,
-        frequency_hz,
-        lag_deg,
-        ..
-    } = wave.kind()
-    else {
-        return Ok(wave.clone());
+    options: &WaveOptions,
+) -> Result<(Wave, WaveOptions), MotionError> {
+    let (motion, asked_m) = match *wave.kind() {
+        WaveKind::Motion {
+            tip_amp_m,
+            frequency_hz,
+            lag_deg,
+            ..
+        } => (
+            Motion::Travelling {
+                tip_amp_m: tip_amp_m as f32,
+                frequency_hz: frequency_hz as f32,
+                lag_deg_per_segment: lag_deg as f32,
+            },
+            tip_amp_m,
+        ),
+        WaveKind::MotionStep { tip_m } => (
+            Motion::Step {
+                tip_m: tip_m as f32,
+            },
+            tip_m,
+        ),
+        _ => return Ok((wave.clone(), *options)),
     };
     let text = wave.text();
-    let motion = Motion::Travelling {
-        tip_amp_m: tip_amp_m as f32,
-        frequency_hz: frequency_hz as f32,
-        lag_deg_per_segment: lag_deg as f32,
-    };
     let t_session_s = t_session_s.map_or(f32::NAN, |t| t as f32);
-    let program = board_program(
+    let envelope = Envelope {
+        ramp_in_s: options.ramp_in_s as f32,
+        hold_s: options.hold_s as f32,
+        ramp_out_s: options.ramp_out_s as f32,
+    };
+    let (program, envelope) = board_program(
         &record(spec),
         segments,
         rate_hz,
         &motion,
+        envelope,
         HARD_LIMIT_V,
         t_session_s,
     )
@@ -135,7 +166,7 @@ pub fn shaped(
             needs_v: f64::from(needs_v),
             segment: usize::from(segment),
             // From the amplitude asked, not its f32: the same ratio.
-            reachable_mm: 1e3 * tip_amp_m.abs() * f64::from(limit_v) / f64::from(needs_v),
+            reachable_mm: 1e3 * asked_m.abs() * f64::from(limit_v) / f64::from(needs_v),
         },
         BoardRefused::Shape(source) => MotionError::Shape {
             wave: text.to_string(),
@@ -146,19 +177,32 @@ pub fn shaped(
             segments,
         },
     })?;
-    let Program::Harmonic {
-        amplitudes_v,
-        phases_deg,
-        ..
-    } = program
-    else {
-        unreachable!("the shaper makes harmonic programs only")
+    // Each f32 as `{}` writes it: the shortest text that reads back as it.
+    let text = match program {
+        Program::Harmonic {
+            frequency_hz,
+            amplitudes_v,
+            phases_deg,
+            ..
+        } => (0..segments).fold(format!("harmonic:{frequency_hz}"), |t, k| {
+            t + &format!(",{},{}", amplitudes_v[k], phases_deg[k])
+        }),
+        Program::HeldStep {
+            levels_v,
+            rise_s,
+            pole_per_s,
+            zero_per_s,
+        } => (0..segments).fold(
+            format!("held:{rise_s},{pole_per_s},{zero_per_s}"),
+            |t, k| t + &format!(",{}", levels_v[k]),
+        ),
+        other => unreachable!("the shaper makes harmonic and held programs only: {other:?}"),
     };
-    let mut harmonic = format!("harmonic:{frequency_hz}");
-    for k in 0..segments {
-        harmonic += &format!(",{},{}", amplitudes_v[k], phases_deg[k]);
-    }
-    Ok(Wave::parse(&harmonic)?)
+    let options = WaveOptions {
+        ramp_in_s: f64::from(envelope.ramp_in_s),
+        ..*options
+    };
+    Ok((Wave::parse(&text)?, options))
 }
 
 /// Why the board's shaper, run on the host, gives no program.
@@ -179,18 +223,20 @@ fn shape(
     record: &ModelRecord,
     segments: usize,
     rate_hz: f64,
-    motion: Option<(&Motion, f32, f32)>,
-) -> Result<Option<Program>, BoardRefused> {
+    motion: Option<Asked>,
+) -> Result<Option<(Program, Envelope)>, BoardRefused> {
     fn go<const N: usize, const S: usize>(
         record: &ModelRecord,
         dt_s: f64,
-        motion: Option<(&Motion, f32, f32)>,
-    ) -> Result<Option<Program>, ShapeRefused> {
+        motion: Option<Asked>,
+    ) -> Result<Option<(Program, Envelope)>, ShapeRefused> {
         let mut shaper = Shaper::<N, ELEMENTS, S>::new();
         shaper.install(Shaper::check(record, dt_s)?);
         motion
-            .map(|(m, limit_v, t_session_s)| {
-                shaper.program(m, limit_v, t_session_s).map(|s| s.program)
+            .map(|(m, envelope, limit_v, t_session_s)| {
+                shaper
+                    .program(&m, envelope, limit_v, t_session_s)
+                    .map(|s| (s.program, s.envelope))
             })
             .transpose()
     }
@@ -207,6 +253,9 @@ fn shape(
     dispatch!(1, 2, 3, 4, 5, 6, 7, 8).map_err(BoardRefused::Shape)
 }
 
+/// A SetMotion's motion, envelope, limit (V) and session time (s).
+type Asked = (Motion, Envelope, f32, f32);
+
 /// The board's check of a SetModel of `record` (`finrs tune` runs it
 /// before sending).
 pub fn board_check(
@@ -217,51 +266,53 @@ pub fn board_check(
     shape(record, segments, rate_hz, None).map(|_| ())
 }
 
-/// The program the board's shaper makes of `motion` under `limit_v`,
-/// starting at `t_session_s` on the drying law's clock (NaN unknown).
+/// The program the board's shaper makes of `motion` under `envelope` and
+/// `limit_v`, starting at `t_session_s` on the drying law's clock (NaN
+/// unknown), and the envelope it drives it with.
 pub fn board_program(
     record: &ModelRecord,
     segments: usize,
     rate_hz: f64,
     motion: &Motion,
+    envelope: Envelope,
     limit_v: f32,
     t_session_s: f32,
-) -> Result<Program, BoardRefused> {
+) -> Result<(Program, Envelope), BoardRefused> {
     shape(
         record,
         segments,
         rate_hz,
-        Some((motion, limit_v, t_session_s)),
+        Some((*motion, envelope, limit_v, t_session_s)),
     )?
     .ok_or(BoardRefused::Segments(segments))
 }
 
 /// The tip a motion asks, m, at each of `t_s` (`None` for another wave):
-/// `TIP_AMP_M · sin(2π HZ (t − start_s))` while the wave is held
-/// (`hold_s`, from and to, s), `None` outside it, where the envelope's
-/// ramps and the relaxation's settling are not what was asked.
+/// `TIP_AMP_M · sin(2π HZ (t − start_s))` for a `motion:`, `TIP_M` for a
+/// `motion-step:`, while the wave is held (`hold_s`, from and to, s),
+/// `None` outside it, where the envelope's ramps (a step's rise) and the
+/// relaxation's settling are not what was asked.
 pub fn asked_tip_m(
     wave: &Wave,
     t_s: &[f64],
     start_s: f64,
     hold_s: (f64, f64),
 ) -> Option<Vec<Option<f64>>> {
-    let &WaveKind::Motion {
-        tip_amp_m,
-        frequency_hz,
-        ..
-    } = wave.kind()
-    else {
-        return None;
+    let asked: Box<dyn Fn(f64) -> f64> = match *wave.kind() {
+        WaveKind::Motion {
+            tip_amp_m,
+            frequency_hz,
+            ..
+        } => {
+            let omega = 2.0 * std::f64::consts::PI * frequency_hz;
+            Box::new(move |t| tip_amp_m * (omega * (t - start_s)).sin())
+        }
+        WaveKind::MotionStep { tip_m } => Box::new(move |_| tip_m),
+        _ => return None,
     };
-    let omega = 2.0 * std::f64::consts::PI * frequency_hz;
     Some(
         t_s.iter()
-            .map(|&t| {
-                (hold_s.0..=hold_s.1)
-                    .contains(&t)
-                    .then(|| tip_amp_m * (omega * (t - start_s)).sin())
-            })
+            .map(|&t| (hold_s.0..=hold_s.1).contains(&t).then(|| asked(t)))
             .collect(),
     )
 }
@@ -269,43 +320,49 @@ pub fn asked_tip_m(
 #[cfg(test)]
 mod tests {
     use super::{asked_tip_m, shaped, MotionError};
-    use crate::model::params::ModelFile;
+    use crate::model::params::{ModelFile, Preset};
+    use crate::model::predict::ModelSpec;
     use crate::model::simulate::predict_recording;
     use crate::model::synth::{drive_recording_shaped, Drive};
     use crate::recording::{Channel, Fixture, Geometry};
     use crate::wave::{Wave, WaveOptions};
     use model_core::Phasor;
 
+    /// `file`'s model, damped (an undamped mode would ring for ever), on the
+    /// seed's geometry.
+    fn damped(mut file: ModelFile) -> ModelSpec {
+        let mut ext = file.extensions.clone().unwrap_or_default();
+        ext.damping_ratio = 0.05;
+        file.extensions = Some(ext);
+        file.spec_for(&Geometry::THESIS_2006).unwrap()
+    }
+
+    /// The free tip of `spec`'s strip driven by `wave` under `options`
+    /// from rest, 3 segments at 1 kHz, over `options.sweep_s`.
+    fn model_tip(wave: &Wave, options: &WaveOptions, spec: &ModelSpec) -> Vec<f64> {
+        let drive = Drive {
+            segments: 3,
+            fixture: Fixture::Free,
+            rest_s: 0.0,
+            duration_s: options.sweep_s,
+            off_s: 0.0,
+            rate_hz: 1000.0,
+        };
+        let rec = drive_recording_shaped(wave, &drive, options, None).unwrap();
+        let mut sim = predict_recording("motion", &rec, spec, 1, &mut |_| {}).unwrap();
+        let at = sim.channels.iter().position(|(c, _)| *c == Channel::TipY);
+        sim.channels.swap_remove(at.expect("a free strip's tip")).1
+    }
+
     /// The model's own simulation of the shaped wave moves the tip as
     /// asked: amplitude and phase by lock-in over whole periods, once the
     /// relaxation (τ = 10 s) has settled.
     #[test]
     fn the_simulated_tip_moves_as_asked() {
-        let mut file = ModelFile::main_m_2006();
-        // A damped strip: an undamped mode would ring for ever.
-        let mut ext = file.extensions.clone().unwrap_or_default();
-        ext.damping_ratio = 0.05;
-        file.extensions = Some(ext);
-        let spec = file.spec_for(&Geometry::THESIS_2006).unwrap();
+        let spec = damped(ModelFile::main_m_2006());
         let wave = Wave::parse("motion:0.0002,1,60").unwrap();
-        let shaped = shaped(&wave, &spec, 3, 1000.0, None).unwrap();
-        let drive = Drive {
-            segments: 3,
-            fixture: Fixture::Free,
-            rest_s: 0.0,
-            duration_s: 120.0,
-            off_s: 0.0,
-            rate_hz: 1000.0,
-        };
-        let rec =
-            drive_recording_shaped(&shaped, &drive, &WaveOptions::steady(120.0), None).unwrap();
-        let sim = predict_recording("motion", &rec, &spec, 1, &mut |_| {}).unwrap();
-        let tip = &sim
-            .channels
-            .iter()
-            .find(|(c, _)| *c == Channel::TipY)
-            .expect("a free strip's tip")
-            .1;
+        let (shaped, _) = shaped(&wave, &spec, 3, 1000.0, None, &WaveOptions::steady(1.0)).unwrap();
+        let tip = model_tip(&shaped, &WaveOptions::steady(120.0), &spec);
         let theta = 2.0 * std::f64::consts::PI / 1000.0;
         // The last ten periods.
         let (from, to) = (tip.len() - 1 - 10_000, tip.len() - 1);
@@ -326,6 +383,32 @@ mod tests {
         );
     }
 
+    /// The host's twin of a step: the `held:` wave the board would drive,
+    /// simulated by the same model, holds the tip from the rise's end on
+    /// (Table 4-2's creeping strip, damped; its charging takes τ1 = 1.6 s).
+    #[test]
+    fn the_simulated_tip_holds_a_step() {
+        let spec = damped(ModelFile::preset(Preset::Table4_2_2006));
+        let wave = Wave::parse("motion-step:0.003").unwrap();
+        let rising = WaveOptions {
+            ramp_in_s: 1.0,
+            ..WaveOptions::steady(60.0)
+        };
+        let (held, options) = shaped(&wave, &spec, 3, 1000.0, None, &rising).unwrap();
+        assert!(
+            held.text().starts_with("held:1,0.1,0.2399"),
+            "{}",
+            held.text()
+        );
+        assert_eq!(options.ramp_in_s, 0.0);
+        let tip = model_tip(&held, &options, &spec);
+        // From 15 s (past the rise and the charging) to the end.
+        let worst = tip[15_000..]
+            .iter()
+            .fold(0.0f64, |m, t| m.max((t / 0.003 - 1.0).abs()));
+        assert!(worst < 3e-3, "worst {worst}");
+    }
+
     #[test]
     fn the_asked_tip_is_the_motion_while_the_wave_is_held() {
         let wave = Wave::parse("motion:0.001,2,60").unwrap();
@@ -344,12 +427,14 @@ mod tests {
         let spec = ModelFile::main_m_2006()
             .spec_for(&Geometry::THESIS_2006)
             .unwrap();
+        let steady = WaveOptions::steady(1.0);
         let e = shaped(
             &Wave::parse("motion:0.005,1,60").unwrap(),
             &spec,
             3,
             1000.0,
             None,
+            &steady,
         )
         .unwrap_err();
         let MotionError::Unreachable {
@@ -364,7 +449,10 @@ mod tests {
         // Other waves pass through untouched; a motion's own generator is
         // refused without a model.
         let sine = Wave::parse("sine:1,1,0").unwrap();
-        assert_eq!(shaped(&sine, &spec, 3, 1000.0, None).unwrap(), sine);
+        assert_eq!(
+            shaped(&sine, &spec, 3, 1000.0, None, &steady).unwrap(),
+            (sine, steady)
+        );
         let motion = Wave::parse("motion:0.0002,1,60").unwrap();
         assert!(motion
             .generator(3, &WaveOptions::steady(1.0))
@@ -372,7 +460,7 @@ mod tests {
             .to_string()
             .contains("needs the strip's model"));
         assert!(matches!(
-            shaped(&motion, &spec, 9, 1000.0, None),
+            shaped(&motion, &spec, 9, 1000.0, None, &steady),
             Err(MotionError::Segments { .. })
         ));
     }

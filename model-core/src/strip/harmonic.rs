@@ -110,7 +110,19 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// description. Computed in `f64` from the stored blocks (of `T`).
     pub fn harmonic(&self, hz: f64, v: &[Phasor; N]) -> Result<Harmonic<N>, HarmonicError> {
         self.has_sine_response(hz)?;
-        let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
+        self.response(
+            Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s),
+            v,
+        )
+    }
+
+    /// The steady response to `v` of a drive whose step turns it by `z`
+    /// (`z = 1`: held voltages, the steady state of a step).
+    pub(super) fn response(
+        &self,
+        z: Phasor,
+        v: &[Phasor; N],
+    ) -> Result<Harmonic<N>, HarmonicError> {
         let f = |x: T| x.to_f64();
         let gain = f(self.moment_gain);
 
@@ -291,34 +303,39 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
 
     /// Whether the strip has one steady sine at `hz`: a frequency inside
     /// `(0, Nyquist)` and no electrochemical cubic.
-    fn has_sine_response(&self, hz: f64) -> Result<(), HarmonicError> {
+    pub(super) fn has_sine_response(&self, hz: f64) -> Result<(), HarmonicError> {
         let nyquist_hz = 0.5 / self.dt_s;
         if !(hz.is_finite() && hz > 0.0 && hz < nyquist_hz) {
             return Err(HarmonicError::Frequency { hz, nyquist_hz });
         }
+        match self.nonlinear_field() {
+            Some(field) => Err(HarmonicError::Nonlinear { field }),
+            None => Ok(()),
+        }
+    }
+
+    /// The electrochemical cubic that is on, if one is: the response to a
+    /// voltage then is not linear in it.
+    pub(super) fn nonlinear_field(&self) -> Option<&'static str> {
         if self.ext.charge_cubic_per_v2 != 0.0 {
-            return Err(HarmonicError::Nonlinear {
-                field: "charge_cubic_per_v2",
-            });
+            Some("charge_cubic_per_v2")
+        } else if self.ext.leak_cubic_per_v2 != 0.0 {
+            Some("leak_cubic_per_v2")
+        } else {
+            None
         }
-        if self.ext.leak_cubic_per_v2 != 0.0 {
-            return Err(HarmonicError::Nonlinear {
-                field: "leak_cubic_per_v2",
-            });
-        }
-        Ok(())
     }
 
     /// Segment `i`'s own moment (before crosstalk and the moment gain)
     /// from its electrics `e = [v_C, r]`: `C a v_C + C (b − a p) r`.
-    fn own_moment(&self, i: usize, e: [Phasor; 2]) -> Phasor {
+    pub(super) fn own_moment(&self, i: usize, e: [Phasor; 2]) -> Phasor {
         e[0].scale(self.instant[i].to_f64()) + e[1].scale(self.lag[i].to_f64())
     }
 
     /// Segment `i`'s electrics `[v_C, r]` per volt of a sine whose step
     /// turns it by `z = e^{jθ}`: `v_C ← a v_C + g₀ v` and
     /// `r ← b v_C + c r + g₁ v` settled.
-    fn electrics(&self, z: Phasor, i: usize) -> [Phasor; 2] {
+    pub(super) fn electrics(&self, z: Phasor, i: usize) -> [Phasor; 2] {
         let [a, b, c, g0, g1] = self.circuit.elec[i].map(|x| x.to_f64());
         let vc = Phasor::real(g0) / (z - Phasor::real(a));
         let r = (vc.scale(b) + Phasor::real(g1)) / (z - Phasor::real(c));
@@ -330,7 +347,7 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
 /// sweep (diagonally dominant for `|κ| < 1/2`; the model allows `|κ| < 1`,
 /// where a pivot can vanish, so every pivot is checked by the caller's
 /// result being finite).
-fn tridiagonal_solve<const N: usize>(kappa: f64, d: &[Phasor; N]) -> [Phasor; N] {
+pub(super) fn tridiagonal_solve<const N: usize>(kappa: f64, d: &[Phasor; N]) -> [Phasor; N] {
     let mut c = [0.0; N];
     let mut x = *d;
     let mut pivot = 1.0;

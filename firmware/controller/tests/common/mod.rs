@@ -2,9 +2,13 @@
 //! accepts, decoding it with the frames crate, and a typical config.
 #![allow(dead_code)] // each test binary uses a different subset
 
+use finrs_controller::shaper::{command, Shaped, Shaper, ELEMENTS};
 use finrs_controller::{Config, Controller, FrameSink, Identity};
 use finrs_drive::Limits;
+use finrs_frames::{Command, ModelRecord, StripModel};
 use finrs_frames::{Decoder, Event, ResetCause, Stats};
+use model_core::state_len;
+use rtic_core::Exclusive;
 
 /// A sink that accepts or refuses each frame as told, and keeps the bytes
 /// of those it accepts.
@@ -103,4 +107,29 @@ pub fn tared() -> (Controller<3>, Channel, u64) {
     assert!(!c.taring());
     ch.bytes.clear();
     (c, ch, 10)
+}
+
+/// The state length of the board's model strip for 3 segments.
+pub const S3: usize = state_len(3, ELEMENTS);
+
+/// A 3-segment controller on `config` past its tare, its channel and next
+/// tick, and a shaper holding `m` (the SetModel taken).
+pub fn tared_with_model(
+    config: Config,
+    m: &StripModel,
+) -> (Controller<3>, Channel, u64, Shaper<3, ELEMENTS, S3>) {
+    let mut c = Controller::<3>::new(config).unwrap();
+    let mut ch = Channel::default();
+    let mut tick = 0;
+    while c.taring() {
+        c.tick(&input(tick, 1000, [2048; 3]), &mut ch);
+        tick += 1;
+    }
+    let mut shaper = Shaper::new();
+    let set = Command::SetModel(ModelRecord::encode(m));
+    assert_eq!(
+        command(set, &mut shaper, 1e-3, &mut Exclusive(&mut c)),
+        Ok(Shaped::ModelSet)
+    );
+    (c, ch, tick, shaper)
 }

@@ -103,7 +103,54 @@ pub fn wave(p: &Program, n: usize, k: usize, t_s: f64, sine: impl Fn(f64) -> f64
             amplitudes_v,
             ..
         } => offset_v as f64 + amplitudes_v[k] as f64 * s,
+        Program::HeldStep {
+            levels_v,
+            rise_s,
+            pole_per_s,
+            zero_per_s,
+        } => {
+            levels_v[k] as f64 * held_step(t_s, rise_s as f64, pole_per_s as f64, zero_per_s as f64)
+        }
     }
+}
+
+/// `y = ρ + (z − p)/p · ∫₀ᵗ e^{−z(t−τ)} ρ′(τ) dτ` of a held step, the
+/// integral by Simpson's rule over the rise (where `ρ′` lives), not the
+/// generator's closed form; `ρ + ρ′/p` for `z = ∞`.
+pub fn held_step(t_s: f64, rise_s: f64, p: f64, z: f64) -> f64 {
+    if t_s < 0.0 {
+        return 0.0;
+    }
+    if rise_s == 0.0 {
+        return 1.0 + (z - p) / p * libm::exp(-z * t_s);
+    }
+    let w = PI / rise_s;
+    let rho = |t: f64| {
+        if t < rise_s {
+            0.5 - 0.5 * libm::cos(w * t)
+        } else {
+            1.0
+        }
+    };
+    let d_rho = |t: f64| {
+        if t < rise_s {
+            0.5 * w * libm::sin(w * t)
+        } else {
+            0.0
+        }
+    };
+    if z.is_infinite() {
+        return rho(t_s) + d_rho(t_s) / p;
+    }
+    let end = t_s.min(rise_s);
+    let n = 2000;
+    let h = end / n as f64;
+    let f = |tau: f64| libm::exp(-z * (t_s - tau)) * d_rho(tau);
+    let mut sum = f(0.0) + f(end);
+    for i in 1..n {
+        sum += f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    rho(t_s) + (z - p) / p * sum * h / 3.0
 }
 
 /// The exact voltage of segment `k` of `n`.
