@@ -16,7 +16,7 @@ use finrs::model::params::{ModelFile, Preset};
 use finrs::model::simulate::predict_recording;
 use finrs::model::synth::{self, DriveError};
 use finrs::plot;
-use finrs::recording::{Channel, Geometry};
+use finrs::recording::Geometry;
 use finrs::recording::{Fixture, Recording};
 use finrs::session::Session;
 use finrs::wave::{Wave, WaveError, WaveKind, WaveOptions};
@@ -35,8 +35,9 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         Some(p) => ModelFile::read(p)?,
         None => ModelFile::main_m_2006(),
     };
-    // What a motion asks of the tip, to draw beside the model's.
-    let mut asked_tip_m = None;
+    // What a motion asks (of the tip, or the load cell), to draw beside
+    // the model's.
+    let mut asked = None;
     // clap refuses the wave's options with --input, and requires one of
     // --input and --wave.
     let (name, input) = match (&args.input, &args.wave) {
@@ -46,8 +47,8 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         }
         (Some(path), _) => (path.display().to_string(), Recording::read_drive(path)?),
         (None, Some(spec)) => {
-            let (rec, tip) = wave_recording(spec, &args.drive, &model, args.session_s)?;
-            asked_tip_m = tip;
+            let (rec, wanted) = wave_recording(spec, &args.drive, &model, args.session_s)?;
+            asked = wanted;
             (spec.clone(), rec)
         }
         (None, None) => bail!("give --input REC.csv or --wave SPEC"),
@@ -75,14 +76,14 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         // Plotting needs the prediction as a recording of its own.
         let sim = sim.to_recording();
         let title = format!("finrs simulate: {name}");
-        match asked_tip_m {
+        match asked {
             // A motion: what was asked beside what the model does.
-            Some(tip) => {
+            Some((channel, values)) => {
                 let asked = Recording {
                     meta: sim.meta.clone(),
                     t_s: sim.t_s.clone(),
                     v_v: sim.v_v.clone(),
-                    channels: vec![(Channel::TipY, tip)],
+                    channels: vec![(channel, values)],
                 };
                 plot::plot_models(png, &title, None, &[("model", &sim), ("asked", &asked)])
             }
@@ -116,7 +117,7 @@ fn wave_recording(
     args: &SimWaveArgs,
     model: &ModelFile,
     session_s: Option<f64>,
-) -> anyhow::Result<(Recording, Option<Vec<Option<f64>>>)> {
+) -> anyhow::Result<(Recording, Option<motion::Asked>)> {
     let wave = Wave::parse(spec)?;
     let fixture = match args.fixture.unwrap_or(FixtureArg::Free) {
         FixtureArg::Free => Fixture::Free,
@@ -143,7 +144,7 @@ fn wave_recording(
         ..WaveOptions::steady(args.shape.sweep_s.unwrap_or(duration_s))
     };
     let (shaped, shaped_options) = match wave.kind() {
-        WaveKind::Motion { .. } | WaveKind::MotionStep { .. } => {
+        WaveKind::Motion { .. } | WaveKind::MotionStep { .. } | WaveKind::Force { .. } => {
             let spec = model.spec_for(&Geometry::THESIS_2006)?;
             let (shaped, shaped_options) = motion::shaped(
                 &wave,
@@ -166,7 +167,7 @@ fn wave_recording(
         start_s + options.ramp_in_s,
         start_s + duration_s - options.ramp_out_s,
     );
-    let asked = motion::asked_tip_m(&wave, &rec.t_s, start_s, hold_s);
+    let asked = motion::asked(&wave, &rec.t_s, start_s, hold_s);
     Ok((rec, asked))
 }
 

@@ -8,7 +8,10 @@
 //! strip's drift), `motion-ff:TIP_AMP_M,HZ,LAG_DEG` (the same, feed-forward
 //! only: the model's voltages as they are), `motion-step:TIP_M` (the free
 //! tip stepped to `TIP_M` over the ramp-in and held there against the
-//! strip's relaxation, through the model), and
+//! strip's relaxation, through the model), `force:FORCE_AMP_N,HZ,LAG_DEG`
+//! (the same travelling wave asked of the strip held by the load cell, its
+//! force; the board's tracker holds it by the load cell), `force-ff:` (the
+//! same, feed-forward only), and
 //! `held:RISE_S,POLE_PER_S,ZERO_PER_S,V[,V..]` (the voltages a
 //! `motion-step:` becomes: each segment's level times the inverse of the
 //! relaxation `(s + z)/(s + p)` over a raised-cosine rise; `ZERO_PER_S` may
@@ -73,7 +76,7 @@ pub enum WaveError {
     },
     /// No such kind.
     #[error(
-        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, held, motion, motion-ff, motion-step)"
+        "wave `{wave}`: unknown kind `{kind}` (step, sine, standing, chirp, pulses, harmonic, held, motion, motion-ff, motion-step, force, force-ff)"
     )]
     UnknownKind {
         /// The wave's text.
@@ -204,6 +207,21 @@ pub enum WaveKind {
         lag_deg: f64,
         /// Whether the board's gain tracker holds it (`motion:`), or the
         /// model's voltages are driven as they are (`motion-ff:`).
+        tracked: bool,
+    },
+    /// A travelling bending wave asked of the strip held by the load cell:
+    /// as [`WaveKind::Motion`], scaled so that the force on the load cell
+    /// moves `force_amp_n` (`model_core::Strip::force_wave`).
+    Force {
+        /// The force's amplitude, N.
+        force_amp_n: f64,
+        /// Frequency, Hz.
+        frequency_hz: f64,
+        /// Each segment's moment behind the one before, degrees.
+        lag_deg: f64,
+        /// Whether the board's tracker holds it by the load cell
+        /// (`force:`), or the model's voltages are driven as they are
+        /// (`force-ff:`).
         tracked: bool,
     },
     /// A step of the free tip held against the strip's relaxation
@@ -376,6 +394,15 @@ impl Wave {
                     levels_v: values[3..].to_vec(),
                 }
             }
+            "force" | "force-ff" => {
+                need(3, "FORCE_AMPLITUDE_N,FREQUENCY_HZ,LAG_DEG")?;
+                WaveKind::Force {
+                    force_amp_n: values[0],
+                    frequency_hz: values[1],
+                    lag_deg: values[2],
+                    tracked: kind == "force",
+                }
+            }
             "motion-step" => {
                 need(1, "TIP_M")?;
                 WaveKind::MotionStep { tip_m: values[0] }
@@ -509,7 +536,9 @@ impl Wave {
             out
         };
         Some(match &self.kind {
-            WaveKind::Motion { .. } | WaveKind::MotionStep { .. } => return None,
+            WaveKind::Motion { .. } | WaveKind::MotionStep { .. } | WaveKind::Force { .. } => {
+                return None
+            }
             &WaveKind::HeldStep {
                 rise_s,
                 pole_per_s,
@@ -843,7 +872,7 @@ mod tests {
             ),
             (
                 "wobble:1",
-                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, held, motion, motion-ff, motion-step)",
+                "wave `wobble:1`: unknown kind `wobble` (step, sine, standing, chirp, pulses, harmonic, held, motion, motion-ff, motion-step, force, force-ff)",
             ),
             ("step:x", "wave `step:x`: `x` is not a finite number"),
             ("step:nan", "wave `step:nan`: `nan` is not a finite number"),

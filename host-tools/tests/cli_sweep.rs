@@ -218,6 +218,7 @@ fn wave_spec() -> impl Strategy<Value = String> {
         "pulses",
         "held",
         "motion-step",
+        "force",
         "square",
         "",
         "STEP",

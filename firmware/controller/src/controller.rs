@@ -397,10 +397,10 @@ impl<const N: usize> Controller<N> {
                 };
             }
         }
-        self.track(&currents_a, input.t_us, sink);
-        let (voltages_v, limiter_flags) = self.next_voltages(input.tick);
         let force_n = (f32::from(counts) - self.tare_offset_counts)
             * self.config.calibration.newtons_per_count;
+        self.track(&currents_a, force_n, input.t_us, sink);
+        let (voltages_v, limiter_flags) = self.next_voltages(input.tick);
         self.send_sample(
             &Sample {
                 seq: self.next_seq,
@@ -641,13 +641,13 @@ impl<const N: usize> Controller<N> {
     /// period of the wave, drives its corrected program (within the limit
     /// in force) and sends its Tracking frame (none if the channel is full:
     /// the next period's is newer).
-    fn track(&mut self, currents_a: &[f32; N], t_us: u32, sink: &mut impl FrameSink) {
+    fn track(&mut self, currents_a: &[f32; N], force_n: f32, t_us: u32, sink: &mut impl FrameSink) {
         if !self.running() {
             return;
         }
         let applied_v = self.limiter.last_v();
         let Some(t) = &mut self.tracker else { return };
-        let Some(c) = t.feed(&applied_v, currents_a) else {
+        let Some(c) = t.feed(&applied_v, currents_a, force_n) else {
             return;
         };
         let (program, flags) = t.program(&c, self.limiter.limits().max_abs_v());

@@ -14,8 +14,11 @@
 //! becomes a [`Program::HeldStep`]: each segment's level from the model's
 //! static inverse (`model_core::Strip::tip_step`) times the relaxation's
 //! inverse over a raised-cosine rise, the motion's ramp-in (the envelope
-//! then starts at full gain). A motion that needs more than the limit in
-//! force is refused with the amplitude that is reachable, never clipped.
+//! then starts at full gain). A travelling wave of the strip held by the
+//! load cell ([`Motion::Force`]) is shaped as the free one, on the model's
+//! held strip built for it, with each segment's force per volt for the
+//! tracker. A motion that needs more than the limit in force is refused
+//! with the amplitude that is reachable, never clipped.
 //! Where the model dries, the motion starts at `1/g(t₀)` of its undried
 //! voltages, `t₀` the session time the SetMotion carries; the controller's
 //! [`crate::tracker`] then follows the law, and the currents if tracked.
@@ -128,6 +131,17 @@ pub enum ShapeRefused {
         /// The tip amplitude the limit allows, m.
         reachable_m: f32,
     },
+    /// SetMotion: a force wave needs more than the limit in force.
+    UnreachableForce {
+        /// The largest amplitude it needs, V.
+        needs_v: f32,
+        /// Where, counted from 1 at the clamp.
+        segment: u8,
+        /// The limit in force, V.
+        limit_v: f32,
+        /// The force amplitude the limit allows, N.
+        reachable_n: f32,
+    },
     /// SetMotion: the voltages break a wave rule (field and rule).
     Wave(WaveError),
     /// SetMotion without its session time, on a model that dries: the
@@ -161,6 +175,12 @@ impl fmt::Display for ShapeRefused {
                 limit_v,
                 reachable_m,
             } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
+            Self::UnreachableForce {
+                needs_v,
+                segment,
+                limit_v,
+                reachable_n,
+            } => unreachable_force(f, *needs_v, *segment, *limit_v, *reachable_n),
             Self::Wave(e) => write!(f, "SetMotion refused: {e}"),
             Self::NoSessionTime => f.write_str(NO_SESSION_TIME),
             Self::Controller(e) => write!(f, "{e}"),
@@ -205,6 +225,24 @@ fn unreachable(
         (needs_v * 1e3) as u32,
         (limit_v * 1e3) as u32,
         (reachable_m * 1e6) as u32
+    )
+}
+
+/// As [`unreachable`], the force in whole µN.
+fn unreachable_force(
+    f: &mut fmt::Formatter<'_>,
+    needs_v: f32,
+    segment: u8,
+    limit_v: f32,
+    reachable_n: f32,
+) -> fmt::Result {
+    write!(
+        f,
+        "SetMotion refused: needs {} mV on segment {segment}, above the {} mV limit; \
+         within it the model reaches {} uN at the load cell",
+        (needs_v * 1e3) as u32,
+        (limit_v * 1e3) as u32,
+        (reachable_n * 1e6) as u32
     )
 }
 
@@ -278,6 +316,12 @@ impl fmt::Display for Brief<'_> {
                 limit_v,
                 reachable_m,
             } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
+            ShapeRefused::UnreachableForce {
+                needs_v,
+                segment,
+                limit_v,
+                reachable_n,
+            } => unreachable_force(f, *needs_v, *segment, *limit_v, *reachable_n),
             ShapeRefused::Wave(e) => write!(f, "SetMotion refused: {e}"),
             ShapeRefused::NoSessionTime => f.write_str(NO_SESSION_TIME),
             ShapeRefused::Controller(e) => write!(f, "{e}"),
@@ -322,7 +366,7 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
             return Err(ShapeRefused::TooManySegments(N));
         }
         let m = record.decode().map_err(ShapeRefused::Format)?;
-        let strip = Self::build(&m, dt_s)?;
+        let strip = Self::build(&m, Fixture::Free, dt_s)?;
         if CHECK_HZ < 0.5 / dt_s {
             Self::answers(&strip)?;
         }
@@ -334,9 +378,26 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
     }
 
     #[inline(never)]
-    fn build(m: &StripModel, dt_s: f64) -> Result<Strip<f32, N, E, S>, ShapeRefused> {
-        Strip::<f32, N, E, S>::with_extensions(&m.params, &m.extensions, Fixture::Free, dt_s)
+    fn build(
+        m: &StripModel,
+        fixture: Fixture,
+        dt_s: f64,
+    ) -> Result<Strip<f32, N, E, S>, ShapeRefused> {
+        Strip::<f32, N, E, S>::with_extensions(&m.params, &m.extensions, fixture, dt_s)
             .map_err(ShapeRefused::Model)
+    }
+
+    /// The model's strip held by the load cell, built for a force motion
+    /// (not kept: the free strip is what the board holds).
+    #[inline(never)]
+    fn held(model: &CheckedModel<N, E, S>) -> Result<Strip<f32, N, E, S>, ShapeRefused> {
+        // Never reached above the bound (no model is checked there), but
+        // said so the build is left out of those firmwares (22 KB at N = 8).
+        if N > MAX_SHAPED_SEGMENTS {
+            return Err(ShapeRefused::TooManySegments(N));
+        }
+        let m = model.record.decode().map_err(ShapeRefused::Format)?;
+        Self::build(&m, Fixture::Blocked, model.strip.dt_s())
     }
 
     #[inline(never)]
@@ -391,14 +452,29 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
             } => {
                 // The strip's moment gain is 1; dried, every voltage is 1/g.
                 let g0 = drying.map_or(1.0, |d| d.gain(0.0));
-                let (program, sine) = Self::sines(
-                    &model.strip,
-                    tip_amp_m,
+                let asked = Asked {
+                    amplitude: tip_amp_m,
                     frequency_hz,
                     lag_deg_per_segment,
-                    limit_v,
-                    g0,
-                )?;
+                    force: false,
+                };
+                let (program, sine) = Self::sines(&model.strip, &asked, limit_v, g0)?;
+                (program, envelope, Shape::Sine(sine), drying)
+            }
+            Motion::Force {
+                force_amp_n,
+                frequency_hz,
+                lag_deg_per_segment,
+            } => {
+                let g0 = drying.map_or(1.0, |d| d.gain(0.0));
+                let asked = Asked {
+                    amplitude: force_amp_n,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                    force: true,
+                };
+                let held = Self::held(model)?;
+                let (program, sine) = Self::sines(&held, &asked, limit_v, g0)?;
                 (program, envelope, Shape::Sine(sine), drying)
             }
             Motion::Step { tip_m } => {
@@ -414,7 +490,7 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         };
         let target = Target {
             shape,
-            track_currents: false,
+            tracked: false,
             drying,
         };
         Ok(ShapedMotion {
@@ -424,28 +500,36 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         })
     }
 
-    /// A travelling wave's sines (`Strip::tip_wave`), each amplitude
-    /// `1/g0` of the undried one, and the sines undried with each
-    /// segment's admittance.
+    /// A travelling wave's sines (`Strip::tip_wave`, or `force_wave` on
+    /// the held `strip`), each amplitude `1/g0` of the undried one, and
+    /// the sines undried with each segment's admittance (and force per
+    /// volt, for a force).
     // Not inlined, nor is `held_step`: each has its own solve's arrays, and
     // inlined side by side their frames would add up on the command
     // task's stack.
     #[inline(never)]
     fn sines(
         strip: &Strip<f32, N, E, S>,
-        tip_amp_m: f32,
-        frequency_hz: f32,
-        lag_deg_per_segment: f32,
+        asked: &Asked,
         limit_v: f32,
         g0: f64,
     ) -> Result<(Program, Sine<N>), ShapeRefused> {
-        let v = strip
-            .tip_wave(
-                f64::from(frequency_hz),
-                f64::from(tip_amp_m),
-                f64::from(lag_deg_per_segment).to_radians(),
-            )
-            .map_err(ShapeRefused::Harmonic)?;
+        let Asked {
+            amplitude,
+            frequency_hz,
+            lag_deg_per_segment,
+            force,
+        } = *asked;
+        let (hz, lag_rad) = (
+            f64::from(frequency_hz),
+            f64::from(lag_deg_per_segment).to_radians(),
+        );
+        let v = if force {
+            strip.force_wave(hz, f64::from(amplitude), lag_rad)
+        } else {
+            strip.tip_wave(hz, f64::from(amplitude), lag_rad)
+        }
+        .map_err(ShapeRefused::Harmonic)?;
         let mut amplitudes_v = [0.0f32; 8];
         let mut phases_deg = [0.0f32; 8];
         let mut undried_v = [0.0f32; N];
@@ -457,7 +541,15 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         // The f32 amplitudes, as the generator and the controller's limit
         // check will see them.
         let (k, needs_v) = largest(&amplitudes_v[..N]);
-        within(needs_v, k, limit_v, tip_amp_m)?;
+        if force && needs_v > limit_v {
+            return Err(ShapeRefused::UnreachableForce {
+                needs_v,
+                segment: k as u8 + 1,
+                limit_v,
+                reachable_n: amplitude.abs() * limit_v / needs_v,
+            });
+        }
+        within(needs_v, k, limit_v, amplitude)?;
         let program = Program::Harmonic {
             frequency_hz,
             offset_v: 0.0,
@@ -467,15 +559,25 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         // The generator's own rules (frequency range, finite values); the
         // envelope is the command's, checked where it is used.
         finrs_drive::Generator::<N>::new(program, STEADY).map_err(ShapeRefused::Wave)?;
-        // Each segment's admittance as its shunt samples it.
+        // Each segment's admittance as its shunt samples it, and its force
+        // per volt as the load cell reads it.
         let currents = strip
-            .sampled_admittance(f64::from(frequency_hz))
+            .sampled_admittance(hz)
             .map_err(ShapeRefused::Harmonic)?;
+        let force_n_per_v = if force {
+            let h = strip
+                .sampled_force_per_volt(hz)
+                .map_err(ShapeRefused::Harmonic)?;
+            Some(h.map(|h| [h.re as f32, h.im as f32]))
+        } else {
+            None
+        };
         let sine = Sine {
             frequency_hz,
             amplitudes_v: undried_v,
             phases_deg: core::array::from_fn(|k| phases_deg[k]),
             admittance_a_per_v: currents.map(|y| [y.re as f32, y.im as f32]),
+            force_n_per_v,
         };
         Ok((program, sine))
     }
@@ -543,6 +645,14 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
     }
 }
 
+/// A travelling wave asked of the free tip (m) or of the load cell (N).
+struct Asked {
+    amplitude: f32,
+    frequency_hz: f32,
+    lag_deg_per_segment: f32,
+    force: bool,
+}
+
 /// A program's own envelope while it is checked: full from the start.
 const STEADY: Envelope = Envelope {
     ramp_in_s: 0.0,
@@ -583,7 +693,7 @@ pub struct ShapedMotion<const N: usize> {
     /// rise).
     pub envelope: Envelope,
     /// The same undried, with the model's admittances and drying law:
-    /// what the controller holds it to (its `track_currents` false: the
+    /// what the controller holds it to (its `tracked` false: the
     /// command says).
     pub target: Target<N>,
 }
@@ -629,7 +739,7 @@ pub fn command<const N: usize, const E: usize, const S: usize>(
             let limit_v = lock.lock(|ctl| ctl.limits().max_abs_v());
             let shaped = shaper.program(&motion, envelope, limit_v, t_session_s)?;
             let target = Target {
-                track_currents: tracked,
+                tracked,
                 ..shaped.target
             };
             // Held when tracked, or while the model dries; else as shaped.

@@ -19,8 +19,15 @@
 //!
 //! What the currents cannot see is a change of the moment per charge (in
 //! the model, the dehydration extension's moment gain): on a free strip
-//! nothing the board measures sees it. It is the load cell's to measure in
-//! blocked runs (not done here, see docs/model.md).
+//! nothing the board measures sees it. On the strip held by the load cell
+//! (a force motion, [`Sine::force_n_per_v`]) the tracker reads the force
+//! instead: the force the model predicts for the voltages each segment
+//! had, `F̂ = Σₖ Hₖ Vₖ` (`Hₖ` the model's force per volt, sampled as the
+//! load cell reads it), against the one measured, least squares with the
+//! same forgetting (`P ← λP + |F̂|²`, `S ← λS + F F̂*`, `ĝ = S/P`), and
+//! every segment's voltage times `c = 1/ĝ`: whatever changed between the
+//! voltage and the force, electrics or moment per charge, alike on every
+//! segment.
 //!
 //! The drying law: where the model dries (the record's
 //! `dehydration_per_s`), the moment gain it predicts falls over the
@@ -52,15 +59,16 @@
 //!         amplitudes_v: [1.0],
 //!         phases_deg: [0.0],
 //!         admittance_a_per_v: [[0.02, 0.0]],
+//!         force_n_per_v: None,
 //!     }),
-//!     track_currents: true,
+//!     tracked: true,
 //!     drying: None,
 //! };
 //! let mut tracker = Tracker::new(target, 1000);
 //! let mut last = None;
 //! for k in 0..1000 {
 //!     let v = libm::sinf(2.0 * core::f32::consts::PI * 10.0 * k as f32 / 1000.0);
-//!     if let Some(c) = tracker.feed(&[v], &[0.01 * v]) {
+//!     if let Some(c) = tracker.feed(&[v], &[0.01 * v], 0.0) {
 //!         last = Some(c);
 //!     }
 //! }
@@ -93,9 +101,10 @@ pub const STEP_UPDATE_S: f32 = 1.0;
 pub struct Target<const N: usize> {
     /// The model's program.
     pub shape: Shape<N>,
-    /// Whether the currents' admittance is tracked (`motion:`; a sine
-    /// only), or only the drying law followed (`motion-ff:`).
-    pub track_currents: bool,
+    /// Whether the tracker measures and corrects (`motion:`, `force:`): a
+    /// sine's currents, or the load cell's force for a force motion; else
+    /// (`motion-ff:`, a step) only the drying law is followed.
+    pub tracked: bool,
     /// The model's drying law, if it dries.
     pub drying: Option<Drying>,
 }
@@ -121,6 +130,10 @@ pub struct Sine<const N: usize> {
     /// `Y`: each segment's admittance in the model at `frequency_hz`, A/V,
     /// as (re, im) of the phasor ratio `I/V`.
     pub admittance_a_per_v: [[f32; 2]; N],
+    /// For a force motion (the strip held by the load cell), `H`: each
+    /// segment's force per volt in the model at `frequency_hz`, N/V, as
+    /// the load cell reads it; tracked, the force is what is measured.
+    pub force_n_per_v: Option<[[f32; 2]; N]>,
 }
 
 /// A held step's program ([`Program::HeldStep`]'s fields).
@@ -190,10 +203,11 @@ pub struct Tracker<const N: usize> {
     /// Samples fed since the motion started, and the rate they come at.
     ticks: u64,
     sample_hz: u32,
-    /// This period's `Σ v e^{−jθ}` and `Σ i e^{−jθ}`.
+    /// This period's `Σ v e^{−jθ}`, `Σ i e^{−jθ}` and `Σ f e^{−jθ}`.
     v_sum: [[f32; 2]; N],
     i_sum: [[f32; 2]; N],
-    /// The fit's `P` and `S`.
+    f_sum: [f32; 2],
+    /// The fit's `P` and `S` per segment (the force's: the first only).
     p: [f32; N],
     s: [[f32; 2]; N],
     /// `λ`.
@@ -221,6 +235,7 @@ impl<const N: usize> Tracker<N> {
             periods: 0,
             v_sum: [[0.0; 2]; N],
             i_sum: [[0.0; 2]; N],
+            f_sum: [0.0; 2],
             p: [0.0; N],
             s: [[0.0; 2]; N],
             forget: libm::expf(-1.0 / MEMORY_PERIODS),
@@ -228,22 +243,30 @@ impl<const N: usize> Tracker<N> {
     }
 
     /// One sample: `applied_v` the voltages the segments had over the
-    /// sample period that just ended, `currents_a` the currents read at
-    /// its end. At the end of each period of the wave, the correction:
-    /// the admittance's from every period so far (once the first
+    /// sample period that just ended, `currents_a` the currents and
+    /// `force_n` the load cell's force read at its end. At the end of each
+    /// period of the wave, the correction: the admittance's (or the
+    /// force's) from every period so far (once the first
     /// [`SETTLE_PERIODS`] are over, if tracked), times the drying law's
     /// (if the model dries).
-    pub fn feed(&mut self, applied_v: &[f32; N], currents_a: &[f32; N]) -> Option<Correction<N>> {
+    pub fn feed(
+        &mut self,
+        applied_v: &[f32; N],
+        currents_a: &[f32; N],
+        force_n: f32,
+    ) -> Option<Correction<N>> {
         self.ticks = self.ticks.saturating_add(1);
         let [c, s] = self.reference;
         // Only a tracked motion's fit reads the lock-in.
-        if self.tracks_currents() {
+        if self.tracks() {
             for k in 0..N {
                 self.v_sum[k][0] += applied_v[k] * c;
                 self.v_sum[k][1] -= applied_v[k] * s;
                 self.i_sum[k][0] += currents_a[k] * c;
                 self.i_sum[k][1] -= currents_a[k] * s;
             }
+            self.f_sum[0] += force_n * c;
+            self.f_sum[1] -= force_n * s;
         }
         self.cycles += self.cycles_per_tick;
         let [tc, ts] = self.turn;
@@ -257,10 +280,11 @@ impl<const N: usize> Tracker<N> {
         let (s, c) = libm::sincosf(TAU * self.cycles);
         self.reference = [c, s];
         self.periods = self.periods.saturating_add(1);
-        let (v, i) = (self.v_sum, self.i_sum);
+        let (v, i, f) = (self.v_sum, self.i_sum, self.f_sum);
         self.v_sum = [[0.0; 2]; N];
         self.i_sum = [[0.0; 2]; N];
-        let tracked = self.tracks_currents() && self.periods > SETTLE_PERIODS;
+        self.f_sum = [0.0; 2];
+        let tracked = self.tracks() && self.periods > SETTLE_PERIODS;
         if !tracked && self.target.drying.is_none() {
             return None;
         }
@@ -270,7 +294,7 @@ impl<const N: usize> Tracker<N> {
             flags: 0,
         };
         if tracked {
-            self.fit(&v, &i, &mut out);
+            self.fit(&v, &i, f, &mut out);
         }
         if let Some(d) = self.target.drying {
             let since_s = self.ticks as f64 / f64::from(self.sample_hz);
@@ -280,17 +304,22 @@ impl<const N: usize> Tracker<N> {
         Some(out)
     }
 
-    /// Whether the currents are tracked: asked, and a sine to lock in to.
-    fn tracks_currents(&self) -> bool {
-        self.target.track_currents && matches!(self.target.shape, Shape::Sine(_))
+    /// Whether the tracker measures: asked, and a sine to lock in to.
+    fn tracks(&self) -> bool {
+        self.target.tracked && matches!(self.target.shape, Shape::Sine(_))
     }
 
-    /// The period's phasors `v`, `i` into the fit, and its correction of
-    /// each segment into `out`.
-    fn fit(&mut self, v: &[[f32; 2]; N], i: &[[f32; 2]; N], out: &mut Correction<N>) {
+    /// The period's phasors `v`, `i`, `f` into the fit (the force's for a
+    /// force motion, else the currents'), and its correction of each
+    /// segment into `out`.
+    fn fit(&mut self, v: &[[f32; 2]; N], i: &[[f32; 2]; N], f: [f32; 2], out: &mut Correction<N>) {
         let Shape::Sine(sine) = self.target.shape else {
             return;
         };
+        if let Some(h) = sine.force_n_per_v {
+            self.fit_force(v, &h, f, out);
+            return;
+        }
         for k in 0..N {
             let [vr, vi] = v[k];
             let [ir, ii] = i[k];
@@ -310,16 +339,42 @@ impl<const N: usize> Tracker<N> {
             let scale = self.p[k] / den;
             let cr = (yr * sr + yi * si) * scale;
             let ci = (yi * sr - yr * si) * scale;
-            let mut gain = libm::hypotf(cr, ci);
-            if !gain.is_finite() {
-                continue;
+            if let Some((gain, phase_deg)) = bounded(cr, ci, &mut out.flags) {
+                out.gains[k] = gain;
+                out.phases_deg[k] = phase_deg;
             }
-            if !(1.0 / MAX_CORRECTION..=MAX_CORRECTION).contains(&gain) {
-                gain = gain.clamp(1.0 / MAX_CORRECTION, MAX_CORRECTION);
-                out.flags |= TrackingFlags::BOUNDED;
-            }
-            out.gains[k] = gain;
-            out.phases_deg[k] = libm::atan2f(ci, cr).to_degrees();
+        }
+    }
+
+    /// The force's fit: `F̂ = Σ Hₖ Vₖ` against the measured `F`, one
+    /// correction `c = 1/ĝ = P S̄/|S|²` for every segment.
+    fn fit_force(
+        &mut self,
+        v: &[[f32; 2]; N],
+        h: &[[f32; 2]; N],
+        f: [f32; 2],
+        out: &mut Correction<N>,
+    ) {
+        let (mut pr, mut pi) = (0.0f32, 0.0f32);
+        for (&[hr, hi], &[vr, vi]) in h.iter().zip(v) {
+            pr += hr * vr - hi * vi;
+            pi += hr * vi + hi * vr;
+        }
+        let [fr, fi] = f;
+        self.p[0] = self.forget * self.p[0] + pr * pr + pi * pi;
+        // F F̂* = (fr + j fi)(pr − j pi).
+        self.s[0][0] = self.forget * self.s[0][0] + fr * pr + fi * pi;
+        self.s[0][1] = self.forget * self.s[0][1] + fi * pr - fr * pi;
+        let [sr, si] = self.s[0];
+        let den = sr * sr + si * si;
+        if den.is_nan() || den <= 0.0 {
+            // Nothing driven, or no force read: nothing to correct.
+            return;
+        }
+        let scale = self.p[0] / den;
+        if let Some((gain, phase_deg)) = bounded(sr * scale, -si * scale, &mut out.flags) {
+            out.gains = [gain; N];
+            out.phases_deg = [phase_deg; N];
         }
     }
 
@@ -370,6 +425,21 @@ impl<const N: usize> Tracker<N> {
         };
         (program, flags)
     }
+}
+
+/// The correction `cr + j ci` as a gain within `[1/B, B]` (flagged
+/// [`TrackingFlags::BOUNDED`] in `flags` if it was not) and a phase,
+/// degrees; `None` if it is not finite.
+fn bounded(cr: f32, ci: f32, flags: &mut u8) -> Option<(f32, f32)> {
+    let gain = libm::hypotf(cr, ci);
+    if !gain.is_finite() {
+        return None;
+    }
+    let held = gain.clamp(1.0 / MAX_CORRECTION, MAX_CORRECTION);
+    if held != gain {
+        *flags |= TrackingFlags::BOUNDED;
+    }
+    Some((held, libm::atan2f(ci, cr).to_degrees()))
 }
 
 /// The Tracking frame of correction `c` (with `flags`) at `t_us`.

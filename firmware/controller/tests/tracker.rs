@@ -204,8 +204,9 @@ fn the_tracker_finds_a_complex_admittance_ratio() {
             amplitudes_v: [1.0, 0.5],
             phases_deg: [0.0, -90.0],
             admittance_a_per_v: [[0.02, 0.0], [0.02, 0.0]],
+            force_n_per_v: None,
         }),
-        track_currents: true,
+        tracked: true,
         drying: None,
     };
     let mut t = Tracker::new(target, 1000);
@@ -218,7 +219,7 @@ fn the_tracker_finds_a_complex_admittance_ratio() {
             0.01 * (w + lead).sin(),
             0.005 * (w - core::f32::consts::FRAC_PI_2 + lead).sin(),
         ];
-        if let Some(c) = t.feed(&v, &i) {
+        if let Some(c) = t.feed(&v, &i, 0.0) {
             last = Some(c);
         }
     }
@@ -405,4 +406,85 @@ fn the_drying_law_holds_a_motion_fed_forward() {
     assert!(a.abs() < 0.01 && p.abs() < 0.5, "followed: {a} {p}°");
     // 1/(1 + 2e-3 · 355 s) = 0.585.
     assert!(a0 < -0.35, "without the law: {a0}");
+}
+
+/// A force motion on the strip held by the load cell (#16: the load cell
+/// in blocked runs): the example session's strip (an instant moment, so
+/// that 1 mN at 1 Hz is within 4 V), its moment per charge weakening by
+/// 0.3 % a second (the dehydration extension's moment gain, which no
+/// current shows). Tracked, the tracker reads the force against the
+/// model's and the force stays as asked; fed forward, it falls with the
+/// moment. Over the last 10 of 60 s, by lock-in.
+#[test]
+fn a_force_motion_is_held_by_the_load_cell() {
+    const FORCE_N: f64 = 1e-3;
+    let m = StripModel {
+        params: Params::baseline_air_example(),
+        ..model()
+    };
+    let config = Config {
+        calibration: finrs_frames::Calibration {
+            newtons_per_count: 1e-5,
+            current_zero_counts: [2048; 8],
+        },
+        ..fine_config()
+    };
+    let run = |tracked: bool| {
+        let (mut c, mut ch, tick, mut shaper) = tared_with_model(config, &m);
+        let motion = Command::SetMotion {
+            motion: Motion::Force {
+                force_amp_n: FORCE_N as f32,
+                frequency_hz: 1.0,
+                lag_deg_per_segment: 60.0,
+            },
+            envelope: Envelope {
+                ramp_in_s: 0.0,
+                hold_s: f32::INFINITY,
+                ramp_out_s: 0.0,
+            },
+            t_session_s: f32::NAN,
+            tracked,
+        };
+        command(motion, &mut shaper, 1e-3, &mut Exclusive(&mut c)).unwrap();
+        assert_eq!(c.tracking(), tracked);
+        let mut plant = Strip::<f64, N, 4, { state_len(N, 4) }>::with_extensions(
+            &m.params,
+            &m.extensions,
+            Fixture::Blocked,
+            1e-3,
+        )
+        .unwrap();
+        let mut x = plant.rest();
+        let (mut force, mut currents) = (0.0f64, [0.0f64; N]);
+        let steps = 60_000u64;
+        let theta = 2.0 * core::f64::consts::PI / 1000.0;
+        let mut y = Phasor::ZERO;
+        for k in 0..steps {
+            // The tare's 1000 counts are the load cell's zero.
+            let counts = (1000.0 + force / 1e-5).round() as u16;
+            let shunts = currents.map(|i| (2048.0 + i / 2e-5).round() as u16);
+            let out = c.tick(&input(tick + k, counts, shunts), &mut ch);
+            plant.set_moment_gain(1.0 - 0.003 * k as f64 / 1000.0);
+            let v = out.voltages_v.map(f64::from);
+            plant.step(&mut x, &v);
+            force = plant.blocking_force_n(&x);
+            currents = plant.currents_a(&x, &v);
+            if k + 1 >= steps - 10_000 {
+                y += Phasor::unit(-theta * (k + 1) as f64).scale(2.0 * force / 10_000.0);
+            }
+        }
+        (
+            y.amplitude() / FORCE_N - 1.0,
+            y.sine_phase_rad().to_degrees(),
+        )
+    };
+    let (a, p) = run(true);
+    let (a0, p0) = run(false);
+    eprintln!(
+        "force motion, moment per charge -0.3 %/s, last 10 of 60 s: tracked {:+.2} % {p:+.2}°, fed forward {:+.2} % {p0:+.2}°",
+        100.0 * a,
+        100.0 * a0
+    );
+    assert!(a.abs() < 0.03 && p.abs() < 1.0, "tracked: {a} {p}°");
+    assert!(a0 < -0.12, "fed forward: {a0}");
 }

@@ -67,7 +67,7 @@ mod wave;
 pub use limit::{Applied, LimitError, Limiter, Limits, HARD_LIMIT_V};
 pub use wave::{
     default_program, Envelope, Generator, Program, WaveError, WaveRule, MAX_FREQUENCY_HZ,
-    MAX_PROGRAM_V, MIN_FREQUENCY_HZ,
+    MAX_PROGRAM_V, MIN_FREQUENCY_HZ, MIN_HELD_STEP,
 };
 
 /// Most segments a fin can have (and the length of [`Program::Steps`]).

@@ -23,6 +23,10 @@ pub const MAX_FREQUENCY_HZ: f32 = 100.0;
 /// is the limiter's): a bound that keeps every sum in the generator finite
 /// and catches typing errors.
 pub const MAX_PROGRAM_V: f32 = 1000.0;
+/// Smallest rise (s) and smallest pole or zero (1/s) of a held step: a
+/// strip's are milliseconds and hundredths of a second or more, and the
+/// closed form stays finite in `f32` above this (`π/T` and `ω/z` bounded).
+pub const MIN_HELD_STEP: f32 = 1e-6;
 
 /// What each segment does. The host's one `--wave` parser (`finrs::wave`)
 /// maps its texts onto these kinds one to one (`step:` → `Steps`, `sine:`
@@ -119,12 +123,13 @@ pub enum Program {
     HeldStep {
         /// Each segment's voltage once settled, V.
         levels_v: [f32; 8],
-        /// Length of the raised-cosine rise, s (≥ 0; above 0 for `z = ∞`).
+        /// Length of the raised-cosine rise, s (0, or at least
+        /// [`MIN_HELD_STEP`]; not 0 for `z = ∞`).
         rise_s: f32,
-        /// The relaxation's pole `p`, 1/s (above 0).
+        /// The relaxation's pole `p`, 1/s (at least [`MIN_HELD_STEP`]).
         pole_per_s: f32,
-        /// Its zero `z`, 1/s (above 0; `+∞` for a pure lag, whose inverse
-        /// is `ρ + ρ′/p`).
+        /// Its zero `z`, 1/s (at least [`MIN_HELD_STEP`]; `+∞` for a pure
+        /// lag, whose inverse is `ρ + ρ′/p`).
         zero_per_s: f32,
     },
 }
@@ -159,6 +164,10 @@ pub enum WaveRule {
     FrequencyRange,
     /// Must be above the chirp's `start_hz`.
     AboveStart,
+    /// Must be at least [`MIN_HELD_STEP`] (a rate, 1/s).
+    AtLeastMin,
+    /// Must be 0 or at least [`MIN_HELD_STEP`] (a time, s).
+    ZeroOrAtLeastMin,
 }
 
 /// A refused program or envelope: which field, which rule.
@@ -180,6 +189,8 @@ impl fmt::Display for WaveError {
             WaveRule::ProgramRange => "must be within ±1000 V",
             WaveRule::FrequencyRange => "must be within 0.001..=100 Hz",
             WaveRule::AboveStart => "must be above start_hz",
+            WaveRule::AtLeastMin => "must be at least 1e-6",
+            WaveRule::ZeroOrAtLeastMin => "must be 0 or at least 1e-6",
         };
         write!(f, "{} {rule}", self.field)
     }
@@ -678,15 +689,24 @@ fn check_program<const N: usize>(program: &Program) -> Result<(), WaveError> {
                 .iter()
                 .try_for_each(|&v| volts("HeldStep.levels_v", v))?;
             duration("HeldStep.rise_s", rise_s)?;
+            if rise_s != 0.0 && rise_s < MIN_HELD_STEP {
+                return Err(err("HeldStep.rise_s", WaveRule::ZeroOrAtLeastMin));
+            }
             finite("HeldStep.pole_per_s", pole_per_s)?;
             if pole_per_s <= 0.0 {
                 return Err(err("HeldStep.pole_per_s", WaveRule::Positive));
+            }
+            if pole_per_s < MIN_HELD_STEP {
+                return Err(err("HeldStep.pole_per_s", WaveRule::AtLeastMin));
             }
             if zero_per_s.is_nan() {
                 return Err(err("HeldStep.zero_per_s", WaveRule::NotNan));
             }
             if zero_per_s <= 0.0 {
                 return Err(err("HeldStep.zero_per_s", WaveRule::Positive));
+            }
+            if zero_per_s < MIN_HELD_STEP {
+                return Err(err("HeldStep.zero_per_s", WaveRule::AtLeastMin));
             }
             // The pure lag's inverse of an instant step is an impulse.
             if zero_per_s.is_infinite() && rise_s == 0.0 {

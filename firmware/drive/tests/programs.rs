@@ -544,6 +544,13 @@ fn refuses_each_broken_field_by_name_and_rule() {
             is("HeldStep.rise_s", Positive),
         ),
         (held(0.0, 1e-3, 1e3), is("HeldStep.levels_v", ProgramRange)),
+        // Below the smallest: the closed form would not stay finite.
+        (
+            held(1e-45, 0.1, 4.0),
+            is("HeldStep.rise_s", ZeroOrAtLeastMin),
+        ),
+        (held(0.5, 1e-9, 4.0), is("HeldStep.pole_per_s", AtLeastMin)),
+        (held(0.5, 0.1, 1e-45), is("HeldStep.zero_per_s", AtLeastMin)),
     ] {
         assert_eq!(Generator::<3>::new(p, e).unwrap_err(), want, "{p:?}");
     }

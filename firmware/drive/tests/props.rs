@@ -227,3 +227,31 @@ proptest! {
         run::<8>(program, envelope, limits, &steps)?;
     }
 }
+
+proptest! {
+    /// A held step accepted with any rise, pole and zero over wide ranges
+    /// (a zero at infinity too) asks finite voltages at any time, within
+    /// its peak.
+    #[test]
+    fn a_held_step_asks_finite_voltages_within_its_peak(
+        rise_s in prop_oneof![Just(0.0f32), 1e-6f32..1e4],
+        pole_per_s in 1e-6f32..1e6,
+        zero_per_s in prop_oneof![1e-6f32..1e6, Just(f32::INFINITY)],
+        level_v in -10.0f32..10.0,
+        t_s in prop_oneof![0.0f32..1e-3, 0.0f32..1e4, any::<f32>()],
+    ) {
+        let program = Program::HeldStep {
+            levels_v: [level_v, -level_v, 0.5 * level_v, 0.0, 0.0, 0.0, 0.0, 0.0],
+            rise_s,
+            pole_per_s,
+            zero_per_s,
+        };
+        let envelope = Envelope { ramp_in_s: 0.0, hold_s: f32::INFINITY, ramp_out_s: 0.0 };
+        if let Ok(g) = Generator::<3>::new(program, envelope) {
+            let v = g.voltages_v(t_s);
+            prop_assert!(v.iter().all(|x| x.is_finite()), "{v:?}");
+            let peak = g.peak_abs_v();
+            prop_assert!(v.iter().all(|x| x.abs() <= peak * 1.001 + 1e-6), "{v:?} above {peak}");
+        }
+    }
+}

@@ -53,6 +53,7 @@ const PROGRAM_HELD_STEP: u8 = 7;
 
 const MOTION_TRAVELLING: u8 = 1;
 const MOTION_STEP: u8 = 2;
+const MOTION_FORCE: u8 = 3;
 /// SetMotion's payload: the motion kind, its three f32, the envelope, the
 /// session time, whether the tracker holds it.
 const SET_MOTION_PAYLOAD_LEN: usize = 1 + 4 * 3 + ENVELOPE_LEN + 4 + 1;
@@ -186,6 +187,17 @@ pub enum Motion {
         /// The tip's deflection once settled, m.
         tip_m: f32,
     },
+    /// A travelling bending wave of the strip held by the load cell: as
+    /// [`Motion::Travelling`], the force on the load cell moving
+    /// `force_amp_n · sin(2π frequency_hz t)`; tracked, by the load cell.
+    Force {
+        /// Force amplitude, N.
+        force_amp_n: f32,
+        /// Frequency, Hz.
+        frequency_hz: f32,
+        /// Phase lag of each segment's moment behind the one before, degrees.
+        lag_deg_per_segment: f32,
+    },
 }
 
 /// Why bytes on the down channel were not a command.
@@ -213,7 +225,7 @@ pub enum CommandError {
     },
     /// A SetWave's program kind is not 1..=7.
     BadProgramKind(u8),
-    /// A SetMotion's motion kind is not 1 or 2.
+    /// A SetMotion's motion kind is not 1..=3.
     BadMotionKind(u8),
     /// A SetMotion's motion (its kind) has non-zero bytes in a field its
     /// kind does not use.
@@ -239,7 +251,7 @@ impl fmt::Display for CommandError {
             }
             Self::BadCrc { kind } => write!(f, "CRC mismatch in command kind {kind:#04x}"),
             Self::BadProgramKind(p) => write!(f, "program kind {p} is not 1..=7"),
-            Self::BadMotionKind(m) => write!(f, "motion kind {m} is not 1 or 2"),
+            Self::BadMotionKind(m) => write!(f, "motion kind {m} is not 1..=3"),
             Self::MotionUnused(m) => {
                 write!(
                     f,
@@ -318,6 +330,14 @@ pub fn encode_command(c: &Command, out: &mut [u8]) -> Result<usize, EncodeError>
                     [tip_amp_m, frequency_hz, lag_deg_per_segment],
                 ),
                 Motion::Step { tip_m } => (MOTION_STEP, [tip_m, 0.0, 0.0]),
+                Motion::Force {
+                    force_amp_n,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                } => (
+                    MOTION_FORCE,
+                    [force_amp_n, frequency_hz, lag_deg_per_segment],
+                ),
             };
             let mut w = Writer::start(out, KIND_SET_MOTION, SET_MOTION_PAYLOAD_LEN)?;
             w.put(&[motion_kind]);
@@ -671,6 +691,11 @@ fn parse(kind: u8, p: &[u8]) -> Result<Command, CommandError> {
                 // Bits, not values: a −0.0 or NaN there is not a zero sent.
                 MOTION_STEP if p[5..13].iter().all(|&b| b == 0) => Motion::Step { tip_m: field(0) },
                 MOTION_STEP => return Err(CommandError::MotionUnused(MOTION_STEP)),
+                MOTION_FORCE => Motion::Force {
+                    force_amp_n: field(0),
+                    frequency_hz: field(1),
+                    lag_deg_per_segment: field(2),
+                },
                 m => return Err(CommandError::BadMotionKind(m)),
             };
             let tracked = match p[SET_MOTION_PAYLOAD_LEN - 1] {

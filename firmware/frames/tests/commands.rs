@@ -162,11 +162,28 @@ fn layout_is_as_documented() {
         decode(&framed(0x89, &q)),
         vec![CommandEvent::Refused(CommandError::MotionUnused(2))]
     );
-    // A motion kind that is not 1 or 2.
+    // A force wave: kind 3, as a travelling one.
+    let force = Command::SetMotion {
+        motion: Motion::Force {
+            force_amp_n: 0.005,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 60.0,
+        },
+        envelope: Envelope {
+            ramp_in_s: 2.0,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 1.5,
+        },
+        t_session_s: 120.0,
+        tracked: true,
+    };
     p[0] = 3;
+    assert_eq!(frame(&force), framed(0x89, &p));
+    // A motion kind that is not 1..=3.
+    p[0] = 4;
     assert_eq!(
         decode(&framed(0x89, &p)),
-        vec![CommandEvent::Refused(CommandError::BadMotionKind(3))]
+        vec![CommandEvent::Refused(CommandError::BadMotionKind(4))]
     );
     // A tracking byte that is neither 0 nor 1.
     p[0] = 1;
@@ -510,18 +527,22 @@ fn any_command() -> BoxedStrategy<Command> {
         1 => (
             (any_f32(), any_f32(), any_f32()),
             (any_f32(), any_f32(), any_f32()),
-            (any_f32(), any::<bool>(), any::<bool>())
+            (any_f32(), any::<bool>(), 0..3u8)
         )
-            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), (t_session_s, tracked, step))| {
+            .prop_map(|((tip_amp_m, frequency_hz, lag_deg_per_segment), (a, b, c), (t_session_s, tracked, kind))| {
                 Command::SetMotion {
-                motion: if step {
-                    Motion::Step { tip_m: tip_amp_m }
-                } else {
-                    Motion::Travelling {
+                motion: match kind {
+                    0 => Motion::Travelling {
                         tip_amp_m,
                         frequency_hz,
                         lag_deg_per_segment,
-                    }
+                    },
+                    1 => Motion::Step { tip_m: tip_amp_m },
+                    _ => Motion::Force {
+                        force_amp_n: tip_amp_m,
+                        frequency_hz,
+                        lag_deg_per_segment,
+                    },
                 },
                     envelope: Envelope {
                         ramp_in_s: a,
@@ -650,6 +671,11 @@ fn bits(c: &Command) -> Vec<u32> {
                     lag_deg_per_segment,
                 } => (1, b(&[tip_amp_m, frequency_hz, lag_deg_per_segment])),
                 Motion::Step { tip_m } => (2, b(&[tip_m])),
+                Motion::Force {
+                    force_amp_n,
+                    frequency_hz,
+                    lag_deg_per_segment,
+                } => (3, b(&[force_amp_n, frequency_hz, lag_deg_per_segment])),
             };
             let mut v = vec![17, kind];
             v.extend(fields);

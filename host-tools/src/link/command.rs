@@ -59,6 +59,20 @@ pub fn wave_command(
             format!("harmonic:{frequency_hz},0,0"),
             tracked,
         ),
+        WaveKind::Force {
+            force_amp_n,
+            frequency_hz,
+            lag_deg,
+            tracked,
+        } => (
+            Motion::Force {
+                force_amp_n: force_amp_n as f32,
+                frequency_hz: frequency_hz as f32,
+                lag_deg_per_segment: lag_deg as f32,
+            },
+            format!("harmonic:{frequency_hz},0,0"),
+            tracked,
+        ),
         // Held by the drying law alone: a step has no sine to track.
         WaveKind::MotionStep { tip_m } => (
             Motion::Step {
@@ -216,6 +230,23 @@ mod tests {
         assert!(
             matches!(ff, Command::SetMotion { tracked: false, .. }),
             "motion-ff: is not tracked: {ff:?}"
+        );
+        let force = request(&WaveRequest::new("force:0.001,1,60", 3)).unwrap();
+        assert!(
+            matches!(
+                force,
+                Command::SetMotion {
+                    motion: Motion::Force { force_amp_n, .. },
+                    tracked: true,
+                    ..
+                } if force_amp_n == 1e-3
+            ),
+            "{force:?}"
+        );
+        let ff = request(&WaveRequest::new("force-ff:0.001,1,60", 3)).unwrap();
+        assert!(
+            matches!(ff, Command::SetMotion { tracked: false, .. }),
+            "{ff:?}"
         );
         let e = request(&WaveRequest::new("motion:0.0002,300,60", 3)).unwrap_err();
         assert!(

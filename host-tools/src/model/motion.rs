@@ -50,6 +50,7 @@ use finrs_frames::{ModelRecord, Motion, StripModel};
 use model_core::state_len;
 
 use super::predict::ModelSpec;
+use crate::recording::Channel;
 use crate::wave::{Wave, WaveError, WaveKind, WaveOptions};
 
 /// Why a motion has no voltages.
@@ -102,8 +103,8 @@ pub fn record(spec: &ModelSpec) -> ModelRecord {
 }
 
 /// `wave` itself under `options`, or for a motion the wave the board
-/// would drive for it (`harmonic:` for a `motion:`, `held:` for a
-/// `motion-step:`) on `segments` segments sampled at `rate_hz`, holding
+/// would drive for it (`harmonic:` for a `motion:` or a `force:`, `held:`
+/// for a `motion-step:`) on `segments` segments sampled at `rate_hz`, holding
 /// the model of `spec`, starting at `t_session_s` on its drying law's
 /// clock (needed if the model dries: the wave is then the one the board
 /// starts with; its corrections as the strip dries are the controller's,
@@ -136,6 +137,19 @@ pub fn shaped(
                 tip_m: tip_m as f32,
             },
             tip_m,
+        ),
+        WaveKind::Force {
+            force_amp_n,
+            frequency_hz,
+            lag_deg,
+            ..
+        } => (
+            Motion::Force {
+                force_amp_n: force_amp_n as f32,
+                frequency_hz: frequency_hz as f32,
+                lag_deg_per_segment: lag_deg as f32,
+            },
+            force_amp_n,
         ),
         _ => return Ok((wave.clone(), *options)),
     };
@@ -223,12 +237,12 @@ fn shape(
     record: &ModelRecord,
     segments: usize,
     rate_hz: f64,
-    motion: Option<Asked>,
+    motion: Option<MotionRequest>,
 ) -> Result<Option<(Program, Envelope)>, BoardRefused> {
     fn go<const N: usize, const S: usize>(
         record: &ModelRecord,
         dt_s: f64,
-        motion: Option<Asked>,
+        motion: Option<MotionRequest>,
     ) -> Result<Option<(Program, Envelope)>, ShapeRefused> {
         let mut shaper = Shaper::<N, ELEMENTS, S>::new();
         shaper.install(Shaper::check(record, dt_s)?);
@@ -254,7 +268,7 @@ fn shape(
 }
 
 /// A SetMotion's motion, envelope, limit (V) and session time (s).
-type Asked = (Motion, Envelope, f32, f32);
+type MotionRequest = (Motion, Envelope, f32, f32);
 
 /// The board's check of a SetModel of `record` (`finrs tune` runs it
 /// before sending).
@@ -287,45 +301,52 @@ pub fn board_program(
     .ok_or(BoardRefused::Segments(segments))
 }
 
-/// The tip a motion asks, m, at each of `t_s` (`None` for another wave):
-/// `TIP_AMP_M · sin(2π HZ (t − start_s))` for a `motion:`, `TIP_M` for a
-/// `motion-step:`, while the wave is held (`hold_s`, from and to, s),
-/// `None` outside it, where the envelope's ramps (a step's rise) and the
-/// relaxation's settling are not what was asked.
-pub fn asked_tip_m(
-    wave: &Wave,
-    t_s: &[f64],
-    start_s: f64,
-    hold_s: (f64, f64),
-) -> Option<Vec<Option<f64>>> {
-    let asked: Box<dyn Fn(f64) -> f64> = match *wave.kind() {
+/// A channel as a motion asks it, sample by sample (`None` where nothing
+/// is asked).
+pub type Asked = (Channel, Vec<Option<f64>>);
+
+/// What a motion asks at each of `t_s` (`None` for another wave), and of
+/// which channel: the tip, m, `TIP_AMP_M · sin(2π HZ (t − start_s))` for
+/// a `motion:`, `TIP_M` for a `motion-step:`; the load cell's force, N,
+/// `FORCE_AMP_N · sin(2π HZ (t − start_s))` for a `force:`; while the
+/// wave is held (`hold_s`, from and to, s), `None` outside it, where the
+/// envelope's ramps (a step's rise) and the relaxation's settling are not
+/// what was asked.
+pub fn asked(wave: &Wave, t_s: &[f64], start_s: f64, hold_s: (f64, f64)) -> Option<Asked> {
+    let sine = |amplitude: f64, hz: f64| -> Box<dyn Fn(f64) -> f64> {
+        let omega = 2.0 * std::f64::consts::PI * hz;
+        Box::new(move |t| amplitude * (omega * (t - start_s)).sin())
+    };
+    let (channel, value): (Channel, Box<dyn Fn(f64) -> f64>) = match *wave.kind() {
         WaveKind::Motion {
             tip_amp_m,
             frequency_hz,
             ..
-        } => {
-            let omega = 2.0 * std::f64::consts::PI * frequency_hz;
-            Box::new(move |t| tip_amp_m * (omega * (t - start_s)).sin())
-        }
-        WaveKind::MotionStep { tip_m } => Box::new(move |_| tip_m),
+        } => (Channel::TipY, sine(tip_amp_m, frequency_hz)),
+        WaveKind::MotionStep { tip_m } => (Channel::TipY, Box::new(move |_| tip_m)),
+        WaveKind::Force {
+            force_amp_n,
+            frequency_hz,
+            ..
+        } => (Channel::Force, sine(force_amp_n, frequency_hz)),
         _ => return None,
     };
-    Some(
-        t_s.iter()
-            .map(|&t| (hold_s.0..=hold_s.1).contains(&t).then(|| asked(t)))
-            .collect(),
-    )
+    let values = t_s
+        .iter()
+        .map(|&t| (hold_s.0..=hold_s.1).contains(&t).then(|| value(t)))
+        .collect();
+    Some((channel, values))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{asked_tip_m, shaped, MotionError};
+    use super::{asked, shaped, MotionError};
     use crate::model::params::{ModelFile, Preset};
     use crate::model::predict::ModelSpec;
     use crate::model::simulate::predict_recording;
     use crate::model::synth::{drive_recording_shaped, Drive};
     use crate::recording::{Channel, Fixture, Geometry};
-    use crate::wave::{Wave, WaveOptions};
+    use crate::wave::{Wave, WaveKind, WaveOptions};
     use model_core::Phasor;
 
     /// `file`'s model, damped (an undamped mode would ring for ever), on the
@@ -340,9 +361,20 @@ mod tests {
     /// The free tip of `spec`'s strip driven by `wave` under `options`
     /// from rest, 3 segments at 1 kHz, over `options.sweep_s`.
     fn model_tip(wave: &Wave, options: &WaveOptions, spec: &ModelSpec) -> Vec<f64> {
+        model_output(wave, options, spec, Fixture::Free, Channel::TipY)
+    }
+
+    /// `channel` of `spec`'s strip in `fixture`, as [`model_tip`].
+    fn model_output(
+        wave: &Wave,
+        options: &WaveOptions,
+        spec: &ModelSpec,
+        fixture: Fixture,
+        channel: Channel,
+    ) -> Vec<f64> {
         let drive = Drive {
             segments: 3,
-            fixture: Fixture::Free,
+            fixture,
             rest_s: 0.0,
             duration_s: options.sweep_s,
             off_s: 0.0,
@@ -350,8 +382,8 @@ mod tests {
         };
         let rec = drive_recording_shaped(wave, &drive, options, None).unwrap();
         let mut sim = predict_recording("motion", &rec, spec, 1, &mut |_| {}).unwrap();
-        let at = sim.channels.iter().position(|(c, _)| *c == Channel::TipY);
-        sim.channels.swap_remove(at.expect("a free strip's tip")).1
+        let at = sim.channels.iter().position(|(c, _)| *c == channel);
+        sim.channels.swap_remove(at.expect("the channel asked")).1
     }
 
     /// The model's own simulation of the shaped wave moves the tip as
@@ -381,6 +413,32 @@ mod tests {
             "{}",
             y.sine_phase_rad().to_degrees()
         );
+    }
+
+    /// The host's twin of a force wave: the `harmonic:` wave the board
+    /// would drive for it, simulated on the held strip by the same model
+    /// (the example session's strip: an instant moment), moves the force
+    /// as asked over the last ten periods.
+    #[test]
+    fn the_simulated_force_moves_as_asked() {
+        let mut file = ModelFile::main_m_2006();
+        let p = model_core::Params::baseline_air_example();
+        file.relaxation.a_nm_per_c = p.a_nm_per_c;
+        file.relaxation.b_nm_per_c_s = p.b_nm_per_c_s;
+        let spec = damped(file);
+        let wave = Wave::parse("force:0.001,1,60").unwrap();
+        let steady = WaveOptions::steady(60.0);
+        let (shaped, _) = shaped(&wave, &spec, 3, 1000.0, None, &steady).unwrap();
+        assert!(matches!(shaped.kind(), WaveKind::Harmonic { .. }));
+        let force = model_output(&shaped, &steady, &spec, Fixture::Blocked, Channel::Force);
+        let theta = 2.0 * std::f64::consts::PI / 1000.0;
+        let (from, to) = (force.len() - 1 - 10_000, force.len() - 1);
+        let mut y = Phasor::ZERO;
+        for (k, &v) in force.iter().enumerate().take(to).skip(from) {
+            y += Phasor::unit(-theta * k as f64).scale(2.0 * v / 10_000.0);
+        }
+        assert!((y.amplitude() / 1e-3 - 1.0).abs() < 0.01, "{y:?}");
+        assert!(y.sine_phase_rad().to_degrees().abs() < 1.0, "{y:?}");
     }
 
     /// The host's twin of a step: the `held:` wave the board would drive,
@@ -413,13 +471,22 @@ mod tests {
     fn the_asked_tip_is_the_motion_while_the_wave_is_held() {
         let wave = Wave::parse("motion:0.001,2,60").unwrap();
         let t: Vec<f64> = (0..100).map(|k| k as f64 * 0.01).collect();
-        let asked = asked_tip_m(&wave, &t, 0.1, (0.3, 0.8)).unwrap();
+        let (channel, asked) = asked(&wave, &t, 0.1, (0.3, 0.8)).unwrap();
+        assert_eq!(channel, Channel::TipY);
         assert!(asked[..30].iter().all(Option::is_none) && asked[81..].iter().all(Option::is_none));
         for k in 30..=80 {
             let want = 0.001 * (2.0 * std::f64::consts::PI * 2.0 * (t[k] - 0.1)).sin();
             assert!((asked[k].unwrap() - want).abs() < 1e-15, "{k}");
         }
-        assert!(asked_tip_m(&Wave::parse("sine:1,1,0").unwrap(), &t, 0.0, (0.0, 1.0)).is_none());
+        assert!(super::asked(&Wave::parse("sine:1,1,0").unwrap(), &t, 0.0, (0.0, 1.0)).is_none());
+        // A force wave asks the load cell's force; a step its tip, held.
+        let force = Wave::parse("force:0.002,2,60").unwrap();
+        let (channel, f) = super::asked(&force, &t, 0.1, (0.3, 0.8)).unwrap();
+        assert_eq!(channel, Channel::Force);
+        assert!((f[30].unwrap() - 0.002 * (2.0 * std::f64::consts::PI * 0.4).sin()).abs() < 1e-15);
+        let step = Wave::parse("motion-step:0.003").unwrap();
+        let (_, s) = super::asked(&step, &t, 0.1, (0.3, 0.8)).unwrap();
+        assert_eq!((s[29], s[30], s[80]), (None, Some(0.003), Some(0.003)));
     }
 
     #[test]

@@ -233,6 +233,36 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }))
     }
 
+    /// Each segment's force on the load cell per volt at `hz` as the board
+    /// samples it, N/V: the force read at the end of a sample period (the
+    /// state after it) over the voltage held through it, the others at 0
+    /// V; [`Strip::harmonic`]'s force is the one at the period's start.
+    /// Zero on a free strip. Refused as [`Strip::harmonic`] refuses.
+    ///
+    /// ```
+    /// use model_core::{Fixture, Params, Phasor, Strip};
+    /// let p = Params::main_m_2006();
+    /// let held = Strip::<f64, 3, 1, 18>::new(&p, Fixture::Blocked, 1e-3).unwrap();
+    /// let per_volt = held.sampled_force_per_volt(1.0).unwrap();
+    /// // Linear: the force of any voltages is their sum.
+    /// let v = [Phasor::from_sine(1.0, 0.0), Phasor::from_sine(0.5, -1.0), Phasor::ZERO];
+    /// let f = held.harmonic(1.0, &v).unwrap().force_n * Phasor::unit(2.0 * core::f64::consts::PI * 1e-3);
+    /// let sum = per_volt[0] * v[0] + per_volt[1] * v[1];
+    /// assert!((f - sum).norm_sqr().sqrt() < 1e-12 * f.amplitude());
+    /// ```
+    pub fn sampled_force_per_volt(&self, hz: f64) -> Result<[Phasor; N], HarmonicError> {
+        self.has_sine_response(hz)?;
+        let z = Phasor::unit(2.0 * core::f64::consts::PI * hz * self.dt_s);
+        let mut out = [Phasor::ZERO; N];
+        for (k, f) in out.iter_mut().enumerate() {
+            let mut v = [Phasor::ZERO; N];
+            v[k] = Phasor::real(1.0);
+            // The period's end: the state one step on.
+            *f = self.response(z, &v)?.force_n * z;
+        }
+        Ok(out)
+    }
+
     /// The voltages (phasors, V) of a travelling bending wave at `hz`:
     /// every segment's moment of one amplitude, each `lag_rad` behind the
     /// one before it (from the clamp), scaled so that the free tip moves
@@ -582,5 +612,38 @@ mod tests {
             Err(HarmonicError::Resonant { mode: 0 })
         ));
         assert!(s.harmonic(0.9 * f1, &v).is_ok());
+    }
+
+    /// What a board's load cell reads at the end of each sample period,
+    /// against the voltage held through it, by lock-in over the last ten
+    /// periods of a long run: each segment's sampled force per volt, on
+    /// the damped strip with every linear effect, within 1e-6.
+    #[test]
+    fn the_sampled_force_per_volt_is_what_the_load_cell_reads() {
+        let s = strip(Fixture::Blocked);
+        let hz = 2.0;
+        let per_volt = s.sampled_force_per_volt(hz).unwrap();
+        let theta = 2.0 * core::f64::consts::PI * hz * s.dt_s();
+        let v: [Phasor; 3] = core::array::from_fn(|i| Phasor::from_sine(1.0, -0.7 * i as f64));
+        let (steps, last) = (250_000u64, 5_000u64);
+        let mut x = s.rest();
+        let mut f = Phasor::ZERO;
+        for k in 0..steps {
+            let vk: [f64; 3] = core::array::from_fn(|i| v[i].at(theta, k));
+            s.step(&mut x, &vk);
+            if k >= steps - last {
+                // Read after the period in which v_k was held.
+                let w = Phasor::unit(-theta * k as f64).scale(2.0 / last as f64);
+                f += w.scale(s.blocking_force_n(&x));
+            }
+        }
+        let want = per_volt[0] * v[0] + per_volt[1] * v[1] + per_volt[2] * v[2];
+        assert!(
+            (f - want).amplitude() < 1e-6 * want.amplitude(),
+            "{f:?} against {want:?}"
+        );
+        // A free strip has no force.
+        let free = strip(Fixture::Free).sampled_force_per_volt(hz).unwrap();
+        assert!(free.iter().all(|p| p.amplitude() == 0.0));
     }
 }

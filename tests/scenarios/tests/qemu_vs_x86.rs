@@ -21,13 +21,29 @@ use std::time::{Duration, Instant};
 mod common;
 
 fn build_elf() -> PathBuf {
+    build_dir().join("finrs-qemu-tests")
+}
+
+/// The QEMU test programs' folder, every program of the package built.
+fn build_dir() -> PathBuf {
     common::build_release(
         &common::workspace(),
         "finrs-qemu-tests",
         |_| {},
         "building the QEMU program failed (is the target installed? run scripts/setup)",
     )
-    .join("finrs-qemu-tests")
+}
+
+/// The board's shaper at N = 6 (`MAX_SHAPED_SEGMENTS`) on the Cortex-M4F:
+/// every motion's program needs no more stack than a SetModel's check
+/// plus 16 KiB (the force wave builds the model's held strip inside its
+/// program), as `shape_stack` measures and checks; its numbers are
+/// printed (docs/model.md quotes them).
+#[test]
+fn the_shapers_motions_fit_the_stack_a_models_check_needs() {
+    let out = run_qemu(&build_dir().join("shape_stack"));
+    eprint!("{out}");
+    assert_eq!(out.lines().count(), 4, "{out}");
 }
 
 fn run_qemu(elf: &Path) -> String {

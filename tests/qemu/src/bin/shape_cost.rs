@@ -6,7 +6,8 @@
 //! a 1 Hz motion, and 100 ticks that each end a period of the wave (the
 //! worst tick: the fit's update, the corrected program, its generator and
 //! its Tracking frame); then a step's program (`motion-step:`, on a
-//! creeping strip) ten times, and the generator's voltages of a held step
+//! creeping strip) ten times, a force wave's (the held strip built)
+//! three times, and the generator's voltages of a held step
 //! in its rise (its worst: a sine, a cosine and an exponential) for 1000
 //! ticks.
 #![no_std]
@@ -41,6 +42,19 @@ pub fn finrs_shape_program_n3(
     motion: &Motion,
 ) -> Result<ShapedMotion<N>, ShapeRefused> {
     shaper.program(motion, STEADY, 4.0, f32::NAN)
+}
+
+/// A SetMotion's force wave (the model's held strip built for it),
+/// whose instructions are counted.
+#[no_mangle]
+#[inline(never)]
+pub fn finrs_shape_force_n3(
+    shaper: &Shaper<N, ELEMENTS, S>,
+    motion: &Motion,
+) -> Result<ShapedMotion<N>, ShapeRefused> {
+    // A limit of its own: a body identical to `finrs_shape_program_n3`'s
+    // would be folded into it by the linker, and not found in the trace.
+    shaper.program(motion, STEADY, 3.5, f32::NAN)
 }
 
 /// A SetMotion's held step (rising over 1 s), whose instructions are
@@ -80,7 +94,7 @@ pub fn finrs_track_tick_n3(
     v: &[f32; N],
     i: &[f32; N],
 ) -> Option<Correction<N>> {
-    t.feed(v, i)
+    t.feed(v, i, 0.0)
 }
 
 /// The tracker's share of a tick that ends a period, counted: the
@@ -88,7 +102,7 @@ pub fn finrs_track_tick_n3(
 #[no_mangle]
 #[inline(never)]
 pub fn finrs_track_period_end_n3(t: &mut Tracker<N>, v: &[f32; N], i: &[f32; N]) -> usize {
-    let Some(c) = t.feed(v, i) else { return 0 };
+    let Some(c) = t.feed(v, i, 0.0) else { return 0 };
     let (program, flags) = t.program(&c, 4.0);
     let made = Generator::<N>::new(program, STEADY).is_ok();
     let mut buf = [0u8; MAX_FRAME_LEN];
@@ -133,10 +147,11 @@ fn main() -> ! {
         amplitudes_v: [1.0, 0.8, 0.6],
         phases_deg: [0.0, -60.0, -120.0],
         admittance_a_per_v: [[2e-3, 1e-4]; N],
+        force_n_per_v: None,
     };
     let target = Target {
         shape: Shape::Sine(sine),
-        track_currents: true,
+        tracked: true,
         // The drying law's once a period too: the worst tick.
         drying: Some(tracker::Drying {
             rate_per_s: 1e-3,
@@ -187,6 +202,15 @@ fn main() -> ! {
     match Shaper::check(&record, 1e-3) {
         Ok(m) => shaper.install(m),
         Err(_) => ok = false,
+    }
+    // 0.1 mN at 1 Hz on the held strip, 3 times.
+    let force = Motion::Force {
+        force_amp_n: 1e-4,
+        frequency_hz: 1.0,
+        lag_deg_per_segment: 60.0,
+    };
+    for _ in 0..3 {
+        ok &= finrs_shape_force_n3(&shaper, &force).is_ok();
     }
     let step = Motion::Step { tip_m: 1e-3 };
     let mut held = None;

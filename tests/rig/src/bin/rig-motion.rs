@@ -168,7 +168,7 @@ fn board_drive(
         let v = generator.voltages_at_tick_v(tick, RATE_HZ as u32);
         out.push(v.map(f64::from));
         let Some(t) = tracker.as_mut() else { continue };
-        if let Some(c) = t.feed(&v, &[0.0; N]) {
+        if let Some(c) = t.feed(&v, &[0.0; N], 0.0) {
             let (program, _) = t.program(&c, LIMIT_V);
             generator = Generator::new(program, steady).map_err(|e| anyhow::anyhow!("{e}"))?;
         }
