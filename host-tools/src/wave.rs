@@ -44,6 +44,7 @@
 //! ```
 
 use finrs_drive::{Envelope, Generator, Program, HARD_LIMIT_V, MAX_SEGMENTS};
+use finrs_frames::Motion;
 
 /// Why a wave was refused: its text, or the firmware's rules for it.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -261,6 +262,18 @@ pub struct Wave {
     kind: WaveKind,
 }
 
+/// A motion wave as the board's shaper takes it ([`Wave::motion`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotionWave {
+    /// The SetMotion's motion (its values as `f32`).
+    pub motion: Motion,
+    /// Whether the board's tracker holds it (`motion:`, `force:`).
+    pub tracked: bool,
+    /// What is asked, as written: the tip's amplitude or step, m, or the
+    /// force's amplitude, N.
+    pub asked: f64,
+}
+
 /// What shapes a wave beyond its text: the one description `finrs wave`
 /// sends to the firmware and `finrs simulate --wave` drives a recording
 /// with (`model::synth::drive_recording_shaped`).
@@ -439,6 +452,49 @@ impl Wave {
         &self.kind
     }
 
+    /// A motion wave as a SetMotion carries it to the board's shaper;
+    /// `None` for a voltage wave.
+    pub fn motion(&self) -> Option<MotionWave> {
+        let f = |x: f64| x as f32;
+        Some(match self.kind {
+            WaveKind::Motion {
+                tip_amp_m,
+                frequency_hz,
+                lag_deg,
+                tracked,
+            } => MotionWave {
+                motion: Motion::Travelling {
+                    tip_amp_m: f(tip_amp_m),
+                    frequency_hz: f(frequency_hz),
+                    lag_deg_per_segment: f(lag_deg),
+                },
+                tracked,
+                asked: tip_amp_m,
+            },
+            WaveKind::Force {
+                force_amp_n,
+                frequency_hz,
+                lag_deg,
+                tracked,
+            } => MotionWave {
+                motion: Motion::Force {
+                    force_amp_n: f(force_amp_n),
+                    frequency_hz: f(frequency_hz),
+                    lag_deg_per_segment: f(lag_deg),
+                },
+                tracked,
+                asked: force_amp_n,
+            },
+            // Held by the drying law alone: a step has no sine to track.
+            WaveKind::MotionStep { tip_m } => MotionWave {
+                motion: Motion::Step { tip_m: f(tip_m) },
+                tracked: false,
+                asked: tip_m,
+            },
+            _ => return None,
+        })
+    }
+
     /// Checks that a step names one level or one per segment.
     pub fn check_segments(&self, segments: usize) -> Result<(), WaveError> {
         match &self.kind {
@@ -553,7 +609,7 @@ impl Wave {
                 };
                 // The generator's own peak (its rules are checked before the
                 // peak is: a refused program's NaN is never read).
-                let peak = Generator::<MAX_SEGMENTS>::new(program, STEADY)
+                let peak = Generator::<MAX_SEGMENTS>::new(program, Envelope::STEADY)
                     .map_or(f64::NAN, |g| f64::from(g.peak_abs_v()));
                 (program, peak, "largest level times the step's peak")
             }
@@ -625,19 +681,14 @@ impl Wave {
                 amplitudes_v,
                 phases_deg,
             } => {
-                let (mut amps, mut phases) = ([0.0f32; MAX_SEGMENTS], [0.0f32; MAX_SEGMENTS]);
-                for k in 0..segments {
-                    let i = if amplitudes_v.len() == 1 { 0 } else { k };
-                    amps[k] = f(amplitudes_v[i]);
-                    phases[k] = f(phases_deg[i]);
-                }
                 let largest = amplitudes_v.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+                // As many phases as amplitudes (one pair, or one a segment).
                 (
                     Program::Harmonic {
                         frequency_hz: f(*frequency_hz),
                         offset_v: f(offset_v),
-                        amplitudes_v: amps,
-                        phases_deg: phases,
+                        amplitudes_v: per_segment(amplitudes_v),
+                        phases_deg: per_segment(phases_deg),
                     },
                     largest + offset_v.abs(),
                     "largest amplitude plus offset",
@@ -646,13 +697,6 @@ impl Wave {
         })
     }
 }
-
-/// Full gain from the start, for ever: a program's peak is its own.
-const STEADY: Envelope = Envelope {
-    ramp_in_s: 0.0,
-    hold_s: f32::INFINITY,
-    ramp_out_s: 0.0,
-};
 
 /// The firmware's [`Generator<N>`] for a segment count known at run time
 /// (N = 1..=8). Built only through [`Generator::new`], so it holds a

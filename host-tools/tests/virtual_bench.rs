@@ -400,11 +400,7 @@ fn shaped_phase_deg(file: &finrs::model::params::ModelFile, motion: &finrs_frame
         .spec_for(&finrs::recording::Geometry::THESIS_2006)
         .unwrap();
     let record = finrs::model::motion::record(&spec);
-    let steady = finrs_drive::Envelope {
-        ramp_in_s: 0.0,
-        hold_s: f32::INFINITY,
-        ramp_out_s: 0.0,
-    };
+    let steady = finrs_drive::Envelope::STEADY;
     match finrs::model::motion::board_program(&record, 3, 1000.0, motion, steady, 4.0, f32::NAN)
         .unwrap()
         .0

@@ -444,39 +444,27 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         } else {
             return Err(ShapeRefused::NoSessionTime);
         };
-        let (program, envelope, shape, drying) = match *motion {
+        let wave = match *motion {
             Motion::Travelling {
                 tip_amp_m,
                 frequency_hz,
                 lag_deg_per_segment,
-            } => {
-                // The strip's moment gain is 1; dried, every voltage is 1/g.
-                let g0 = drying.map_or(1.0, |d| d.gain(0.0));
-                let asked = Asked {
-                    amplitude: tip_amp_m,
-                    frequency_hz,
-                    lag_deg_per_segment,
-                    force: false,
-                };
-                let (program, sine) = Self::sines(&model.strip, &asked, limit_v, g0)?;
-                (program, envelope, Shape::Sine(sine), drying)
-            }
+            } => Asked {
+                amplitude: tip_amp_m,
+                frequency_hz,
+                lag_deg_per_segment,
+                force: false,
+            },
             Motion::Force {
                 force_amp_n,
                 frequency_hz,
                 lag_deg_per_segment,
-            } => {
-                let g0 = drying.map_or(1.0, |d| d.gain(0.0));
-                let asked = Asked {
-                    amplitude: force_amp_n,
-                    frequency_hz,
-                    lag_deg_per_segment,
-                    force: true,
-                };
-                let held = Self::held(model)?;
-                let (program, sine) = Self::sines(&held, &asked, limit_v, g0)?;
-                (program, envelope, Shape::Sine(sine), drying)
-            }
+            } => Asked {
+                amplitude: force_amp_n,
+                frequency_hz,
+                lag_deg_per_segment,
+                force: true,
+            },
             Motion::Step { tip_m } => {
                 let (program, step, drying) =
                     Self::held_step(&model.strip, tip_m, envelope.ramp_in_s, limit_v, drying)?;
@@ -485,19 +473,28 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
                     ramp_in_s: 0.0,
                     ..envelope
                 };
-                (program, envelope, Shape::Step(step), drying)
+                return Ok(ShapedMotion::untracked(
+                    program,
+                    envelope,
+                    Shape::Step(step),
+                    drying,
+                ));
             }
         };
-        let target = Target {
-            shape,
-            tracked: false,
-            drying,
+        // The strip's moment gain is 1; dried, every voltage is 1/g.
+        let g0 = drying.map_or(1.0, |d| d.gain(0.0));
+        // A force wave is the held strip's, built for it.
+        let (program, sine) = if wave.force {
+            Self::sines(&Self::held(model)?, &wave, limit_v, g0)?
+        } else {
+            Self::sines(&model.strip, &wave, limit_v, g0)?
         };
-        Ok(ShapedMotion {
+        Ok(ShapedMotion::untracked(
             program,
             envelope,
-            target,
-        })
+            Shape::Sine(sine),
+            drying,
+        ))
     }
 
     /// A travelling wave's sines (`Strip::tip_wave`, or `force_wave` on
@@ -541,15 +538,7 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         // The f32 amplitudes, as the generator and the controller's limit
         // check will see them.
         let (k, needs_v) = largest(&amplitudes_v[..N]);
-        if force && needs_v > limit_v {
-            return Err(ShapeRefused::UnreachableForce {
-                needs_v,
-                segment: k as u8 + 1,
-                limit_v,
-                reachable_n: amplitude.abs() * limit_v / needs_v,
-            });
-        }
-        within(needs_v, k, limit_v, amplitude)?;
+        within(needs_v, k, limit_v, amplitude, force)?;
         let program = Program::Harmonic {
             frequency_hz,
             offset_v: 0.0,
@@ -558,7 +547,7 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         };
         // The generator's own rules (frequency range, finite values); the
         // envelope is the command's, checked where it is used.
-        finrs_drive::Generator::<N>::new(program, STEADY).map_err(ShapeRefused::Wave)?;
+        finrs_drive::Generator::<N>::new(program, Envelope::STEADY).map_err(ShapeRefused::Wave)?;
         // Each segment's admittance as its shunt samples it, and its force
         // per volt as the load cell reads it.
         let currents = strip
@@ -622,14 +611,14 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
             pole_per_s: step.pole_per_s as f32,
             zero_per_s: step.zero_per_s as f32,
         };
-        let generator =
-            finrs_drive::Generator::<N>::new(program, STEADY).map_err(ShapeRefused::Wave)?;
+        let generator = finrs_drive::Generator::<N>::new(program, Envelope::STEADY)
+            .map_err(ShapeRefused::Wave)?;
         // The peak of the whole program (a creep's start, a pure lag's
         // rise), on the segment of the largest level.
         let needs_v = generator.peak_abs_v();
         let magnitudes: [f32; N] = core::array::from_fn(|k| levels_v[k].abs());
         let (k, largest_v) = largest(&magnitudes);
-        within(needs_v, k, limit_v, tip_m)?;
+        within(needs_v, k, limit_v, tip_m, false)?;
         let held = HeldStep {
             levels_v: step.levels_v.map(|v| v as f32),
             rise_s,
@@ -653,26 +642,36 @@ struct Asked {
     force: bool,
 }
 
-/// A program's own envelope while it is checked: full from the start.
-const STEADY: Envelope = Envelope {
-    ramp_in_s: 0.0,
-    hold_s: f32::INFINITY,
-    ramp_out_s: 0.0,
-};
-
-/// Refuses a motion of `asked_m` whose largest voltage, `needs_v` on
-/// segment `k` (from 0), is above `limit_v`, with the motion the limit
-/// reaches: the voltages scale with the motion asked.
-fn within(needs_v: f32, k: usize, limit_v: f32, asked_m: f32) -> Result<(), ShapeRefused> {
-    if needs_v > limit_v {
-        return Err(ShapeRefused::Unreachable {
-            needs_v,
-            segment: k as u8 + 1,
-            limit_v,
-            reachable_m: asked_m.abs() * limit_v / needs_v,
-        });
+/// Refuses a motion of `asked` (at the tip, m, or of the load cell's
+/// `force`, N) whose largest voltage, `needs_v` on segment `k` (from 0),
+/// is above `limit_v`, with the motion the limit reaches: the voltages
+/// scale with the motion asked.
+fn within(
+    needs_v: f32,
+    k: usize,
+    limit_v: f32,
+    asked: f32,
+    force: bool,
+) -> Result<(), ShapeRefused> {
+    if needs_v <= limit_v {
+        return Ok(());
     }
-    Ok(())
+    let (segment, reachable) = (k as u8 + 1, asked.abs() * limit_v / needs_v);
+    Err(if force {
+        ShapeRefused::UnreachableForce {
+            needs_v,
+            segment,
+            limit_v,
+            reachable_n: reachable,
+        }
+    } else {
+        ShapeRefused::Unreachable {
+            needs_v,
+            segment,
+            limit_v,
+            reachable_m: reachable,
+        }
+    })
 }
 
 /// The index and value of the largest of `values` (the first if tied).
@@ -696,6 +695,28 @@ pub struct ShapedMotion<const N: usize> {
     /// what the controller holds it to (its `tracked` false: the
     /// command says).
     pub target: Target<N>,
+}
+
+impl<const N: usize> ShapedMotion<N> {
+    /// `program` under `envelope`, held by the tracker to `shape` and
+    /// `drying` (not tracked: the command says).
+    fn untracked(
+        program: Program,
+        envelope: Envelope,
+        shape: Shape<N>,
+        drying: Option<Drying>,
+    ) -> Self {
+        let target = Target {
+            shape,
+            tracked: false,
+            drying,
+        };
+        Self {
+            program,
+            envelope,
+            target,
+        }
+    }
 }
 
 /// What [`command`] did.

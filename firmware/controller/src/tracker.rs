@@ -257,16 +257,16 @@ impl<const N: usize> Tracker<N> {
     ) -> Option<Correction<N>> {
         self.ticks = self.ticks.saturating_add(1);
         let [c, s] = self.reference;
-        // Only a tracked motion's fit reads the lock-in.
+        // Only a tracked motion's fit reads the lock-in, and only what it
+        // measures: the force, or the currents.
         if self.tracks() {
-            for k in 0..N {
-                self.v_sum[k][0] += applied_v[k] * c;
-                self.v_sum[k][1] -= applied_v[k] * s;
-                self.i_sum[k][0] += currents_a[k] * c;
-                self.i_sum[k][1] -= currents_a[k] * s;
+            let by_force = self.by_force();
+            lock_in(&mut self.v_sum, applied_v, [c, s]);
+            if by_force {
+                lock_in(core::slice::from_mut(&mut self.f_sum), &[force_n], [c, s]);
+            } else {
+                lock_in(&mut self.i_sum, currents_a, [c, s]);
             }
-            self.f_sum[0] += force_n * c;
-            self.f_sum[1] -= force_n * s;
         }
         self.cycles += self.cycles_per_tick;
         let [tc, ts] = self.turn;
@@ -307,6 +307,17 @@ impl<const N: usize> Tracker<N> {
     /// Whether the tracker measures: asked, and a sine to lock in to.
     fn tracks(&self) -> bool {
         self.target.tracked && matches!(self.target.shape, Shape::Sine(_))
+    }
+
+    /// Whether what it measures is the load cell's force (a force motion).
+    fn by_force(&self) -> bool {
+        matches!(
+            self.target.shape,
+            Shape::Sine(Sine {
+                force_n_per_v: Some(_),
+                ..
+            })
+        )
     }
 
     /// The period's phasors `v`, `i`, `f` into the fit (the force's for a
@@ -424,6 +435,15 @@ impl<const N: usize> Tracker<N> {
             }
         };
         (program, flags)
+    }
+}
+
+/// Adds each of `x` times `e^{−jθ}` to its sum, `[cos θ, sin θ]` the
+/// reference.
+fn lock_in(sums: &mut [[f32; 2]], x: &[f32], [c, s]: [f32; 2]) {
+    for (sum, &x) in sums.iter_mut().zip(x) {
+        sum[0] += x * c;
+        sum[1] -= x * s;
     }
 }
 

@@ -7,10 +7,10 @@
 
 mod common;
 
-use common::{config, input, tared_with_model, Channel};
+use common::{config, input, set_motion, tared_with_model, Channel};
 use finrs_controller::shaper::{command, ShapeRefused, Shaped};
 use finrs_controller::{Config, Controller};
-use finrs_drive::{Envelope, Limits, Program};
+use finrs_drive::{Limits, Program};
 use finrs_frames::{Command, Event, Motion, StripModel};
 use model_core::{state_len, Extensions, Fixture, Params, StepError, Strip};
 use rtic_core::Exclusive;
@@ -59,16 +59,7 @@ fn config_4v() -> Config {
 
 /// `motion-step:tip_m` rising over `rise_s`, from `t_session_s`.
 fn step(tip_m: f32, rise_s: f32, t_session_s: f32, tracked: bool) -> Command {
-    Command::SetMotion {
-        motion: Motion::Step { tip_m },
-        envelope: Envelope {
-            ramp_in_s: rise_s,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 0.0,
-        },
-        t_session_s,
-        tracked,
-    }
+    set_motion(Motion::Step { tip_m }, rise_s, t_session_s, tracked)
 }
 
 /// `c` driving `m`'s strip from rest, its moment gain `gain(t)` at `t` s

@@ -71,11 +71,7 @@ fn the_shaped_voltages_move_the_models_tip_as_asked() {
         frequency_hz: 1.0,
         lag_deg_per_segment: 60.0,
     };
-    let steady = Envelope {
-        ramp_in_s: 0.0,
-        hold_s: f32::INFINITY,
-        ramp_out_s: 0.0,
-    };
+    let steady = Envelope::STEADY;
     let program = shaper
         .program(&asked, steady, 4.0, f32::NAN)
         .unwrap()

@@ -7,11 +7,11 @@
 
 mod common;
 
-use common::{config, input, tared_with_model, Channel};
+use common::{config, input, set_motion, tared_with_model, Channel, LastTenSeconds};
 use finrs_controller::shaper::{command, Shaped};
 use finrs_controller::tracker::MAX_CORRECTION;
 use finrs_controller::{Config, Controller};
-use finrs_drive::{Envelope, Limits};
+use finrs_drive::Limits;
 use finrs_frames::{Command, Event, Motion, StripModel, TrackingFlags};
 use model_core::{state_len, Extensions, Fixture, Params, Phasor, Strip};
 use rtic_core::Exclusive;
@@ -47,20 +47,12 @@ fn fine_config() -> Config {
 /// `motion:TIP_M,1,60` (or `motion-ff:` if not `tracked`), steady, from
 /// `t_session_s`.
 fn motion_command(tip_m: f32, t_session_s: f32, tracked: bool) -> Command {
-    Command::SetMotion {
-        motion: Motion::Travelling {
-            tip_amp_m: tip_m,
-            frequency_hz: 1.0,
-            lag_deg_per_segment: 60.0,
-        },
-        envelope: Envelope {
-            ramp_in_s: 0.0,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 0.0,
-        },
-        t_session_s,
-        tracked,
-    }
+    let motion = Motion::Travelling {
+        tip_amp_m: tip_m,
+        frequency_hz: 1.0,
+        lag_deg_per_segment: 60.0,
+    };
+    set_motion(motion, 0.0, t_session_s, tracked)
 }
 
 /// What a run measured: the tip's phasor over the last 10 s (asked: `TIP_M`
@@ -98,8 +90,7 @@ fn run(tracked: bool, (r1, c_factor): (f64, f64), drying: bool) -> Run {
     let mut x = plant.rest();
     let mut currents = [0.0f64; N];
     let steps = 60 * u64::from(HZ);
-    let theta = 2.0 * core::f64::consts::PI / f64::from(HZ);
-    let mut tip = Phasor::ZERO;
+    let mut tip = LastTenSeconds::new(steps);
     let amps_per_count = f64::from(fine_config().amps_per_count);
     for k in 0..steps {
         let counts = currents.map(|i| (2048.0 + i / amps_per_count).round() as u16);
@@ -114,10 +105,7 @@ fn run(tracked: bool, (r1, c_factor): (f64, f64), drying: bool) -> Run {
         plant.step(&mut x, &v);
         currents = plant.currents_a(&x, &v);
         // The tip after step k holds the sample at k + 1.
-        if k + 1 >= steps - 10 * u64::from(HZ) {
-            let y = plant.tip_deflection_m(&x);
-            tip += Phasor::unit(-theta * (k + 1) as f64).scale(2.0 * y / 10_000.0);
-        }
+        tip.add(k + 1, plant.tip_deflection_m(&x));
     }
     let tracking = ch
         .take_events()
@@ -127,7 +115,10 @@ fn run(tracked: bool, (r1, c_factor): (f64, f64), drying: bool) -> Run {
             _ => None,
         })
         .collect();
-    Run { tip, tracking }
+    Run {
+        tip: tip.phasor(),
+        tracking,
+    }
 }
 
 /// The tip's amplitude error (fraction) and phase error, degrees.
@@ -374,8 +365,7 @@ fn the_drying_law_holds_a_motion_fed_forward() {
         let mut plant = plant.unwrap();
         let mut x = plant.rest();
         let steps = 60_000u64;
-        let theta = 2.0 * core::f64::consts::PI / 1000.0;
-        let mut tip = Phasor::ZERO;
+        let mut tip = LastTenSeconds::new(steps);
         for k in 0..steps {
             let out = c.tick(&input(tick + k, 1000, [2048; N]), &mut ch);
             // The strip dries by the law whichever model drives it.
@@ -385,11 +375,9 @@ fn the_drying_law_holds_a_motion_fed_forward() {
                 t0_s + k as f64 / 1000.0,
             ));
             plant.step(&mut x, &out.voltages_v.map(f64::from));
-            if k + 1 >= steps - 10_000 {
-                let y = plant.tip_deflection_m(&x);
-                tip += Phasor::unit(-theta * (k + 1) as f64).scale(2.0 * y / 10_000.0);
-            }
+            tip.add(k + 1, plant.tip_deflection_m(&x));
         }
+        let tip = tip.phasor();
         (
             tip.amplitude() / TIP_M - 1.0,
             tip.sine_phase_rad().to_degrees(),
@@ -431,20 +419,12 @@ fn a_force_motion_is_held_by_the_load_cell() {
     };
     let run = |tracked: bool| {
         let (mut c, mut ch, tick, mut shaper) = tared_with_model(config, &m);
-        let motion = Command::SetMotion {
-            motion: Motion::Force {
-                force_amp_n: FORCE_N as f32,
-                frequency_hz: 1.0,
-                lag_deg_per_segment: 60.0,
-            },
-            envelope: Envelope {
-                ramp_in_s: 0.0,
-                hold_s: f32::INFINITY,
-                ramp_out_s: 0.0,
-            },
-            t_session_s: f32::NAN,
-            tracked,
+        let force = Motion::Force {
+            force_amp_n: FORCE_N as f32,
+            frequency_hz: 1.0,
+            lag_deg_per_segment: 60.0,
         };
+        let motion = set_motion(force, 0.0, f32::NAN, tracked);
         command(motion, &mut shaper, 1e-3, &mut Exclusive(&mut c)).unwrap();
         assert_eq!(c.tracking(), tracked);
         let mut plant = Strip::<f64, N, 4, { state_len(N, 4) }>::with_extensions(
@@ -457,8 +437,7 @@ fn a_force_motion_is_held_by_the_load_cell() {
         let mut x = plant.rest();
         let (mut force, mut currents) = (0.0f64, [0.0f64; N]);
         let steps = 60_000u64;
-        let theta = 2.0 * core::f64::consts::PI / 1000.0;
-        let mut y = Phasor::ZERO;
+        let mut y = LastTenSeconds::new(steps);
         for k in 0..steps {
             // The tare's 1000 counts are the load cell's zero.
             let counts = (1000.0 + force / 1e-5).round() as u16;
@@ -469,10 +448,9 @@ fn a_force_motion_is_held_by_the_load_cell() {
             plant.step(&mut x, &v);
             force = plant.blocking_force_n(&x);
             currents = plant.currents_a(&x, &v);
-            if k + 1 >= steps - 10_000 {
-                y += Phasor::unit(-theta * (k + 1) as f64).scale(2.0 * force / 10_000.0);
-            }
+            y.add(k + 1, force);
         }
+        let y = y.phasor();
         (
             y.amplitude() / FORCE_N - 1.0,
             y.sine_phase_rad().to_degrees(),

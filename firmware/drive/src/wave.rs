@@ -147,6 +147,15 @@ pub struct Envelope {
     pub ramp_out_s: f32,
 }
 
+impl Envelope {
+    /// Full gain from the start, for ever: the program as it is.
+    pub const STEADY: Envelope = Envelope {
+        ramp_in_s: 0.0,
+        hold_s: f32::INFINITY,
+        ramp_out_s: 0.0,
+    };
+}
+
 /// The rule a field of a program or envelope breaks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WaveRule {

@@ -124,32 +124,25 @@ fn layout_is_as_documented() {
         p.extend_from_slice(&v.to_le_bytes());
     }
     p.push(1);
-    let motion = Command::SetMotion {
-        motion: Motion::Travelling {
-            tip_amp_m: 0.005,
-            frequency_hz: 1.0,
-            lag_deg_per_segment: 60.0,
-        },
+    // Each motion kind with the envelope and session time `p` holds.
+    let set_motion = |motion, tracked| Command::SetMotion {
+        motion,
         envelope: Envelope {
             ramp_in_s: 2.0,
             hold_s: f32::INFINITY,
             ramp_out_s: 1.5,
         },
         t_session_s: 120.0,
-        tracked: true,
+        tracked,
     };
-    assert_eq!(frame(&motion), framed(0x89, &p));
+    let travelling = Motion::Travelling {
+        tip_amp_m: 0.005,
+        frequency_hz: 1.0,
+        lag_deg_per_segment: 60.0,
+    };
+    assert_eq!(frame(&set_motion(travelling, true)), framed(0x89, &p));
     // A step: kind 2, its tip, then two unused fields of zero bytes.
-    let step = Command::SetMotion {
-        motion: Motion::Step { tip_m: 0.005 },
-        envelope: Envelope {
-            ramp_in_s: 2.0,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 1.5,
-        },
-        t_session_s: 120.0,
-        tracked: false,
-    };
+    let step = set_motion(Motion::Step { tip_m: 0.005 }, false);
     let mut q = p.clone();
     q[0] = 2;
     q[5..13].fill(0);
@@ -163,20 +156,14 @@ fn layout_is_as_documented() {
         vec![CommandEvent::Refused(CommandError::MotionUnused(2))]
     );
     // A force wave: kind 3, as a travelling one.
-    let force = Command::SetMotion {
-        motion: Motion::Force {
+    let force = set_motion(
+        Motion::Force {
             force_amp_n: 0.005,
             frequency_hz: 1.0,
             lag_deg_per_segment: 60.0,
         },
-        envelope: Envelope {
-            ramp_in_s: 2.0,
-            hold_s: f32::INFINITY,
-            ramp_out_s: 1.5,
-        },
-        t_session_s: 120.0,
-        tracked: true,
-    };
+        true,
+    );
     p[0] = 3;
     assert_eq!(frame(&force), framed(0x89, &p));
     // A motion kind that is not 1..=3.

@@ -31,7 +31,7 @@
 use finrs_drive::Limits;
 use finrs_frames::{encode_command, Command, Motion, MAX_COMMAND_LEN};
 
-use crate::wave::{Wave, WaveError, WaveKind, WaveOptions};
+use crate::wave::{MotionWave, Wave, WaveError, WaveOptions};
 
 /// The `SetWave` command for the wave `spec` on `segments` segments shaped
 /// by `options`, or the field and rule it breaks; for a motion, the
@@ -44,50 +44,21 @@ pub fn wave_command(
     options: &WaveOptions,
 ) -> Result<Command, WaveError> {
     let wave = Wave::parse(spec)?;
-    let (motion, silent, tracked) = match *wave.kind() {
-        WaveKind::Motion {
-            tip_amp_m,
-            frequency_hz,
-            lag_deg,
-            tracked,
-        } => (
-            Motion::Travelling {
-                tip_amp_m: tip_amp_m as f32,
-                frequency_hz: frequency_hz as f32,
-                lag_deg_per_segment: lag_deg as f32,
-            },
-            format!("harmonic:{frequency_hz},0,0"),
-            tracked,
-        ),
-        WaveKind::Force {
-            force_amp_n,
-            frequency_hz,
-            lag_deg,
-            tracked,
-        } => (
-            Motion::Force {
-                force_amp_n: force_amp_n as f32,
-                frequency_hz: frequency_hz as f32,
-                lag_deg_per_segment: lag_deg as f32,
-            },
-            format!("harmonic:{frequency_hz},0,0"),
-            tracked,
-        ),
-        // Held by the drying law alone: a step has no sine to track.
-        WaveKind::MotionStep { tip_m } => (
-            Motion::Step {
-                tip_m: tip_m as f32,
-            },
-            "step:0".to_string(),
-            false,
-        ),
-        _ => {
-            let generator = wave.generator(segments, options)?;
-            return Ok(Command::SetWave {
-                program: generator.program(),
-                envelope: generator.envelope(),
-            });
+    let Some(MotionWave {
+        motion, tracked, ..
+    }) = wave.motion()
+    else {
+        let generator = wave.generator(segments, options)?;
+        return Ok(Command::SetWave {
+            program: generator.program(),
+            envelope: generator.envelope(),
+        });
+    };
+    let silent = match motion {
+        Motion::Travelling { frequency_hz, .. } | Motion::Force { frequency_hz, .. } => {
+            format!("harmonic:{frequency_hz},0,0")
         }
+        Motion::Step { .. } => "step:0".to_string(),
     };
     // The voltages are the board's to find; the envelope (and a sine's
     // frequency) follow the rules of a silent wave of the same kind.

@@ -51,7 +51,7 @@ use model_core::state_len;
 
 use super::predict::ModelSpec;
 use crate::recording::Channel;
-use crate::wave::{Wave, WaveError, WaveKind, WaveOptions};
+use crate::wave::{MotionWave, Wave, WaveError, WaveKind, WaveOptions};
 
 /// Why a motion has no voltages.
 #[derive(Debug, thiserror::Error)]
@@ -118,40 +118,13 @@ pub fn shaped(
     t_session_s: Option<f64>,
     options: &WaveOptions,
 ) -> Result<(Wave, WaveOptions), MotionError> {
-    let (motion, asked_m) = match *wave.kind() {
-        WaveKind::Motion {
-            tip_amp_m,
-            frequency_hz,
-            lag_deg,
-            ..
-        } => (
-            Motion::Travelling {
-                tip_amp_m: tip_amp_m as f32,
-                frequency_hz: frequency_hz as f32,
-                lag_deg_per_segment: lag_deg as f32,
-            },
-            tip_amp_m,
-        ),
-        WaveKind::MotionStep { tip_m } => (
-            Motion::Step {
-                tip_m: tip_m as f32,
-            },
-            tip_m,
-        ),
-        WaveKind::Force {
-            force_amp_n,
-            frequency_hz,
-            lag_deg,
-            ..
-        } => (
-            Motion::Force {
-                force_amp_n: force_amp_n as f32,
-                frequency_hz: frequency_hz as f32,
-                lag_deg_per_segment: lag_deg as f32,
-            },
-            force_amp_n,
-        ),
-        _ => return Ok((wave.clone(), *options)),
+    let Some(MotionWave {
+        motion,
+        asked: asked_m,
+        ..
+    }) = wave.motion()
+    else {
+        return Ok((wave.clone(), *options));
     };
     let text = wave.text();
     let t_session_s = t_session_s.map_or(f32::NAN, |t| t as f32);

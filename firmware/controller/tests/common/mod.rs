@@ -5,9 +5,9 @@
 use finrs_controller::shaper::{command, Shaped, Shaper, ELEMENTS};
 use finrs_controller::{Config, Controller, FrameSink, Identity};
 use finrs_drive::Limits;
-use finrs_frames::{Command, ModelRecord, StripModel};
+use finrs_frames::{Command, ModelRecord, Motion, StripModel};
 use finrs_frames::{Decoder, Event, ResetCause, Stats};
-use model_core::state_len;
+use model_core::{state_len, Phasor};
 use rtic_core::Exclusive;
 
 /// A sink that accepts or refuses each frame as told, and keeps the bytes
@@ -107,6 +107,51 @@ pub fn tared() -> (Controller<3>, Channel, u64) {
     assert!(!c.taring());
     ch.bytes.clear();
     (c, ch, 10)
+}
+
+/// A SetMotion of `motion` rising over `ramp_in_s`, held for ever, from
+/// `t_session_s`, tracked or not.
+pub fn set_motion(motion: Motion, ramp_in_s: f32, t_session_s: f32, tracked: bool) -> Command {
+    Command::SetMotion {
+        motion,
+        envelope: finrs_drive::Envelope {
+            ramp_in_s,
+            hold_s: f32::INFINITY,
+            ramp_out_s: 0.0,
+        },
+        t_session_s,
+        tracked,
+    }
+}
+
+/// The phasor `Y` of an output `Re(Y e^{jθk})` of a 1 Hz motion sampled
+/// at 1 kHz, by lock-in over the last 10 s of a run of `steps` ticks.
+pub struct LastTenSeconds {
+    steps: u64,
+    y: Phasor,
+}
+
+impl LastTenSeconds {
+    /// For a run of `steps` ticks.
+    pub fn new(steps: u64) -> Self {
+        Self {
+            steps,
+            y: Phasor::ZERO,
+        }
+    }
+
+    /// `value`, the output at sample `k` (the state after tick `k − 1`).
+    pub fn add(&mut self, k: u64, value: f64) {
+        if k + 10_000 >= self.steps {
+            let theta = 2.0 * core::f64::consts::PI / 1000.0;
+            self.y += Phasor::unit(-theta * k as f64).scale(2.0 * value / 10_000.0);
+        }
+    }
+
+    /// `Y`.
+    pub fn phasor(&self) -> Phasor {
+        self.y
+    }
 }
 
 /// The state length of the board's model strip for 3 segments.

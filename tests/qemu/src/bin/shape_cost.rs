@@ -41,7 +41,7 @@ pub fn finrs_shape_program_n3(
     shaper: &Shaper<N, ELEMENTS, S>,
     motion: &Motion,
 ) -> Result<ShapedMotion<N>, ShapeRefused> {
-    shaper.program(motion, STEADY, 4.0, f32::NAN)
+    shaper.program(motion, Envelope::STEADY, 4.0, f32::NAN)
 }
 
 /// A SetMotion's force wave (the model's held strip built for it),
@@ -54,7 +54,7 @@ pub fn finrs_shape_force_n3(
 ) -> Result<ShapedMotion<N>, ShapeRefused> {
     // A limit of its own: a body identical to `finrs_shape_program_n3`'s
     // would be folded into it by the linker, and not found in the trace.
-    shaper.program(motion, STEADY, 3.5, f32::NAN)
+    shaper.program(motion, Envelope::STEADY, 3.5, f32::NAN)
 }
 
 /// A SetMotion's held step (rising over 1 s), whose instructions are
@@ -67,7 +67,7 @@ pub fn finrs_shape_step_n3(
 ) -> Result<ShapedMotion<N>, ShapeRefused> {
     let rising = Envelope {
         ramp_in_s: 1.0,
-        ..STEADY
+        ..Envelope::STEADY
     };
     shaper.program(motion, rising, 4.0, f32::NAN)
 }
@@ -78,13 +78,6 @@ pub fn finrs_shape_step_n3(
 pub fn finrs_held_step_tick_n3(g: &Generator<N>, tick: u64) -> [f32; N] {
     g.voltages_at_tick_v(tick, 1000)
 }
-
-/// Full gain from the start, for ever.
-const STEADY: Envelope = Envelope {
-    ramp_in_s: 0.0,
-    hold_s: f32::INFINITY,
-    ramp_out_s: 0.0,
-};
 
 /// The tracker's share of an ordinary tick, counted.
 #[no_mangle]
@@ -104,7 +97,7 @@ pub fn finrs_track_tick_n3(
 pub fn finrs_track_period_end_n3(t: &mut Tracker<N>, v: &[f32; N], i: &[f32; N]) -> usize {
     let Some(c) = t.feed(v, i, 0.0) else { return 0 };
     let (program, flags) = t.program(&c, 4.0);
-    let made = Generator::<N>::new(program, STEADY).is_ok();
+    let made = Generator::<N>::new(program, Envelope::STEADY).is_ok();
     let mut buf = [0u8; MAX_FRAME_LEN];
     let sent = encode_tracking(&tracker::frame(&c, flags, 0), &mut buf).unwrap_or(0);
     usize::from(made) + sent

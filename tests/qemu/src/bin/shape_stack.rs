@@ -76,11 +76,7 @@ fn main() -> ! {
         }
         Err(_) => false,
     });
-    let steady = Envelope {
-        ramp_in_s: 0.0,
-        hold_s: f32::INFINITY,
-        ramp_out_s: 0.0,
-    };
+    let steady = Envelope::STEADY;
     let rising = Envelope {
         ramp_in_s: 1.0,
         ..steady

@@ -125,13 +125,6 @@ fn shaper(spec: &ModelSpec) -> anyhow::Result<BoardShaper> {
     Ok(shaper)
 }
 
-/// Full gain from the start, for ever.
-const STEADY: Envelope = Envelope {
-    ramp_in_s: 0.0,
-    hold_s: f32::INFINITY,
-    ramp_out_s: 0.0,
-};
-
 /// The motion asked, `asked_m` at the tip.
 fn motion(asked_m: f64) -> Motion {
     Motion::Travelling {
@@ -151,7 +144,12 @@ fn board_drive(
     t_session_s: f64,
     rows: u64,
 ) -> anyhow::Result<Option<Vec<[f64; N]>>> {
-    let shaped = match shaper.program(&motion(asked_m), STEADY, LIMIT_V, t_session_s as f32) {
+    let shaped = match shaper.program(
+        &motion(asked_m),
+        Envelope::STEADY,
+        LIMIT_V,
+        t_session_s as f32,
+    ) {
         Ok(s) => s,
         Err(ShapeRefused::Unreachable { .. }) => return Ok(None),
         Err(e) => anyhow::bail!("{e}"),
@@ -179,7 +177,12 @@ fn board_drive(
 /// The tip amplitude the limit lets `shaper`'s model reach, m, if 5 mm is
 /// beyond it.
 fn reachable_m(shaper: &BoardShaper, t_session_s: f64) -> anyhow::Result<Option<f64>> {
-    match shaper.program(&motion(WANTED_M), STEADY, LIMIT_V, t_session_s as f32) {
+    match shaper.program(
+        &motion(WANTED_M),
+        Envelope::STEADY,
+        LIMIT_V,
+        t_session_s as f32,
+    ) {
         Ok(_) => Ok(None),
         Err(ShapeRefused::Unreachable { reachable_m, .. }) => Ok(Some(f64::from(reachable_m))),
         Err(e) => anyhow::bail!("{e}"),
