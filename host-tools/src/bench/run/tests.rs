@@ -34,10 +34,33 @@ prompt = "put the tip on the load cell"
 notes = "blocked step"
 "#;
 
-fn out_dir(name: &str) -> PathBuf {
+/// A test's own output directory, removed when the test ends, failed or
+/// not.
+struct OutDir(PathBuf);
+
+impl std::ops::Deref for OutDir {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for OutDir {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for OutDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn out_dir(name: &str) -> OutDir {
     let dir = std::env::temp_dir().join(format!("finrs-bench-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    dir
+    OutDir(dir)
 }
 
 /// Runs `protocol` on `board` into `dir` with the default options, no
