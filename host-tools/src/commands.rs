@@ -13,7 +13,7 @@ use finrs::link::capture::{self, CaptureError, Firmware, Monitor};
 use finrs::link::probe::ProbeError;
 use finrs::model::motion;
 use finrs::model::params::{ModelFile, Preset};
-use finrs::model::simulate::predict_recording;
+use finrs::model::simulate::write_prediction;
 use finrs::model::synth::{self, DriveError};
 use finrs::plot;
 use finrs::recording::Geometry;
@@ -65,13 +65,19 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     );
     bar.set_message("simulating");
     let elements = sim_elements(&args, &model);
-    let sim = predict_recording(&name, &input, &spec, elements, &mut |n| bar.set_position(n))?;
-    bar.finish_and_clear();
-
     create_parent(&args.out)?;
-    sim.write(&args.out)?;
-    eprintln!("wrote {} ({} rows)", args.out.display(), sim.rows());
-    if let Some(png) = &args.plot {
+    // Written as it is computed; kept whole only to be drawn.
+    let kept = write_prediction(
+        &name,
+        &input,
+        &spec,
+        elements,
+        (&args.out, args.plot.is_some()),
+        &mut |n| bar.set_position(n),
+    )?;
+    bar.finish_and_clear();
+    eprintln!("wrote {} ({} rows)", args.out.display(), input.t_s.len());
+    if let (Some(png), Some(sim)) = (&args.plot, kept) {
         let measured = args.input.as_ref().map(|_| &input);
         // Plotting needs the prediction as a recording of its own.
         let sim = sim.to_recording();
@@ -93,9 +99,8 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", png.display());
         std::mem::forget(sim);
     }
-    // The process ends here: the system takes the recordings' memory back
+    // The process ends here: the system takes the recording's memory back
     // at exit, quicker than freeing it piece by piece.
-    std::mem::forget(sim);
     std::mem::forget(input);
     Ok(())
 }

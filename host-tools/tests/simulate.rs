@@ -5,7 +5,7 @@ mod common;
 
 use finrs::model::params::ModelFile;
 use finrs::model::predict::ModelSpec;
-use finrs::model::simulate::{predict_recording, simulate};
+use finrs::model::simulate::{predict_recording, simulate, write_prediction, WRITE_BLOCK_ROWS};
 use finrs::model::synth::{drive_recording, Drive};
 use finrs::recording::Geometry;
 use finrs::recording::{max_written_error, Channel, Fixture, Recording};
@@ -64,6 +64,44 @@ fn a_prediction_writes_what_its_recording_writes() {
     let header_line = written.lines().position(|l| l.starts_with("t_s")).unwrap() + 1;
     let want = format!("pred.csv:{}", header_line + 8);
     assert!(err.contains(&want) && err.contains(&ch.name()), "{err}");
+}
+
+#[test]
+fn a_prediction_written_as_computed_is_the_whole_one() {
+    // Written a block at a time as the model runs (several blocks and a
+    // part of one; free with tracked dots, blocked): byte for byte what
+    // the whole prediction writes, and kept whole on request.
+    let wave = Wave::parse("sine:2,1,120").unwrap();
+    let spec = ModelSpec::baseline(seed_params());
+    let dir = std::env::temp_dir().join(format!("finrs-streamed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for fixture in [Fixture::Free, Fixture::Blocked] {
+        let mut input = drive_recording(&wave, &drive(fixture, 0.5, 9.7)).unwrap();
+        if fixture == Fixture::Free {
+            input.meta.dots_s_m = Some(vec![0.01, 0.03]);
+        }
+        assert!(input.t_s.len() > 2 * WRITE_BLOCK_ROWS && input.t_s.len() % WRITE_BLOCK_ROWS != 0);
+        let whole = predict_recording("sine", &input, &spec, 2, &mut |_| {}).unwrap();
+        let (a, b) = (dir.join("whole.csv"), dir.join("streamed.csv"));
+        whole.write(&a).unwrap();
+        let mut done = 0;
+        let kept =
+            write_prediction("sine", &input, &spec, 2, (&b, true), &mut |n| done = n).unwrap();
+        assert_eq!(done, input.t_s.len() as u64);
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{fixture:?}"
+        );
+        let kept = kept.unwrap();
+        assert_eq!(kept.to_recording(), whole.to_recording(), "{fixture:?}");
+        assert!(
+            write_prediction("sine", &input, &spec, 2, (&b, false), &mut |_| {})
+                .unwrap()
+                .is_none()
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -67,6 +67,32 @@ pub struct Traces {
     pub force_n: Vec<f64>,
 }
 
+impl Traces {
+    /// Empties the traces for a block of `rows` rows of `segments`
+    /// segments and `dots` dots, keeping their room: the camera's rows NaN
+    /// until computed (rows it does not sample stay so).
+    fn start_block(&mut self, segments: usize, dots: usize, free: bool, rows: usize) {
+        let camera_rows = if free { rows } else { 0 };
+        let unsampled = |v: &mut Vec<f64>| {
+            v.clear();
+            v.resize(camera_rows, f64::NAN);
+        };
+        self.currents_a.resize_with(segments, Vec::new);
+        for c in &mut self.currents_a {
+            c.clear();
+            c.reserve(rows);
+        }
+        unsampled(&mut self.tip_y_m);
+        unsampled(&mut self.tip_x_m);
+        for d in [&mut self.dots_y_m, &mut self.dots_x_m] {
+            d.resize_with(dots, Vec::new);
+            d.iter_mut().for_each(unsampled);
+        }
+        self.force_n.clear();
+        self.force_n.reserve(if free { 0 } else { rows });
+    }
+}
+
 /// Runs `spec` over the drive of `rec` (sample time `dt_s`), the recording
 /// starting at session time `t_start_s`. `camera_rows[row]` says where to
 /// compute the camera outputs; `None` means every row.
@@ -79,17 +105,52 @@ pub fn predict(
     camera_rows: Option<&[bool]>,
     progress: &mut dyn FnMut(u64),
 ) -> Result<Traces, PredictError> {
+    let mut whole = Traces::default();
+    // One block of every row: the traces as computed, taken, not copied.
+    let rows = rec.t_s.len().max(1);
+    let mut take = |_: usize, t: &mut Traces| whole = std::mem::take(t);
+    predict_blocks(
+        rec,
+        spec,
+        elements,
+        (dt_s, t_start_s),
+        camera_rows,
+        (rows, &mut take),
+        progress,
+    )?;
+    Ok(whole)
+}
+
+/// Hands out [`Traces`] a block at a time: `(first_row, traces)`.
+pub type OnBlock<'a> = &'a mut dyn FnMut(usize, &mut Traces);
+
+/// As [`predict`], the time given as `(dt_s, t_start_s)`, the traces
+/// handed to `on_block(first_row, traces)` every `block_rows` rows
+/// and for the rows left (at least once): each block's traces hold only
+/// its rows. What writes a prediction as it is computed, never whole in
+/// memory.
+pub fn predict_blocks(
+    rec: &Recording,
+    spec: &ModelSpec,
+    elements: usize,
+    (dt_s, t_start_s): (f64, f64),
+    camera_rows: Option<&[bool]>,
+    (block_rows, on_block): (usize, OnBlock),
+    progress: &mut dyn FnMut(u64),
+) -> Result<(), PredictError> {
     let fixture = match rec.meta.fixture {
         Fixture::Free => CoreFixture::Free,
         Fixture::Blocked => CoreFixture::Blocked,
     };
-    let run = Run {
+    let mut run = Run {
         rec,
         spec,
         fixture,
         dt_s,
         t_start_s,
         camera_rows,
+        block_rows: block_rows.max(1),
+        on_block,
     };
     // One monomorphisation per (segments, elements): the core is fixed-size.
     macro_rules! dispatch {
@@ -177,6 +238,8 @@ struct Run<'a> {
     dt_s: f64,
     t_start_s: f64,
     camera_rows: Option<&'a [bool]>,
+    block_rows: usize,
+    on_block: OnBlock<'a>,
 }
 
 impl Run<'_> {
@@ -187,9 +250,9 @@ impl Run<'_> {
     /// add on its own, and no `fma` is enabled); a blocked diagnosis
     /// steps the model in most of its time.
     fn fastest<const N: usize, const E: usize, const S: usize>(
-        &self,
+        &mut self,
         progress: &mut dyn FnMut(u64),
-    ) -> Result<Traces, ParamError> {
+    ) -> Result<(), ParamError> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
@@ -202,9 +265,9 @@ impl Run<'_> {
     #[target_feature(enable = "avx2")]
     #[inline(never)]
     fn go_avx2<const N: usize, const E: usize, const S: usize>(
-        &self,
+        &mut self,
         progress: &mut dyn FnMut(u64),
-    ) -> Result<Traces, ParamError> {
+    ) -> Result<(), ParamError> {
         self.run::<N, E, S>(progress)
     }
 
@@ -212,9 +275,9 @@ impl Run<'_> {
     // swell the frame of every call.
     #[inline(never)]
     fn go<const N: usize, const E: usize, const S: usize>(
-        &self,
+        &mut self,
         progress: &mut dyn FnMut(u64),
-    ) -> Result<Traces, ParamError> {
+    ) -> Result<(), ParamError> {
         self.run::<N, E, S>(progress)
     }
 
@@ -222,9 +285,9 @@ impl Run<'_> {
     /// so that each is compiled for its own instructions.
     #[inline(always)]
     fn run<const N: usize, const E: usize, const S: usize>(
-        &self,
+        &mut self,
         progress: &mut dyn FnMut(u64),
-    ) -> Result<Traces, ParamError> {
+    ) -> Result<(), ParamError> {
         let spec = self.spec;
         let modes = kept_modes::modes_for::<N, E, S>(&spec.params, &spec.ext, self.fixture)?;
         let mut strip =
@@ -232,16 +295,9 @@ impl Run<'_> {
         let rows = self.rec.t_s.len();
         let dots: &[f64] = self.rec.meta.dots_s_m.as_deref().unwrap_or(&[]);
         let free = self.fixture == CoreFixture::Free;
-        let camera_len = if free { rows } else { 0 };
-        let mut t = Traces {
-            // Not `vec![..; N]`: a clone of an empty Vec drops its capacity.
-            currents_a: (0..N).map(|_| Vec::with_capacity(rows)).collect(),
-            tip_y_m: vec![f64::NAN; camera_len],
-            tip_x_m: vec![f64::NAN; camera_len],
-            dots_y_m: vec![vec![f64::NAN; camera_len]; dots.len()],
-            dots_x_m: vec![vec![f64::NAN; camera_len]; dots.len()],
-            force_n: Vec::with_capacity(if free { 0 } else { rows }),
-        };
+        let mut t = Traces::default();
+        let mut first = 0;
+        t.start_block(N, dots.len(), free, self.block_rows.min(rows));
         let length_m = spec.params.length_m;
         // Without the large-deflection term the tip moves straight across
         // by its node's deflection: one dot product, where the general
@@ -260,6 +316,8 @@ impl Run<'_> {
             )
         });
         for (row, v_row) in self.rec.v_v.rows().enumerate() {
+            // The row within its block.
+            let i = row - first;
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
             if !spec.sensors_before_update || row == 0 {
@@ -287,15 +345,15 @@ impl Run<'_> {
                         }
                         _ => (0.0, strip.tip_deflection_m(&x)),
                     };
-                    t.tip_x_m[row] = along;
-                    t.tip_y_m[row] = across;
+                    t.tip_x_m[i] = along;
+                    t.tip_y_m[i] = across;
                     for (j, &s) in dots.iter().enumerate() {
                         let (along, across) = shape
                             .as_ref()
                             .and_then(|shape| shape.position_at_m(s))
                             .unwrap_or((f64::NAN, f64::NAN));
-                        t.dots_x_m[j][row] = along;
-                        t.dots_y_m[j][row] = across;
+                        t.dots_x_m[j][i] = along;
+                        t.dots_y_m[j][i] = across;
                     }
                 }
             } else {
@@ -306,8 +364,16 @@ impl Run<'_> {
             if row % 4096 == 0 {
                 progress(row as u64);
             }
+            if i + 1 == self.block_rows {
+                (self.on_block)(first, &mut t);
+                first = row + 1;
+                t.start_block(N, dots.len(), free, self.block_rows.min(rows - first));
+            }
+        }
+        if first < rows || rows == 0 {
+            (self.on_block)(first, &mut t);
         }
         progress(rows as u64);
-        Ok(t)
+        Ok(())
     }
 }

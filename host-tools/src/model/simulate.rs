@@ -7,10 +7,16 @@
 
 use std::path::Path;
 
-use super::predict::{predict, ModelSpec, PredictError};
+use super::predict::{predict, predict_blocks, ModelSpec, PredictError, Traces};
 use crate::recording::{
     Channel, Column, Fixture, Metadata, Recording, RecordingError, RecordingView, SampleTimeError,
+    Streamed,
 };
+
+/// Rows simulated, checked and written at a time by [`write_prediction`]:
+/// the prediction's memory (five channels of 4096 rows: 160 KB), for a
+/// recording of any length.
+pub const WRITE_BLOCK_ROWS: usize = 4096;
 
 pub use super::predict::ELEMENTS;
 
@@ -34,6 +40,9 @@ pub enum SimulateError {
         /// The rule broken.
         source: PredictError,
     },
+    /// The prediction could not be written (the error names the file).
+    #[error(transparent)]
+    Write(#[from] RecordingError),
 }
 
 /// A simulation's output: a recording of the same fixture whose time and
@@ -115,45 +124,140 @@ pub fn predict_recording<'a>(
     elements: usize,
     progress: &mut dyn FnMut(u64),
 ) -> Result<Prediction<'a>, SimulateError> {
+    let (dt_s, t_start_s) = clock(name, input)?;
+    let mut traces = predict(input, model, elements, dt_s, t_start_s, None, progress)
+        .map_err(|source| model_error(name, source))?;
+    let meta = predicted_meta(name, input, elements);
+    let channels = predicted_channels(&input.meta)
+        .into_iter()
+        .map(|c| (c, take_trace(&mut traces, c)))
+        .collect();
+    Ok(Prediction {
+        input,
+        meta,
+        channels,
+    })
+}
+
+/// Simulates the drive of `input` as [`predict_recording`] does and writes
+/// the prediction to `path` as it is computed, [`WRITE_BLOCK_ROWS`] rows
+/// at a time: the same text and checks as [`Prediction::write`], but never
+/// the whole prediction in memory. With `keep`, also returns it whole (to
+/// plot it). A refusal leaves the file as it was.
+pub fn write_prediction<'a>(
+    name: &str,
+    input: &'a Recording,
+    model: &ModelSpec,
+    elements: usize,
+    (path, keep): (&Path, bool),
+    progress: &mut dyn FnMut(u64),
+) -> Result<Option<Prediction<'a>>, SimulateError> {
+    let (dt_s, t_start_s) = clock(name, input)?;
+    let meta = predicted_meta(name, input, elements);
+    let channels = predicted_channels(&input.meta);
+    let mut out = Streamed::create(path, &meta, &input.t_s, &input.v_v, &channels)?;
+    let mut kept: Vec<Vec<f64>> = vec![Vec::new(); if keep { channels.len() } else { 0 }];
+    let mut failed = None;
+    let mut on_block = |_: usize, traces: &mut Traces| {
+        if failed.is_some() {
+            return;
+        }
+        let block: Vec<&[f64]> = channels.iter().map(|&c| trace(traces, c)).collect();
+        if let Err(e) = out.rows(&block) {
+            failed = Some(e);
+        }
+        for (all, &c) in kept.iter_mut().zip(&channels) {
+            all.extend_from_slice(trace(traces, c));
+        }
+    };
+    predict_blocks(
+        input,
+        model,
+        elements,
+        (dt_s, t_start_s),
+        None,
+        (WRITE_BLOCK_ROWS, &mut on_block),
+        progress,
+    )
+    .map_err(|source| model_error(name, source))?;
+    if let Some(e) = failed {
+        return Err(e.into());
+    }
+    out.finish()?;
+    Ok(keep.then(|| Prediction {
+        input,
+        meta,
+        channels: channels.into_iter().zip(kept).collect(),
+    }))
+}
+
+/// The sample time of `input` and the session time it starts at (its
+/// `t_session_start_s`, the dehydration clock; without one 0).
+fn clock(name: &str, input: &Recording) -> Result<(f64, f64), SimulateError> {
     let dt_s = input
         .sample_time()
         .map_err(|source| SimulateError::Timing {
             name: name.to_string(),
             source,
         })?;
-    let t_start_s = input.meta.session_start_s().unwrap_or(0.0);
-    let traces =
-        predict(input, model, elements, dt_s, t_start_s, None, progress).map_err(|source| {
-            SimulateError::Model {
-                name: name.to_string(),
-                source,
-            }
-        })?;
+    Ok((dt_s, input.meta.session_start_s().unwrap_or(0.0)))
+}
 
+fn model_error(name: &str, source: PredictError) -> SimulateError {
+    SimulateError::Model {
+        name: name.to_string(),
+        source,
+    }
+}
+
+/// The input's metadata with a note saying what simulated it.
+fn predicted_meta(name: &str, input: &Recording, elements: usize) -> Metadata {
     let mut meta = input.meta.clone();
     meta.notes = Some(format!(
         "simulated by finrs {} ({} element(s) per segment) from {name}",
         env!("CARGO_PKG_VERSION"),
         elements
     ));
-    let mut channels = Vec::new();
-    for (k, c) in traces.currents_a.into_iter().enumerate() {
-        channels.push((Channel::Current(k), c));
-    }
-    match input.meta.fixture {
+    meta
+}
+
+/// The channels a prediction holds, in the order they are written:
+/// currents on every row, and for a free tip the camera channels (tip and
+/// any tracked dots), for a blocked tip the load cell's force.
+fn predicted_channels(meta: &Metadata) -> Vec<Channel> {
+    let mut channels: Vec<Channel> = (0..meta.segments).map(Channel::Current).collect();
+    match meta.fixture {
         Fixture::Free => {
-            channels.push((Channel::TipY, traces.tip_y_m));
-            channels.push((Channel::TipX, traces.tip_x_m));
-            for (j, (y, x)) in traces.dots_y_m.into_iter().zip(traces.dots_x_m).enumerate() {
-                channels.push((Channel::DotY(j), y));
-                channels.push((Channel::DotX(j), x));
+            channels.extend([Channel::TipY, Channel::TipX]);
+            for j in 0..meta.dots_s_m.as_ref().map_or(0, Vec::len) {
+                channels.extend([Channel::DotY(j), Channel::DotX(j)]);
             }
         }
-        Fixture::Blocked => channels.push((Channel::Force, traces.force_n)),
+        Fixture::Blocked => channels.push(Channel::Force),
     }
-    Ok(Prediction {
-        input,
-        meta,
-        channels,
+    channels
+}
+
+/// The trace of `traces` that is `channel`'s prediction.
+fn trace(traces: &Traces, channel: Channel) -> &[f64] {
+    match channel {
+        Channel::Current(k) => &traces.currents_a[k],
+        Channel::TipY => &traces.tip_y_m,
+        Channel::TipX => &traces.tip_x_m,
+        Channel::DotY(j) => &traces.dots_y_m[j],
+        Channel::DotX(j) => &traces.dots_x_m[j],
+        Channel::Force => &traces.force_n,
+    }
+}
+
+/// [`trace`], taken out of `traces`.
+fn take_trace(traces: &mut Traces, channel: Channel) -> Vec<f64> {
+    std::mem::take(match channel {
+        Channel::Current(k) => &mut traces.currents_a[k],
+        Channel::TipY => &mut traces.tip_y_m,
+        Channel::TipX => &mut traces.tip_x_m,
+        Channel::DotY(j) => &mut traces.dots_y_m[j],
+        Channel::DotX(j) => &mut traces.dots_x_m[j],
+        Channel::Force => &mut traces.force_n,
     })
 }

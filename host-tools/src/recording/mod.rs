@@ -34,4 +34,4 @@ pub use geometry::Geometry;
 pub use meta::{Fixture, Medium, Metadata, FORMAT};
 pub use timing::SampleTimeError;
 pub use voltages::Voltages;
-pub use write::{Column, RecordingView};
+pub use write::{Column, RecordingView, Streamed};
