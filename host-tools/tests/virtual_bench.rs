@@ -411,6 +411,42 @@ fn shaped_phase_deg(file: &finrs::model::params::ModelFile, motion: &finrs_frame
 }
 
 /// A protocol of the virtual bench's strip, its model `model` if any.
+/// Runs on `elf` a protocol of one recording, `(name, fixture, wave)`
+/// held `hold_s` after 1 s of rest, the model file `model` (in `dir`)
+/// loaded first: the board's log and the recording's file (its session
+/// in `dir/name`).
+fn one_recording(
+    elf: &Path,
+    dir: &Path,
+    model: &str,
+    (name, fixture, wave): (&str, &str, &str),
+    hold_s: f64,
+) -> (String, PathBuf) {
+    let recording = format!(
+        "[[recording]]\nname = \"{name}\"\nfixture = \"{fixture}\"\nwave = \"{wave}\"\n\
+         rest_s = 1.0\nhold_s = {hold_s}\noff_s = 0.5\n"
+    );
+    let protocol = dir.join(format!("{name}.toml"));
+    std::fs::write(&protocol, protocol_text(Some(model), &recording)).unwrap();
+    let out = dir.join(name);
+    let log = bench(elf, &protocol, &out);
+    let path = common::recordings_in(&out).pop().expect("one recording");
+    (log, path)
+}
+
+/// Per-window errors `(amplitude fraction, phase °)` as printed, and the
+/// worst amplitude and phase after the first window.
+fn shown_and_worst(errors: &[(f64, f64)]) -> (String, (f64, f64)) {
+    let shown: Vec<String> = errors
+        .iter()
+        .map(|(a, p)| format!("{:+.1}% {:+.1}°", 100.0 * a, p))
+        .collect();
+    let worst = errors[1..].iter().fold((0.0f64, 0.0f64), |m, &(a, p)| {
+        (m.0.max(a.abs()), m.1.max(p.abs()))
+    });
+    (shown.join(", "), worst)
+}
+
 fn protocol_text(model: Option<&str>, recordings: &str) -> String {
     let model = model.map_or(String::new(), |m| format!("model = {m:?}\n"));
     format!(
@@ -436,22 +472,16 @@ fn a_motion_on_the_virtual_bench_moves_the_plants_tip_as_asked() {
     std::fs::write(dir.join("plant.toml"), plant.to_toml()).unwrap();
     // The issue's 5 mm at 1 Hz: within 1 V a segment for this plant.
     let (tip_amp_m, hz, lag_deg) = (5e-3, 1.0, 60.0);
-    let recording = format!(
-        "[[recording]]\nname = \"free_motion\"\nfixture = \"free\"\n\
-         wave = \"motion:{tip_amp_m},{hz},{lag_deg}\"\nrest_s = 1.0\nhold_s = 30\noff_s = 0.5\n"
+    let wave = format!("motion:{tip_amp_m},{hz},{lag_deg}");
+    let (log, path) = one_recording(
+        &elf,
+        &dir,
+        "plant.toml",
+        ("free_motion", "free", &wave),
+        30.0,
     );
-    std::fs::write(
-        dir.join("protocol.toml"),
-        protocol_text(Some("plant.toml"), &recording),
-    )
-    .unwrap();
-    let session = dir.join("session");
-    let log = bench(&elf, &dir.join("protocol.toml"), &session);
     assert!(log.contains("in use on the board"), "{log}");
-    let path = common::recordings_in(&session)
-        .pop()
-        .expect("one recording");
-    merge(&session, &path);
+    merge(&dir.join("free_motion"), &path);
     let (amplitude, phase_deg) = tip_response(&path, hz);
     let motion = Motion::Travelling {
         tip_amp_m: tip_amp_m as f32,
@@ -774,22 +804,12 @@ fn a_tracked_motion_holds_on_a_drying_strip_where_feed_forward_drifts() {
         ("feed_forward", format!("motion-ff:{motion}")),
         ("tracked", format!("motion:{motion}")),
     ] {
-        let recording = format!(
-            "[[recording]]\nname = \"{name}\"\nfixture = \"free\"\nwave = \"{wave}\"\n\
-             rest_s = 1.0\nhold_s = {hold_s}\noff_s = 0.5\n"
-        );
-        let protocol = dir.join(format!("{name}.toml"));
-        std::fs::write(&protocol, protocol_text(Some("fit.toml"), &recording)).unwrap();
+        let (log, path) = one_recording(&elf, &dir, "fit.toml", (name, "free", &wave), hold_s);
         let out = dir.join(name);
-        let log = bench(&elf, &protocol, &out);
-        let path = common::recordings_in(&out).pop().expect("one recording");
         merge(&out, &path);
         let errors = motion_errors(&path, tip_amp_m, hz, hold_s, 5.0);
-        let shown: Vec<String> = errors
-            .iter()
-            .map(|(a, p)| format!("{:+.1}% {:+.1}°", 100.0 * a, p))
-            .collect();
-        eprintln!("{name}: per 5 s: {}", shown.join(", "));
+        let (shown, worst_after_first) = shown_and_worst(&errors);
+        eprintln!("{name}: per 5 s: {shown}");
         // The tracker's reports, once a period after the first.
         let tracking = out.join("tracking").join(path.file_name().unwrap());
         assert_eq!(
@@ -807,9 +827,6 @@ fn a_tracked_motion_holds_on_a_drying_strip_where_feed_forward_drifts() {
             );
             assert!(csv.lines().count() > 55, "{csv}");
         }
-        let worst_after_first = errors[1..].iter().fold((0.0f64, 0.0f64), |m, &(a, p)| {
-            (m.0.max(a.abs()), m.1.max(p.abs()))
-        });
         worst.push((name, errors, worst_after_first));
     }
     let (_, plain_errors, _) = &worst[0];
@@ -849,26 +866,15 @@ fn a_force_wave_is_held_by_the_load_cell_on_a_drying_strip() {
         ("feed_forward", format!("force-ff:{force_n},{hz},{lag_deg}")),
         ("tracked", format!("force:{force_n},{hz},{lag_deg}")),
     ] {
-        let recording = format!(
-            "[[recording]]\nname = \"{name}\"\nfixture = \"blocked\"\nwave = \"{wave}\"\n\
-             rest_s = 1.0\nhold_s = {hold_s}\noff_s = 0.5\n"
-        );
-        let protocol = dir.join(format!("{name}.toml"));
-        std::fs::write(&protocol, protocol_text(Some("fit.toml"), &recording)).unwrap();
-        let out = dir.join(name);
-        bench(&elf, &protocol, &out);
-        let path = common::recordings_in(&out).pop().expect("one recording");
+        let (_, path) = one_recording(&elf, &dir, "fit.toml", (name, "blocked", &wave), hold_s);
         let errors = sine_errors(&path, Channel::Force, force_n, hz, hold_s, 5.0);
-        let shown: Vec<String> = errors
-            .iter()
-            .map(|(a, p)| format!("{:+.1}% {:+.1}°", 100.0 * a, p))
-            .collect();
-        eprintln!("force {name}: per 5 s: {}", shown.join(", "));
-        let tracking = out.join("tracking").join(path.file_name().unwrap());
+        let (shown, worst_after_first) = shown_and_worst(&errors);
+        eprintln!("force {name}: per 5 s: {shown}");
+        let tracking = dir
+            .join(name)
+            .join("tracking")
+            .join(path.file_name().unwrap());
         assert_eq!(tracking.exists(), name == "tracked", "{name}");
-        let worst_after_first = errors[1..].iter().fold((0.0f64, 0.0f64), |m, &(a, p)| {
-            (m.0.max(a.abs()), m.1.max(p.abs()))
-        });
         worst.push((errors, worst_after_first));
     }
     let (ff_errors, ff) = &worst[0];

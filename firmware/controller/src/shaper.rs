@@ -174,13 +174,25 @@ impl fmt::Display for ShapeRefused {
                 segment,
                 limit_v,
                 reachable_m,
-            } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
+            } => unreachable(
+                f,
+                *needs_v,
+                *segment,
+                *limit_v,
+                (*reachable_m, "um at the tip"),
+            ),
             Self::UnreachableForce {
                 needs_v,
                 segment,
                 limit_v,
                 reachable_n,
-            } => unreachable_force(f, *needs_v, *segment, *limit_v, *reachable_n),
+            } => unreachable(
+                f,
+                *needs_v,
+                *segment,
+                *limit_v,
+                (*reachable_n, "uN at the load cell"),
+            ),
             Self::Wave(e) => write!(f, "SetMotion refused: {e}"),
             Self::NoSessionTime => f.write_str(NO_SESSION_TIME),
             Self::Controller(e) => write!(f, "{e}"),
@@ -209,40 +221,23 @@ fn too_many(f: &mut fmt::Formatter<'_>, n: usize) -> fmt::Result {
     )
 }
 
-/// In whole mV and µm: an f32 `Display` would link core's float
-/// formatting (about 14 KB of flash).
+/// In whole mV and millionths of the reachable's unit (`what`: `um at
+/// the tip`, `uN at the load cell`): an f32 `Display` would link core's
+/// float formatting (about 14 KB of flash).
 fn unreachable(
     f: &mut fmt::Formatter<'_>,
     needs_v: f32,
     segment: u8,
     limit_v: f32,
-    reachable_m: f32,
+    (reachable, what): (f32, &str),
 ) -> fmt::Result {
     write!(
         f,
         "SetMotion refused: needs {} mV on segment {segment}, above the {} mV limit; \
-         within it the model reaches {} um at the tip",
+         within it the model reaches {} {what}",
         (needs_v * 1e3) as u32,
         (limit_v * 1e3) as u32,
-        (reachable_m * 1e6) as u32
-    )
-}
-
-/// As [`unreachable`], the force in whole µN.
-fn unreachable_force(
-    f: &mut fmt::Formatter<'_>,
-    needs_v: f32,
-    segment: u8,
-    limit_v: f32,
-    reachable_n: f32,
-) -> fmt::Result {
-    write!(
-        f,
-        "SetMotion refused: needs {} mV on segment {segment}, above the {} mV limit; \
-         within it the model reaches {} uN at the load cell",
-        (needs_v * 1e3) as u32,
-        (limit_v * 1e3) as u32,
-        (reachable_n * 1e6) as u32
+        (reachable * 1e6) as u32
     )
 }
 
@@ -315,13 +310,25 @@ impl fmt::Display for Brief<'_> {
                 segment,
                 limit_v,
                 reachable_m,
-            } => unreachable(f, *needs_v, *segment, *limit_v, *reachable_m),
+            } => unreachable(
+                f,
+                *needs_v,
+                *segment,
+                *limit_v,
+                (*reachable_m, "um at the tip"),
+            ),
             ShapeRefused::UnreachableForce {
                 needs_v,
                 segment,
                 limit_v,
                 reachable_n,
-            } => unreachable_force(f, *needs_v, *segment, *limit_v, *reachable_n),
+            } => unreachable(
+                f,
+                *needs_v,
+                *segment,
+                *limit_v,
+                (*reachable_n, "uN at the load cell"),
+            ),
             ShapeRefused::Wave(e) => write!(f, "SetMotion refused: {e}"),
             ShapeRefused::NoSessionTime => f.write_str(NO_SESSION_TIME),
             ShapeRefused::Controller(e) => write!(f, "{e}"),

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{config, input, set_motion, tared_with_model, Channel, LastTenSeconds};
+use common::{config, error_against, input, set_motion, tared_with_model, Channel, LastTenSeconds};
 use finrs_controller::shaper::{command, Shaped};
 use finrs_controller::tracker::MAX_CORRECTION;
 use finrs_controller::{Config, Controller};
@@ -123,10 +123,7 @@ fn run(tracked: bool, (r1, c_factor): (f64, f64), drying: bool) -> Run {
 
 /// The tip's amplitude error (fraction) and phase error, degrees.
 fn err(r: &Run) -> (f64, f64) {
-    (
-        r.tip.amplitude() / TIP_M - 1.0,
-        r.tip.sine_phase_rad().to_degrees(),
-    )
+    error_against(r.tip, TIP_M)
 }
 
 #[test]
@@ -377,11 +374,7 @@ fn the_drying_law_holds_a_motion_fed_forward() {
             plant.step(&mut x, &out.voltages_v.map(f64::from));
             tip.add(k + 1, plant.tip_deflection_m(&x));
         }
-        let tip = tip.phasor();
-        (
-            tip.amplitude() / TIP_M - 1.0,
-            tip.sine_phase_rad().to_degrees(),
-        )
+        error_against(tip.phasor(), TIP_M)
     };
     let (a, p) = run(true);
     let (a0, p0) = run(false);
@@ -450,11 +443,7 @@ fn a_force_motion_is_held_by_the_load_cell() {
             currents = plant.currents_a(&x, &v);
             y.add(k + 1, force);
         }
-        let y = y.phasor();
-        (
-            y.amplitude() / FORCE_N - 1.0,
-            y.sine_phase_rad().to_degrees(),
-        )
+        error_against(y.phasor(), FORCE_N)
     };
     let (a, p) = run(true);
     let (a0, p0) = run(false);

@@ -7,7 +7,7 @@ use model_core::{
 };
 
 use super::{drying, kept_modes};
-use crate::recording::{Fixture, Recording};
+use crate::recording::{Channel, Fixture, Recording};
 
 /// Elements per segment the engine supports (the seed uses 1).
 pub const ELEMENTS: [usize; 3] = [1, 2, 4];
@@ -68,6 +68,30 @@ pub struct Traces {
 }
 
 impl Traces {
+    /// The trace that is `channel`'s prediction.
+    pub fn channel(&self, channel: Channel) -> &[f64] {
+        match channel {
+            Channel::Current(k) => &self.currents_a[k],
+            Channel::TipY => &self.tip_y_m,
+            Channel::TipX => &self.tip_x_m,
+            Channel::DotY(j) => &self.dots_y_m[j],
+            Channel::DotX(j) => &self.dots_x_m[j],
+            Channel::Force => &self.force_n,
+        }
+    }
+
+    /// [`Traces::channel`], taken out (left empty).
+    pub fn take_channel(&mut self, channel: Channel) -> Vec<f64> {
+        std::mem::take(match channel {
+            Channel::Current(k) => &mut self.currents_a[k],
+            Channel::TipY => &mut self.tip_y_m,
+            Channel::TipX => &mut self.tip_x_m,
+            Channel::DotY(j) => &mut self.dots_y_m[j],
+            Channel::DotX(j) => &mut self.dots_x_m[j],
+            Channel::Force => &mut self.force_n,
+        })
+    }
+
     /// Empties the traces for a block of `rows` rows of `segments`
     /// segments and `dots` dots, keeping their room: the camera's rows NaN
     /// until computed (rows it does not sample stay so).

@@ -130,7 +130,7 @@ pub fn predict_recording<'a>(
     let meta = predicted_meta(name, input, elements);
     let channels = predicted_channels(&input.meta)
         .into_iter()
-        .map(|c| (c, take_trace(&mut traces, c)))
+        .map(|c| (c, traces.take_channel(c)))
         .collect();
     Ok(Prediction {
         input,
@@ -162,12 +162,12 @@ pub fn write_prediction<'a>(
         if failed.is_some() {
             return;
         }
-        let block: Vec<&[f64]> = channels.iter().map(|&c| trace(traces, c)).collect();
+        let block: Vec<&[f64]> = channels.iter().map(|&c| traces.channel(c)).collect();
         if let Err(e) = out.rows(&block) {
             failed = Some(e);
         }
         for (all, &c) in kept.iter_mut().zip(&channels) {
-            all.extend_from_slice(trace(traces, c));
+            all.extend_from_slice(traces.channel(c));
         }
     };
     predict_blocks(
@@ -236,28 +236,4 @@ fn predicted_channels(meta: &Metadata) -> Vec<Channel> {
         Fixture::Blocked => channels.push(Channel::Force),
     }
     channels
-}
-
-/// The trace of `traces` that is `channel`'s prediction.
-fn trace(traces: &Traces, channel: Channel) -> &[f64] {
-    match channel {
-        Channel::Current(k) => &traces.currents_a[k],
-        Channel::TipY => &traces.tip_y_m,
-        Channel::TipX => &traces.tip_x_m,
-        Channel::DotY(j) => &traces.dots_y_m[j],
-        Channel::DotX(j) => &traces.dots_x_m[j],
-        Channel::Force => &traces.force_n,
-    }
-}
-
-/// [`trace`], taken out of `traces`.
-fn take_trace(traces: &mut Traces, channel: Channel) -> Vec<f64> {
-    std::mem::take(match channel {
-        Channel::Current(k) => &mut traces.currents_a[k],
-        Channel::TipY => &mut traces.tip_y_m,
-        Channel::TipX => &mut traces.tip_x_m,
-        Channel::DotY(j) => &mut traces.dots_y_m[j],
-        Channel::DotX(j) => &mut traces.dots_x_m[j],
-        Channel::Force => &mut traces.force_n,
-    })
 }

@@ -728,19 +728,7 @@ mod tests {
 
     #[test]
     fn blocks_write_what_rows_would_even_of_unchecked_parts() {
-        let meta = Metadata {
-            segments: 2,
-            length_m: 0.05,
-            width_m: 0.01,
-            thickness_m: 2.858e-4,
-            fixture: Fixture::Free,
-            medium: Medium::Air,
-            sample: None,
-            cation: None,
-            dots_s_m: None,
-            notes: None,
-            t_session_start_s: None,
-        };
+        let meta = meta();
         // Rows across several blocks and a partial last one; numbers of
         // every shape: the fast paths, ryu's, not finite, empty fields.
         let rows = 3 * BLOCK_ROWS + 17;

@@ -154,6 +154,15 @@ impl LastTenSeconds {
     }
 }
 
+/// The amplitude error of `y` against `amplitude` (a fraction) and its
+/// phase, degrees.
+pub fn error_against(y: Phasor, amplitude: f64) -> (f64, f64) {
+    (
+        y.amplitude() / amplitude - 1.0,
+        y.sine_phase_rad().to_degrees(),
+    )
+}
+
 /// The state length of the board's model strip for 3 segments.
 pub const S3: usize = state_len(3, ELEMENTS);
 

@@ -65,14 +65,7 @@ pub struct Target {
 impl Target {
     /// The model's values at this target's rows.
     pub fn model<'a>(&'a self, t: &'a Traces) -> impl Iterator<Item = f64> + 'a {
-        let series: &[f64] = match self.channel {
-            Channel::Current(k) => &t.currents_a[k],
-            Channel::TipY => &t.tip_y_m,
-            Channel::TipX => &t.tip_x_m,
-            Channel::DotY(j) => &t.dots_y_m[j],
-            Channel::DotX(j) => &t.dots_x_m[j],
-            Channel::Force => &t.force_n,
-        };
+        let series = t.channel(self.channel);
         self.rows.iter().map(move |&r| series[r])
     }
 }
