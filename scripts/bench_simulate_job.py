@@ -1,6 +1,6 @@
 """The whole `finrs simulate` job against the same job in numpy/scipy.
 
-    python3 scripts/bench_simulate_job.py FINRS DIR
+    python3 scripts/bench_simulate_job.py FINRS DIR [--scaling ROWS,ROWS,...]
 
 DIR holds phi.txt, gamma.txt and c.txt (the discrete N = 3 strip that
 model-core's bench_run example exports). Writes DIR/in.csv, a 20 s, 1 kHz,
@@ -17,7 +17,10 @@ as the DAQ writes them), then times, in this one run:
          and also as a whole `python3 -c` process with its imports.
 
 Prints medians over the repetitions and the ratio, and checks that both
-give the same tip.
+give the same tip. With --scaling, then the same two jobs on recordings of
+each number of rows (finrs median of 9, scipy after imports median of 3)
+and what a row costs each beyond the smallest: how much of finrs's time
+is fixed (start-up, files) and what ratio longer recordings tend to.
 """
 import os
 import statistics
@@ -42,10 +45,10 @@ META = """# format = "ipmc-bench/1"
 """
 
 
-def make_input(path):
+def make_input(path, rows=ROWS):
     """A travelling 2.5 V, 1 Hz sine after a 1 s rest, with made-up
     currents; times to the ms, voltages to 0.1 mV, currents to 1 µA."""
-    t = np.arange(ROWS) * DT_S
+    t = np.arange(rows) * DT_S
     phase = 2 * np.pi * (t[:, None] - 1.0) - np.arange(3)[None, :] * 2 * np.pi / 3
     v = np.where(t[:, None] >= 1.0, 2.5 * np.sin(phase), 0.0)
     rng = np.random.default_rng(15)
@@ -53,7 +56,7 @@ def make_input(path):
     with open(path, "w") as f:
         f.write(META)
         f.write("t_s,v1_V,v2_V,v3_V,i1_A,i2_A,i3_A\n")
-        for k in range(ROWS):
+        for k in range(rows):
             f.write(
                 f"{t[k]:.3f},{v[k, 0]:.4f},{v[k, 1]:.4f},{v[k, 2]:.4f},"
                 f"{i[k, 0]:.6f},{i[k, 1]:.6f},{i[k, 2]:.6f}\n"
@@ -96,8 +99,43 @@ def run_process(argv):
     return wall, usage.ru_utime + usage.ru_stime
 
 
+def scaling(finrs, d, system, counts):
+    """Both jobs on recordings of `counts` rows each; the ratios, and the
+    cost of a row beyond the smallest recording."""
+    print("rows      finrs ms   scipy ms   ratio")
+    times = []
+    for rows in counts:
+        src = os.path.join(d, f"in-{rows}.csv")
+        make_input(src, rows)
+        argv = [finrs, "simulate", "--input", src, "--out", os.path.join(d, "finrs-n.csv")]
+        fw = statistics.median(run_process(argv)[0] for _ in range(9))
+        sw = []
+        for _ in range(3):
+            start = time.perf_counter()
+            scipy_job(src, os.path.join(d, "scipy-n.csv"), system)
+            sw.append(time.perf_counter() - start)
+        sw = statistics.median(sw)
+        times.append((rows, fw, sw))
+        print(f"{rows:7d} {fw * 1e3:10.2f} {sw * 1e3:10.1f} {sw / fw:7.1f}x", flush=True)
+    (r0, f0, s0), (r1, f1, s1) = times[0], times[-1]
+    if r1 > r0:
+        fr, sr = (f1 - f0) / (r1 - r0), (s1 - s0) / (r1 - r0)
+        print(f"a row beyond {r0}: finrs {fr * 1e9:.0f} ns, scipy {sr * 1e9:.0f} ns "
+              f"(ratio {sr / fr:.1f}x); finrs fixed {(f0 - fr * r0) * 1e3:.2f} ms")
+
+
 def main():
     finrs, d = sys.argv[1], sys.argv[2]
+    counts = None
+    if len(sys.argv) > 3:
+        if len(sys.argv) != 5 or sys.argv[3] != "--scaling":
+            sys.exit("usage: bench_simulate_job.py FINRS DIR [--scaling ROWS,ROWS,...]")
+        try:
+            counts = sorted(int(n) for n in sys.argv[4].split(","))
+        except ValueError:
+            sys.exit(f"--scaling: {sys.argv[4]!r} is not a comma-separated list of row counts")
+        if not counts or counts[0] < 1:
+            sys.exit("--scaling: row counts must be at least 1")
     src = os.path.join(d, "in.csv")
     make_input(src)
     phi = np.loadtxt(f"{d}/phi.txt")
@@ -149,6 +187,8 @@ def main():
     print(f"largest tip difference: {diff:.3e} m")
     if not diff < 1e-9:
         sys.exit("the two simulations disagree")
+    if counts:
+        scaling(finrs, d, system, counts)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ use crate::cli::{
     timeout, DiagnoseArgs, FirmwareWaveArgs, FitArgs, FixtureArg, LogArgs, PlanArgs, RunArgs,
     SendArgs, SimWaveArgs, SimulateArgs, WaveArgs,
 };
+use crate::new_folders::{check_writable, create_parent, NewFolders};
 use crate::stages::Stages;
 
 /// `finrs simulate`.
@@ -65,7 +66,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     );
     bar.set_message("simulating");
     let elements = sim_elements(&args, &model);
-    create_parent(&args.out)?;
+    let made = create_parent(&args.out)?;
     // Written as it is computed; kept whole only to be drawn.
     let kept = write_prediction(
         &name,
@@ -75,6 +76,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         (&args.out, args.plot.is_some()),
         &mut |n| bar.set_position(n),
     )?;
+    made.keep();
     bar.finish_and_clear();
     eprintln!("wrote {} ({} rows)", args.out.display(), input.t_s.len());
     if let (Some(png), Some(sim)) = (&args.plot, kept) {
@@ -236,8 +238,9 @@ pub fn params(preset: &str) -> anyhow::Result<()> {
 pub fn fit(args: FitArgs) -> anyhow::Result<()> {
     let effects = parse_effects(&args.effects)?;
     // An output that cannot be written fails before the fit, not after.
+    let mut made = NewFolders::default();
     for out in args.out.iter().chain(&args.json) {
-        check_writable(out)?;
+        made.add(check_writable(out)?);
     }
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
@@ -271,17 +274,19 @@ pub fn fit(args: FitArgs) -> anyhow::Result<()> {
             &finrs::analysis::fit::report::FitSummary::new(&fit, fitter.targets()),
         )?;
     }
+    made.keep();
     Ok(())
 }
 
 /// `finrs diagnose`.
 pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
     // The run takes minutes: an output that cannot be written fails now.
+    let mut made = NewFolders::default();
     if let Some(path) = &args.json {
-        check_writable(path)?;
+        made.add(check_writable(path)?);
     }
     if let Some(dir) = &args.report {
-        check_writable(&dir.join("REPORT.md"))?;
+        made.add(check_writable(&dir.join("REPORT.md"))?);
     }
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
@@ -305,6 +310,7 @@ pub fn diagnose(args: DiagnoseArgs) -> anyhow::Result<()> {
         finrs::analysis::diagnose::report::write(dir, &session, &d)?;
         eprintln!("wrote {}", dir.join("REPORT.md").display());
     }
+    made.keep();
     Ok(())
 }
 
@@ -317,8 +323,9 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
         );
     }
     let effects = parse_effects(&args.effects)?;
+    let mut made = NewFolders::default();
     for out in args.out.iter().chain(&args.json) {
-        check_writable(out)?;
+        made.add(check_writable(out)?);
     }
     let session = Session::read(&args.session)?;
     let fixed = ModelFile::main_m_2006().spec_for(&session.geometry())?;
@@ -347,6 +354,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<()> {
             None => eprintln!("nothing chosen: {} not written", out.display()),
         }
     }
+    made.keep();
     Ok(())
 }
 
@@ -369,14 +377,16 @@ fn parse_effects(names: &[String]) -> anyhow::Result<Vec<Effect>> {
 
 /// `finrs seed-check`.
 pub fn seed_check(json: Option<PathBuf>) -> anyhow::Result<()> {
-    if let Some(path) = &json {
-        check_writable(path)?;
-    }
+    let made = match &json {
+        Some(path) => check_writable(path)?,
+        None => NewFolders::default(),
+    };
     let c = finrs::analysis::seed_check::seed_check()?;
     print!("{c}");
     if let Some(path) = json {
         write_json(&path, &c)?;
     }
+    made.keep();
     Ok(())
 }
 
@@ -590,42 +600,14 @@ fn spinner(msg: &'static str) -> ProgressBar {
     bar
 }
 
-/// Creates the folder a file goes into.
 /// Writes `value` to `path` as pretty JSON ending in a newline, its folder
 /// created, and says so on stderr.
 fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
-    create_parent(path)?;
+    let made = create_parent(path)?;
     std::fs::write(path, serde_json::to_string_pretty(value)? + "\n")
         .with_context(|| path.display().to_string())?;
+    made.keep();
     eprintln!("wrote {}", path.display());
-    Ok(())
-}
-
-fn create_parent(path: &Path) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the folder {}", dir.display()))?;
-    }
-    Ok(())
-}
-
-/// Fails, naming `path`, unless it can be written: creates its folder and
-/// opens it for writing. An existing file is left as it was (not
-/// truncated); a file made only for this check is removed again, so that
-/// a run that fails later leaves no empty output behind.
-fn check_writable(path: &Path) -> anyhow::Result<()> {
-    create_parent(path)?;
-    let existed = path.exists();
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    if !existed {
-        std::fs::remove_file(path)
-            .with_context(|| format!("removing {} after checking it", path.display()))?;
-    }
     Ok(())
 }
 

@@ -3,13 +3,15 @@
 //! [`cli`] declares the commands and options, [`commands`] runs each one
 //! (progress bars, Ctrl-C and the files it writes), [`calibrate`] the
 //! board's calibration and model, [`bench_cli`] a session by protocol, [`stages`]
-//! a long run's time per stage; this file
+//! a long run's time per stage, [`new_folders`] the folders made for
+//! outputs; this file
 //! only parses and dispatches.
 
 mod bench_cli;
 mod calibrate;
 mod cli;
 mod commands;
+mod new_folders;
 mod stages;
 
 use std::process::ExitCode;

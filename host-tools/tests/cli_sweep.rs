@@ -180,9 +180,33 @@ fn run_finrs(dir: &CaseDir, args: &[String]) -> Result<(), TestCaseError> {
             "failed ({status}) without an error message: {}",
             what()
         );
+        // Outputs' folders are made before a run (see `out_path`'s missing
+        // folder): a run that fails removes those it left empty.
+        let made = dir.path("missing");
+        prop_assert!(
+            !holds_an_empty_folder(&made),
+            "failed and left an empty folder under {}: {}",
+            made.display(),
+            what()
+        );
     }
     dir.1.set(false);
     Ok(())
+}
+
+/// Whether `dir` is, or holds, an empty folder.
+fn holds_an_empty_folder(dir: &std::path::Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    let mut empty = true;
+    for entry in entries.flatten() {
+        empty = false;
+        if holds_an_empty_folder(&entry.path()) {
+            return true;
+        }
+    }
+    empty
 }
 
 fn shell_words(args: &[String]) -> String {
