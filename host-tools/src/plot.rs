@@ -401,7 +401,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::{Medium, Metadata, Voltages};
+    use crate::recording::{Geometry, Medium, Metadata, Voltages};
 
     /// Squared distance between two colours in RGB.
     fn distance2(a: RGBColor, b: RGBColor) -> i32 {
@@ -449,19 +449,7 @@ mod tests {
 
     fn free(rows: usize, tip: impl Fn(usize) -> Option<f64>) -> Recording {
         Recording {
-            meta: Metadata {
-                segments: 1,
-                length_m: 0.05,
-                width_m: 0.01,
-                thickness_m: 2.858e-4,
-                fixture: Fixture::Free,
-                medium: Medium::Air,
-                sample: None,
-                cation: None,
-                dots_s_m: None,
-                notes: None,
-                t_session_start_s: None,
-            },
+            meta: Metadata::new(1, Geometry::THESIS_2006, Fixture::Free, Medium::Air),
             t_s: (0..rows).map(|k| k as f64 * 1e-3).collect(),
             v_v: Voltages::from_rows(1, std::iter::repeat_n([1.0], rows)),
             channels: vec![

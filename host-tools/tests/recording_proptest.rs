@@ -2,7 +2,7 @@
 //! whatever it accepts is a recording that passes every rule.
 
 use finrs::recording::{
-    max_written_error, Channel, Fixture, Medium, Metadata, Recording, Voltages,
+    max_written_error, Channel, Fixture, Geometry, Medium, Metadata, Recording, Voltages,
 };
 use proptest::prelude::*;
 
@@ -68,17 +68,9 @@ proptest! {
         let ch = if blocked { Channel::Force } else { Channel::TipY };
         let rec = Recording {
             meta: Metadata {
-                segments,
-                length_m: 0.05,
-                width_m: 0.01,
-                thickness_m: 2.858e-4,
-                fixture,
-                medium: Medium::Water,
                 sample: Some("p \"q\" \\ r".to_string()),
-                cation: None,
-                dots_s_m: None,
                 notes: Some(notes),
-                t_session_start_s: None,
+                ..Metadata::new(segments, Geometry::THESIS_2006, fixture, Medium::Water)
             },
             t_s,
             v_v,

@@ -213,20 +213,10 @@ pub fn drive_recording_shaped(
         v_v.push(&row);
     }
     let t_s: Vec<f64> = (0..rows).map(|k| k as f64 / d.rate_hz).collect();
-    let g = Geometry::THESIS_2006;
     Ok(Recording {
         meta: Metadata {
-            segments: d.segments,
-            length_m: g.length_m,
-            width_m: g.width_m,
-            thickness_m: g.thickness_m,
-            fixture: d.fixture,
-            medium: Medium::Air,
             sample: Some("thesis_2006".to_string()),
-            cation: None,
-            dots_s_m: None,
-            notes: None,
-            t_session_start_s: None,
+            ..Metadata::new(d.segments, Geometry::THESIS_2006, d.fixture, Medium::Air)
         },
         t_s,
         v_v,

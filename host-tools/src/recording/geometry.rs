@@ -1,7 +1,5 @@
 //! The strip's geometry, as a recording's metadata states it.
 
-use super::meta::Metadata;
-
 /// Geometry of a strip, as a recording's metadata states it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Geometry {
@@ -20,15 +18,4 @@ impl Geometry {
         width_m: 0.01,
         thickness_m: 0.000_285_8,
     };
-}
-
-impl Metadata {
-    /// The strip's geometry.
-    pub fn geometry(&self) -> Geometry {
-        Geometry {
-            length_m: self.length_m,
-            width_m: self.width_m,
-            thickness_m: self.thickness_m,
-        }
-    }
 }

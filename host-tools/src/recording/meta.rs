@@ -1,6 +1,7 @@
 //! The metadata lines, `# key = value`, values as in TOML.
 
 use super::error::RecordingError;
+use super::geometry::Geometry;
 
 /// The only format this reader knows.
 pub const FORMAT: &str = "ipmc-bench/1";
@@ -69,6 +70,41 @@ pub struct Metadata {
     /// Seconds from the start of the session's first recording to this
     /// one's `t_s = 0`: the clock drying is measured against.
     pub t_session_start_s: Option<f64>,
+}
+
+impl Metadata {
+    /// The required keys only: `segments` segments of a strip of
+    /// `geometry`, held by `fixture` in `medium`; no optional key (sample,
+    /// cation, dots, notes, session start).
+    pub fn new(segments: usize, geometry: Geometry, fixture: Fixture, medium: Medium) -> Metadata {
+        let Geometry {
+            length_m,
+            width_m,
+            thickness_m,
+        } = geometry;
+        Metadata {
+            segments,
+            length_m,
+            width_m,
+            thickness_m,
+            fixture,
+            medium,
+            sample: None,
+            cation: None,
+            dots_s_m: None,
+            notes: None,
+            t_session_start_s: None,
+        }
+    }
+
+    /// The strip's geometry.
+    pub fn geometry(&self) -> Geometry {
+        Geometry {
+            length_m: self.length_m,
+            width_m: self.width_m,
+            thickness_m: self.thickness_m,
+        }
+    }
 }
 
 const REQUIRED: [&str; 7] = [
@@ -152,18 +188,18 @@ impl MetaBuilder {
             Some((_, v, l)) => Some(dots(file, *l, v, length_m)?),
         };
         let t_session_start_s = self.session_start_s(file)?;
-        Ok(Metadata {
-            segments,
+        let geometry = Geometry {
             length_m,
             width_m,
             thickness_m,
-            fixture,
-            medium,
+        };
+        Ok(Metadata {
             sample: self.string(file, "sample")?.map(|s| s.0),
             cation: self.string(file, "cation")?.map(|s| s.0),
             dots_s_m,
             notes: self.string(file, "notes")?.map(|s| s.0),
             t_session_start_s,
+            ..Metadata::new(segments, geometry, fixture, medium)
         })
     }
 

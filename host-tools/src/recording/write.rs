@@ -595,7 +595,7 @@ fn cannot_write(name: &str, e: std::io::Error) -> RecordingError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::{Fixture, Medium};
+    use crate::recording::{Fixture, Geometry, Medium};
 
     /// The text row by row, a number at a time: what the block writer
     /// must give.
@@ -633,19 +633,7 @@ mod tests {
     }
 
     fn meta() -> Metadata {
-        Metadata {
-            segments: 2,
-            length_m: 0.05,
-            width_m: 0.01,
-            thickness_m: 2.858e-4,
-            fixture: Fixture::Free,
-            medium: Medium::Air,
-            sample: None,
-            cation: None,
-            dots_s_m: None,
-            notes: None,
-            t_session_start_s: None,
-        }
+        Metadata::new(2, Geometry::THESIS_2006, Fixture::Free, Medium::Air)
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::camera::track::Track;
-use crate::recording::{Medium, Metadata, Voltages};
+use crate::recording::{Geometry, Medium, Metadata, Voltages};
 
 const ONSET_S: f64 = 1.2;
 const OFFSET_S: f64 = 0.35;
@@ -34,17 +34,10 @@ fn daq(fixture: Fixture) -> Recording {
         .collect();
     Recording {
         meta: Metadata {
-            segments: 3,
-            length_m: 0.05,
-            width_m: 0.01,
-            thickness_m: 0.000_285_8,
-            fixture,
-            medium: Medium::Air,
-            sample: None,
-            cation: None,
             dots_s_m: Some(vec![0.025, 0.05]),
             notes: Some("from the board".to_string()),
             t_session_start_s: Some(10.0),
+            ..Metadata::new(3, Geometry::THESIS_2006, fixture, Medium::Air)
         },
         v_v: Voltages::from_rows(3, &v),
         channels: vec![(Channel::Current(0), vec![Some(0.01); rows])],

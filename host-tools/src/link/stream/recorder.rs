@@ -503,17 +503,9 @@ impl Recorder {
         channels.push((Channel::Force, optional(std::mem::take(&mut self.force_n))));
         let rec = Recording {
             meta: Metadata {
-                segments,
-                length_m: g.length_m,
-                width_m: g.width_m,
-                thickness_m: g.thickness_m,
-                fixture: Fixture::Blocked,
-                medium: self.setup.medium,
                 sample: self.setup.sample.take(),
-                cation: None,
-                dots_s_m: None,
                 notes: Some(notes),
-                t_session_start_s: None,
+                ..Metadata::new(segments, g, Fixture::Blocked, self.setup.medium)
             },
             t_s: std::mem::take(&mut self.t_s),
             v_v: self
