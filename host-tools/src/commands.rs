@@ -66,7 +66,11 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
     );
     bar.set_message("simulating");
     let elements = sim_elements(&args, &model);
-    let made = create_parent(&args.out)?;
+    let mut made = create_parent(&args.out)?;
+    // A picture that cannot be written fails before the simulation.
+    if let Some(png) = &args.plot {
+        made.add(check_writable(png)?);
+    }
     // Written as it is computed; kept whole only to be drawn.
     let kept = write_prediction(
         &name,
@@ -76,7 +80,6 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         (&args.out, args.plot.is_some()),
         &mut |n| bar.set_position(n),
     )?;
-    made.keep();
     bar.finish_and_clear();
     eprintln!("wrote {} ({} rows)", args.out.display(), input.t_s.len());
     if let (Some(png), Some(sim)) = (&args.plot, kept) {
@@ -101,6 +104,7 @@ pub fn simulate(args: SimulateArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", png.display());
         std::mem::forget(sim);
     }
+    made.keep();
     // The process ends here: the system takes the recording's memory back
     // at exit, quicker than freeing it piece by piece.
     std::mem::forget(input);
@@ -630,7 +634,9 @@ pub fn merge_camera(args: crate::cli::MergeCameraArgs) -> anyhow::Result<()> {
         &args.track.display().to_string(),
         &opts,
     )?;
+    let made = create_parent(&args.out)?;
     m.recording.write(&args.out)?;
+    made.keep();
     eprintln!(
         "wrote {}: {} positions placed, {} outside the DAQ's rows; camera clock + {:.4} s = DAQ clock",
         args.out.display(),

@@ -862,7 +862,7 @@ proptest! {
     #[test]
     fn simulate_input(rec in rec_spec(), params in prop::option::of(params_spec()),
                       elements in prop::sample::select(vec!["1", "2", "4", "0", "3", "100", "-1", "x"]),
-                      plot in any::<bool>(), out_kind in any::<u8>(),
+                      plot in prop::option::of(any::<u8>()), out_kind in any::<u8>(),
                       stray in options(&["--segments", "--rate-hz", "--limit-v", "--duration-s"])) {
         let dir = CaseDir::new();
         let input = dir.write("in.csv", &rec.render());
@@ -871,8 +871,8 @@ proptest! {
         if let Some(p) = params {
             args.extend(["--params".into(), dir.write("params.toml", &p.render())]);
         }
-        if plot {
-            args.extend(["--plot".into(), dir.arg("sim.png")]);
+        if let Some(kind) = plot {
+            args.extend(["--plot".into(), out_path(&dir, kind, "sim.png")]);
         }
         // Wave options with --input must be refused, not ignored.
         if rec.seed % 8 == 0 {

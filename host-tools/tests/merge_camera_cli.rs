@@ -73,6 +73,16 @@ fn a_track_is_merged_into_the_daq_recording() {
     assert!((tip[1000].unwrap() - 2e-3).abs() < 1e-9, "{:?}", tip[1000]);
     assert_eq!(tip[1001], None);
 
+    // Into a folder not there yet: made, as every command's outputs are.
+    let out = merge(&dir, "merged/run 1/free.csv");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let merged = Recording::read(&dir.join("merged/run 1/free.csv")).unwrap();
+    assert_eq!(merged.channel(Channel::TipY).unwrap(), tip);
+
     // In place: the DAQ file becomes the merged one.
     let out = merge(&dir, "daq.csv");
     assert!(
