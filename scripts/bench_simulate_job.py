@@ -99,6 +99,17 @@ def run_process(argv):
     return wall, usage.ru_utime + usage.ru_stime
 
 
+def timed_scipy(src, dst, system, reps):
+    """Wall and CPU seconds of `reps` scipy jobs inside this process, and
+    the outputs of the last."""
+    runs = []
+    for _ in range(reps):
+        start, cpu = time.perf_counter(), time.process_time()
+        y = scipy_job(src, dst, system)
+        runs.append((time.perf_counter() - start, time.process_time() - cpu))
+    return runs, y
+
+
 def scaling(finrs, d, system, counts):
     """Both jobs on recordings of `counts` rows each; the ratios, and the
     cost of a row beyond the smallest recording."""
@@ -109,12 +120,8 @@ def scaling(finrs, d, system, counts):
         make_input(src, rows)
         argv = [finrs, "simulate", "--input", src, "--out", os.path.join(d, "finrs-n.csv")]
         fw = statistics.median(run_process(argv)[0] for _ in range(9))
-        sw = []
-        for _ in range(3):
-            start = time.perf_counter()
-            scipy_job(src, os.path.join(d, "scipy-n.csv"), system)
-            sw.append(time.perf_counter() - start)
-        sw = statistics.median(sw)
+        runs, _ = timed_scipy(src, os.path.join(d, "scipy-n.csv"), system, 3)
+        sw = statistics.median(w for w, _ in runs)
         times.append((rows, fw, sw))
         print(f"{rows:7d} {fw * 1e3:10.2f} {sw * 1e3:10.1f} {sw / fw:7.1f}x", flush=True)
     (r0, f0, s0), (r1, f1, s1) = times[0], times[-1]
@@ -149,11 +156,7 @@ def main():
     argv = [finrs, "simulate", "--input", src, "--out", os.path.join(d, "finrs.csv")]
     finrs_runs = [run_process(argv) for _ in range(REPS)]
 
-    scipy_runs = []
-    for _ in range(REPS):
-        start, cpu = time.perf_counter(), time.process_time()
-        y = scipy_job(src, os.path.join(d, "scipy.csv"), system)
-        scipy_runs.append((time.perf_counter() - start, time.process_time() - cpu))
+    scipy_runs, y = timed_scipy(src, os.path.join(d, "scipy.csv"), system, REPS)
     # The same job as a whole process, imports included.
     npz = os.path.join(d, "system.npz")
     np.savez(npz, a=phi, b=gamma, c=c, d=dd)

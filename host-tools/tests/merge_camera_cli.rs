@@ -33,6 +33,18 @@ fn merge(dir: &std::path::Path, out: &str) -> std::process::Output {
         .unwrap()
 }
 
+/// [`merge`] into `out`, which must succeed: the merged tip.
+fn merged_tip(dir: &std::path::Path, out: &str) -> Vec<Option<f64>> {
+    let run = merge(dir, out);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let merged = Recording::read(&dir.join(out)).unwrap();
+    merged.channel(Channel::TipY).unwrap().to_vec()
+}
+
 #[test]
 fn a_track_is_merged_into_the_daq_recording() {
     let dir = std::env::temp_dir().join(format!("finrs-merge-cli-{}", std::process::id()));
@@ -74,24 +86,9 @@ fn a_track_is_merged_into_the_daq_recording() {
     assert_eq!(tip[1001], None);
 
     // Into a folder not there yet: made, as every command's outputs are.
-    let out = merge(&dir, "merged/run 1/free.csv");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let merged = Recording::read(&dir.join("merged/run 1/free.csv")).unwrap();
-    assert_eq!(merged.channel(Channel::TipY).unwrap(), tip);
-
+    assert_eq!(merged_tip(&dir, "merged/run 1/free.csv"), tip);
     // In place: the DAQ file becomes the merged one.
-    let out = merge(&dir, "daq.csv");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let merged = Recording::read(&dir.join("daq.csv")).unwrap();
-    assert_eq!(merged.channel(Channel::TipY).unwrap(), tip);
+    assert_eq!(merged_tip(&dir, "daq.csv"), tip);
 
     // Without --fps a track with no time_s is refused by file and line.
     let out = finrs()
