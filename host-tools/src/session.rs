@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::recording::{Geometry, Recording, RecordingError};
+use crate::recording::{
+    Geometry, Recording, RecordingError, RestReading, REST_BAND_LIMIT_V, REST_OPENING_S,
+};
 
 /// A recording of a session, with what the fit needs to know of it.
 #[derive(Clone, Debug)]
@@ -16,17 +18,31 @@ pub struct SessionRecording {
     pub dt_s: f64,
     /// Session time at the recording's start, s (its `notes`).
     pub t_start_s: Option<f64>,
-    /// Rows of the opening rest (all voltages zero), at least 1 s of them.
+    /// Rows of the opening rest (every voltage reads as its channel's
+    /// rest), at least 1 s of them.
     pub rest_rows: usize,
+    /// Each segment's voltage channel's reading of a rest (its offset,
+    /// noise and step), measured on the opening.
+    pub rests: Vec<RestReading>,
 }
 
 impl SessionRecording {
     /// The segments the recording drives (0-based): those whose voltage
-    /// is non-zero at some sample.
+    /// reads other than its rest at some sample.
     pub fn driven(&self) -> Vec<usize> {
         (0..self.rec.meta.segments)
-            .filter(|&k| self.rec.v_v.rows().any(|v| v[k] != 0.0))
+            .filter(|&k| {
+                let rest = &self.rests[k];
+                self.rec.v_v.rows().any(|v| !rest.at_rest(v[k]))
+            })
             .collect()
+    }
+
+    /// Whether segment `k`'s voltage on `row` reads as `level_v` does:
+    /// within its channel's rest band of it (the DAQ's noise and step on a
+    /// held voltage as on a rest; exactly equal for an exact drive).
+    pub fn reads_as(&self, k: usize, row: usize, level_v: f64) -> bool {
+        (self.rec.v_v[row][k] - level_v).abs() <= self.rests[k].band_v()
     }
 }
 
@@ -69,7 +85,7 @@ pub enum SessionError {
 
 impl Session {
     /// Reads every `*.csv` of `dir`. All must share the sample: segments,
-    /// geometry and medium; each must open with at least 1 s at zero volts
+    /// geometry and medium; each must open with at least 1 s at rest
     /// (`docs/FORMAT.md`), which shows its rest and its noise.
     pub fn read(dir: &Path) -> Result<Session, SessionError> {
         let dir_name = dir.display().to_string();
@@ -120,27 +136,42 @@ impl Session {
 
     /// `rec`, read from `path`, as a session holds it: its sample time,
     /// session start and opening rest found, refused without 1 s of rest.
+    /// A rest is what the DAQ reads when nothing is applied: each voltage
+    /// channel's offset and noise, measured on its opening
+    /// ([`RestReading`]), not exactly 0 V.
     pub fn prepare(path: &Path, rec: Recording) -> Result<SessionRecording, SessionError> {
         let file = path_name(path);
         let dt_s = rec.sample_time().map_err(|e| SessionError::Rule {
             file: file.clone(),
             message: e.to_string(),
         })?;
+        let rests: Vec<RestReading> = (0..rec.meta.segments)
+            .map(|k| RestReading::measure(&rec.t_s, &rec.v_v, k))
+            .collect();
+        if let Some((k, rest)) = rests.iter().enumerate().find(|(_, r)| !r.is_rest()) {
+            let message = format!(
+                "v{}_V reads {:.4} V ± {:.4} V over its first {REST_OPENING_S} s, beyond the {REST_BAND_LIMIT_V} V a rest's offset and noise may read: a recording opens with at least 1 s at rest (docs/FORMAT.md), which the fit needs for its rest and noise",
+                k + 1,
+                rest.offset_v,
+                rest.band_v(),
+            );
+            return Err(SessionError::Rule { file, message });
+        }
         let rest_rows = rec
             .v_v
             .rows()
-            .position(|v| v.iter().any(|&x| x != 0.0))
+            .position(|v| v.iter().zip(&rests).any(|(&x, r)| !r.at_rest(x)))
             .unwrap_or(rec.v_v.len());
         let rest_s = rest_rows as f64 * dt_s;
         if rest_s < 1.0 - 0.5 * dt_s {
             let message = match rec.t_s.get(rest_rows) {
                 Some(t_s) => format!(
-                    "data row {} (t = {t_s} s) drives a segment after only {rest_s:.3} s at 0 V: a recording opens with at least 1 s at zero volts (docs/FORMAT.md), which the fit needs for its rest and noise",
+                    "data row {} (t = {t_s} s) drives a segment after only {rest_s:.3} s at rest: a recording opens with at least 1 s at rest (docs/FORMAT.md), which the fit needs for its rest and noise",
                     rest_rows + 1,
                 ),
                 // Never driven: the whole recording is its opening rest.
                 None => format!(
-                    "the recording is {rest_s:.3} s long ({rest_rows} data rows), all at 0 V: a recording opens with at least 1 s at zero volts (docs/FORMAT.md), which the fit needs for its rest and noise",
+                    "the recording is {rest_s:.3} s long ({rest_rows} data rows), all at rest: a recording opens with at least 1 s at rest (docs/FORMAT.md), which the fit needs for its rest and noise",
                 ),
             };
             return Err(SessionError::Rule { file, message });
@@ -154,6 +185,7 @@ impl Session {
             rec,
             dt_s,
             rest_rows,
+            rests,
         })
     }
 
@@ -189,10 +221,10 @@ mod tests {
         let text = err.to_string();
         assert!(text.starts_with("s/zero.csv: "), "{text}");
         assert!(
-            text.contains("0.500 s long (500 data rows), all at 0 V"),
+            text.contains("0.500 s long (500 data rows), all at rest"),
             "{text}"
         );
-        assert!(text.contains("at least 1 s at zero volts"), "{text}");
+        assert!(text.contains("at least 1 s at rest"), "{text}");
     }
 
     #[test]
@@ -202,6 +234,59 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(text.contains("data row 301 (t = 0.3 s)"), "{text}");
+    }
+
+    /// A DAQ's rest: 0.3 mV counts about a 0.7 mV offset, never 0 V.
+    fn daq_rest(i: usize) -> f64 {
+        0.0003 * (2 + [0, 1, 0, 2, 1, 1, 3][i % 7]) as f64
+    }
+
+    #[test]
+    fn a_measured_rest_is_a_rest_and_a_drive_past_4_v_by_its_offset_is_read() {
+        let rec = at_volts(3000, |i| if i < 1200 { daq_rest(i) } else { 4.0007 });
+        let r = Session::prepare(Path::new("daq.csv"), rec).unwrap();
+        assert_eq!(r.rest_rows, 1200);
+        assert_eq!(r.driven(), vec![0]);
+        assert!(r.rests[0].offset_v > 0.0 && r.rests[0].is_rest());
+    }
+
+    #[test]
+    fn a_rest_that_strays_is_driven_where_it_leaves_its_band() {
+        let rec = at_volts(2000, |i| if i < 700 { daq_rest(i) } else { 0.05 });
+        let text = Session::prepare(Path::new("d.csv"), rec)
+            .unwrap_err()
+            .to_string();
+        assert!(text.contains("data row 701 (t = 0.70"), "{text}");
+        assert!(text.contains("0.700 s at rest"), "{text}");
+    }
+
+    #[test]
+    fn an_undriven_segment_reading_its_rest_is_not_driven() {
+        let mut text = HEAD.replace("segments = 1", "segments = 2");
+        text = text.replace("t_s,v1_V", "t_s,v1_V,v2_V");
+        for i in 0..2500 {
+            let v1 = if i < 1100 { daq_rest(i) } else { 2.5 };
+            let _ = std::fmt::Write::write_fmt(
+                &mut text,
+                format_args!("{},{v1},{}\n", i as f64 * 1e-3, -daq_rest(i + 3)),
+            );
+        }
+        let rec = Recording::parse("two.csv", &text).unwrap();
+        let r = Session::prepare(Path::new("two.csv"), rec).unwrap();
+        assert_eq!(r.driven(), vec![0]);
+        assert!(r.rests[1].offset_v < 0.0, "{:?}", r.rests[1]);
+    }
+
+    #[test]
+    fn an_opening_that_reads_more_than_a_rest_is_refused_by_channel() {
+        let rec = at_volts(2000, |i| 0.02 + 0.001 * (i % 5) as f64);
+        let text = Session::prepare(Path::new("o.csv"), rec)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            text.starts_with("o.csv: v1_V reads 0.0220 V ± 0.0072 V over its first 0.5 s"),
+            "{text}"
+        );
     }
 
     #[test]

@@ -1101,8 +1101,8 @@ fn all_zero_session_shorter_than_1_s_is_refused_by_name() {
         assert_eq!(out.status.code(), Some(1), "{command}: {stderr}");
         assert!(
             stderr.contains(&format!(
-                "{file}: the recording is 0.500 s long (500 data rows), all at 0 V"
-            )) && stderr.contains("at least 1 s at zero volts"),
+                "{file}: the recording is 0.500 s long (500 data rows), all at rest"
+            )) && stderr.contains("at least 1 s at rest"),
             "{command}: {stderr}"
         );
     }

@@ -159,6 +159,20 @@ const CASES: &[(&str, Option<usize>, &str)] = &[
         Some(9),
         "`notes` must be a quoted string",
     ),
+    // Its rest reads 0.6 mV ± a 0.3 mV count: 4.0007 V passes, 4.012 V
+    // does not.
+    (
+        "41_voltage_past_its_rest_reading",
+        Some(16),
+        "v1_V = 4.012 V is beyond the safe range of ±4 V by more than its channel's reading of a rest allows",
+    ),
+    // A rest read as exactly 0 V allows only the rounding of the channel's
+    // 0.3 mV step (4.0004 V beside 4.0007 V).
+    (
+        "42_voltage_past_an_exact_rest",
+        Some(15),
+        "v1_V = 4.0007 V is beyond the safe range of ±4 V by more than its channel's reading of a rest allows (offset 0.0000 V, band 0.0004 V",
+    ),
 ];
 
 #[test]

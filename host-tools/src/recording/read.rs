@@ -7,6 +7,7 @@ use std::path::Path;
 use super::error::RecordingError;
 use super::meta::{Fixture, MetaBuilder, Metadata};
 use super::plain_row::plain_row;
+use super::rest::{check_range, READING_LIMIT_V};
 use super::{Channel, Recording, Voltages, SAFE_VOLTAGE_LIMIT_V};
 
 impl Recording {
@@ -273,7 +274,8 @@ impl<'a> Rows<'a> {
 
     /// Keeps the row `text` if [`plain_row`] reads it and its numbers break
     /// no rule (time present, at or after 0 and later than the last row's;
-    /// voltages present and in the safe range): `false` leaves it to
+    /// voltages present and within any reading of the safe range): `false`
+    /// leaves it to
     /// [`Rows::any_row`], which reads it again and says what is wrong.
     fn plain_row(&mut self, text: &str) -> bool {
         let values = &mut self.plain[..];
@@ -285,9 +287,7 @@ impl<'a> Rows<'a> {
         // NaN (an empty field) fails each comparison.
         let ok = t >= 0.0
             && self.rules.previous_t_s.is_none_or(|previous| t > previous)
-            && values[1..=n]
-                .iter()
-                .all(|v| v.abs() <= SAFE_VOLTAGE_LIMIT_V);
+            && values[1..=n].iter().all(|v| v.abs() <= READING_LIMIT_V);
         if !ok {
             return false;
         }
@@ -371,7 +371,8 @@ impl<'a> Rows<'a> {
         Ok(())
     }
 
-    /// The recording read, if it has a data row.
+    /// The recording read, if it has a data row and its voltages are
+    /// within the safe range as their channels read it.
     fn finish(self) -> Result<Recording, RecordingError> {
         if self.rec.t_s.is_empty() {
             return Err(RecordingError::at(
@@ -380,6 +381,7 @@ impl<'a> Rows<'a> {
                 "no data rows after the header",
             ));
         }
+        check_range(self.name, self.header_line, &self.rec.t_s, &self.rec.v_v)?;
         Ok(self.rec)
     }
 }
@@ -483,9 +485,11 @@ impl RowRules {
     }
 }
 
-/// Voltage `x` of segment `k` (0-based) must lie within the safe range.
+/// Voltage `x` of segment `k` (0-based) must lie within any reading of
+/// the safe range ([`READING_LIMIT_V`]); nearer, its channel's rest says
+/// ([`check_range`], once the rows are read).
 pub(super) fn voltage(file: &str, line: usize, k: usize, x: f64) -> Result<(), RecordingError> {
-    if x.abs() > SAFE_VOLTAGE_LIMIT_V {
+    if x.abs() > READING_LIMIT_V {
         return Err(RecordingError::at(
             file,
             line,

@@ -9,7 +9,8 @@ use super::float::{Formatter, WIDEST};
 use super::meta::Metadata;
 use super::output::Output;
 use super::read::{column_name, lines, read_head, voltage, BadNumber, RowRules};
-use super::{Channel, Recording, Voltages, SAFE_VOLTAGE_LIMIT_V};
+use super::rest::{check_range, READING_LIMIT_V};
+use super::{Channel, Recording, Voltages};
 
 /// Bytes of text gathered before each write to the file: the output never
 /// lies in memory whole (a 20 000-row prediction is 1.6 MB of text).
@@ -346,7 +347,8 @@ impl RecordingView<'_> {
         self.check_drive(name, &head, bad_channel.map_or(rows, |(row, _, _)| row + 1))?;
         match bad_channel {
             Some((row, j, x)) => Err(head.not_finite(name, row, 1 + self.meta.segments + j, x)),
-            None => Ok(()),
+            // As the reader, once every row is read.
+            None => check_range(name, head.header_line, self.t_s, self.v_v),
         }
     }
 
@@ -401,9 +403,10 @@ impl RecordingView<'_> {
     /// The rules of time and drive on the rows before `until`.
     fn check_drive(&self, name: &str, head: &Head, until: usize) -> Result<(), RecordingError> {
         // Time and drive in a tight pass each first: times finite, from 0
-        // and increasing, voltages within the safe range (NaN and infinity
-        // are not). Only if that fails are the rows checked one by one, for
-        // the first rule broken and its message.
+        // and increasing, voltages within any reading of the safe range
+        // (NaN and infinity are not; nearer it, `check_range` judges). Only
+        // if that fails are the rows checked one by one, for the first rule
+        // broken and its message.
         let increasing = self.t_s.first().is_some_and(|&t| t >= 0.0)
             && self.t_s.windows(2).all(|w| w[1] > w[0])
             && self.t_s.iter().all(|t| t.is_finite());
@@ -411,7 +414,7 @@ impl RecordingView<'_> {
             .v_v
             .as_flat()
             .iter()
-            .all(|v| v.abs() <= SAFE_VOLTAGE_LIMIT_V);
+            .all(|v| v.abs() <= READING_LIMIT_V);
         if increasing && in_range {
             return Ok(());
         }
@@ -490,6 +493,7 @@ impl<'a> Streamed<'a> {
         view.check_lengths(&name)?;
         let head = view.check_head(&name)?;
         view.check_drive(&name, &head, t_s.len())?;
+        check_range(&name, head.header_line, t_s, v_v)?;
         let output = Output::create(path).map_err(|e| cannot_write(&name, e))?;
         Ok(Streamed {
             text: Text::new(&view.head_text(), v_v.segments(), channels.len()),

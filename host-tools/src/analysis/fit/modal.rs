@@ -115,7 +115,8 @@ pub fn measured_blocked_ringing(
         }
         // The drive must hold over the window, or its own steps dominate.
         let v0 = &r.rec.v_v[start];
-        if (start..start + len).any(|row| &r.rec.v_v[row] != v0) {
+        let held = |row: usize| v0.iter().enumerate().all(|(k, &v)| r.reads_as(k, row, v));
+        if !(start..start + len).all(held) {
             continue;
         }
         let y: Option<Vec<f64>> = force[start..start + len].iter().copied().collect();

@@ -163,6 +163,7 @@ mod tests {
                     dt_s,
                     t_start_s: Some(0.0),
                     rest_rows: 1000,
+                    rests: vec![Default::default(); 3],
                 }
             })
             .collect();

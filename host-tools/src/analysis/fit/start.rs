@@ -74,7 +74,7 @@ fn electrical(session: &Session, recordings: &[usize]) -> Option<(f64, f64, f64)
             }
             // How long the voltage holds.
             let held = (start..rows)
-                .take_while(|&row| r.rec.v_v[row][seg] == v0)
+                .take_while(|&row| r.reads_as(seg, row, v0))
                 .count();
             if (held as f64) * r.dt_s < 0.5 {
                 continue;
