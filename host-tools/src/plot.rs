@@ -1,6 +1,7 @@
-//! PNG plots of recordings: the drive, the mechanical channel (tip or
-//! force), and the currents, one panel each, measured and simulated
-//! together when both are given; and residual autocorrelations.
+//! PNG plots of recordings: the drive, each measured mechanical channel
+//! (camera dots, tip, load cell) under its own name, and the currents, one
+//! panel each, measured and simulated together when both are given; and
+//! residual autocorrelations.
 //!
 //! Read at a glance: measured samples are black, each model keeps one
 //! colour ([`model_colour`]) in every plot, camera frames (sampled on a
@@ -122,7 +123,8 @@ struct Trace {
     points: Vec<(f64, f64)>,
 }
 
-/// Writes a three-panel PNG of `simulated`, with `measured` beneath it.
+/// Writes a PNG of `simulated`, with `measured` beneath it
+/// ([`plot_models`]).
 pub fn plot(
     path: &Path,
     title: &str,
@@ -132,8 +134,11 @@ pub fn plot(
     plot_models(path, title, measured, &[("model", simulated)])
 }
 
-/// Writes a three-panel PNG (drive, tip or force, currents) of one or more
-/// models' predictions for the same drive, with `measured` beneath them.
+/// Writes a PNG of one or more models' predictions for the same drive,
+/// with `measured` beneath them: a panel for the drive, one for each
+/// mechanical channel `measured` samples (camera dots, tip, load cell),
+/// labelled by its own name, and one for the currents. Without a measured
+/// mechanical channel, the models' tip (free) or force (blocked) is drawn.
 pub fn plot_models(
     path: &Path,
     title: &str,
@@ -144,10 +149,13 @@ pub fn plot_models(
         return Err(PlotError::Nothing);
     };
     register_fonts()?;
-    let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
+    let mechanical = mechanical_channels(measured, first);
+    let panels_n = 2 + mechanical.len();
+    // Each panel keeps the height it had when there were three.
+    let root = BitMapBackend::new(path, (1200, 300 * panels_n as u32)).into_drawing_area();
     root.fill(&WHITE)?;
     let root = root.titled(title, ("sans-serif", 22))?;
-    let panels = root.split_evenly((3, 1));
+    let panels = root.split_evenly((panels_n, 1));
 
     let voltages: Vec<Trace> = (0..first.meta.segments)
         .map(|k| Trace {
@@ -164,15 +172,13 @@ pub fn plot_models(
         .collect();
     panel(&panels[0], "voltage (V)", &voltages)?;
 
-    let (channel, label) = match first.meta.fixture {
-        Fixture::Free => (Channel::TipY, "tip across (mm)"),
-        Fixture::Blocked => (Channel::Force, "blocking force (mN)"),
-    };
-    panel(
-        &panels[1],
-        label,
-        &channel_traces(measured, models, channel, 1e3, 0, ""),
-    )?;
+    for (area, &channel) in panels[1..].iter().zip(&mechanical) {
+        panel(
+            area,
+            &axis_label(channel, first),
+            &channel_traces(measured, models, channel, 1e3, 0, ""),
+        )?;
+    }
 
     let mut currents = Vec::new();
     for k in 0..first.meta.segments {
@@ -186,9 +192,48 @@ pub fn plot_models(
             &prefix,
         ));
     }
-    panel(&panels[2], "current (mA)", &currents)?;
+    panel(&panels[panels_n - 1], "current (mA)", &currents)?;
     root.present()?;
     Ok(())
+}
+
+/// The mechanical channels to draw: every one `measured` samples at some
+/// row, in its header's order; none sampled, the models' tip (free) or
+/// force (blocked).
+fn mechanical_channels(measured: Option<&Recording>, first: &Recording) -> Vec<Channel> {
+    let sampled: Vec<Channel> = measured
+        .map(|m| {
+            m.channels
+                .iter()
+                .filter(|(c, v)| !matches!(c, Channel::Current(_)) && v.iter().any(Option::is_some))
+                .map(|(c, _)| *c)
+                .collect()
+        })
+        .unwrap_or_default();
+    if !sampled.is_empty() {
+        return sampled;
+    }
+    vec![match first.meta.fixture {
+        Fixture::Free => Channel::TipY,
+        Fixture::Blocked => Channel::Force,
+    }]
+}
+
+/// A mechanical channel's axis: its own name, a dot's place on the strip,
+/// the unit drawn (mm or mN).
+fn axis_label(ch: Channel, r: &Recording) -> String {
+    let place = match ch {
+        Channel::DotY(j) | Channel::DotX(j) => r
+            .meta
+            .dots_s_m
+            .as_ref()
+            .and_then(|d| d.get(j))
+            .map(|s| format!(", {:.1} mm from the clamp", s * 1e3))
+            .unwrap_or_default(),
+        _ => String::new(),
+    };
+    let unit = if ch == Channel::Force { "mN" } else { "mm" };
+    format!("{}{place} ({unit})", ch.name())
 }
 
 /// The traces of one channel, scaled: each model as a line in its colour,
@@ -460,6 +505,42 @@ mod tests {
                 (Channel::TipY, (0..rows).map(tip).collect()),
             ],
         }
+    }
+
+    /// A laser at one dot: its channel is drawn as measured, by its own
+    /// name and place, and the models' tip (which nothing measured) not.
+    #[test]
+    fn each_measured_channel_has_a_panel_under_its_own_name() {
+        let mut laser = free(10, |_| None);
+        laser.meta.dots_s_m = Some(vec![0.015]);
+        laser.channels[1] = (Channel::DotY(0), (0..10).map(|k| Some(k as f64)).collect());
+        let model = free(10, |_| Some(1.0));
+        assert_eq!(
+            mechanical_channels(Some(&laser), &model),
+            [Channel::DotY(0)]
+        );
+        assert_eq!(
+            axis_label(Channel::DotY(0), &laser),
+            "dot1_y_m, 15.0 mm from the clamp (mm)"
+        );
+        let traces = channel_traces(Some(&laser), &[("m", &laser)], Channel::DotY(0), 1e3, 0, "");
+        assert!(traces
+            .iter()
+            .any(|t| t.label == "measured" && t.points.len() == 10));
+        // Nothing measured but currents: the models' tip, as before.
+        let drive = free(10, |_| None);
+        assert_eq!(mechanical_channels(Some(&drive), &model), [Channel::TipY]);
+        assert_eq!(mechanical_channels(None, &model), [Channel::TipY]);
+        // Several, in the header's order; a column never sampled is not drawn.
+        let mut camera = free(10, |_| Some(0.0));
+        camera.channels.push((Channel::TipX, vec![Some(0.0); 10]));
+        camera.channels.push((Channel::DotY(1), vec![None; 10]));
+        assert_eq!(
+            mechanical_channels(Some(&camera), &model),
+            [Channel::TipY, Channel::TipX]
+        );
+        assert_eq!(axis_label(Channel::Force, &camera), "force_N (mN)");
+        assert_eq!(axis_label(Channel::TipX, &camera), "tip_x_m (mm)");
     }
 
     #[test]
