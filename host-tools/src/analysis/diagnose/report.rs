@@ -178,7 +178,7 @@ fn summary(s: &mut String, session: &Session, v: &Verdict) {
     if !v.rest.bench.is_empty() {
         let _ = writeln!(
             s,
-            "The bench, not the strip (seen in the opening rests; no catalogue effect is named for these):\n"
+            "The bench, not the strip (seen in the opening rests, or drift fitted beside every model; no catalogue effect is named for these):\n"
         );
         for b in &v.rest.bench {
             let _ = writeln!(s, "- {}", b.detail);

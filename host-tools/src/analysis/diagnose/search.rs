@@ -4,6 +4,7 @@ use rayon::prelude::*;
 
 use super::analyses;
 use super::choose::{choose, Passed};
+use super::drift;
 use super::floors::sensor_floors;
 use super::gates::{each_mode_damping_kept, family_tail, family_z, holdout_gain_passes, DELTA_BIC};
 use super::identify;
@@ -180,6 +181,8 @@ pub fn diagnose(
             Err(e) => (Vec::new(), Some(identify::error_chain(&e))),
         };
     let final_fit = form::spanning(found.fit, each_mode, each_mode_final);
+    rest.bench
+        .extend(drift::findings(&fitter.drifts(&all, &final_fit.spec)?));
     let score_of = |fit: &FitResult, hold: &Score| ModelScore {
         holdout_nrmse: hold.nrmse,
         holdout_rss_per_residual: per(hold),

@@ -1,10 +1,15 @@
 //! The fit itself: a session's targets, the least-squares problem the
 //! optimiser sees, and its restarts.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
 use rayon::prelude::*;
 
 use super::covariance::{self, Block};
 use super::data::{Sensor, SessionTargets};
+use super::drift::Drift;
+use super::drift_set::DriftSet;
 use super::effect::Effect;
 use super::error::FitError;
 use super::inflation::{profile_cost, Inflation};
@@ -153,15 +158,41 @@ impl FitResult {
 pub struct Fitter<'a> {
     pub(super) session: &'a Session,
     targets: SessionTargets,
+    /// Whether camera and load-cell channels have drift terms.
+    drift: bool,
+    /// The drift terms of each set of recordings fitted or scored
+    /// together, built once per set.
+    drift_sets: Mutex<HashMap<Vec<usize>, Arc<DriftSet>>>,
 }
 
 impl<'a> Fitter<'a> {
-    /// Prepares `session`.
+    /// Prepares `session`, with the bench's drift on every camera and
+    /// load-cell channel fitted jointly (`drift.rs`).
     pub fn new(session: &'a Session) -> Fitter<'a> {
+        Self::with_drift(session, true)
+    }
+
+    /// Prepares `session`, with drift terms or without (to measure what
+    /// they change).
+    pub fn with_drift(session: &'a Session, drift: bool) -> Fitter<'a> {
         Fitter {
             session,
             targets: SessionTargets::new(session),
+            drift,
+            drift_sets: Mutex::new(HashMap::new()),
         }
+    }
+
+    /// The drift terms of `recordings` fitted or scored together (none
+    /// without drift).
+    fn drift_set(&self, recordings: &[usize]) -> Arc<DriftSet> {
+        if !self.drift {
+            return Arc::new(DriftSet::default());
+        }
+        let mut sets = self.drift_sets.lock().unwrap_or_else(|e| e.into_inner());
+        sets.entry(recordings.to_vec())
+            .or_insert_with(|| Arc::new(DriftSet::new(self.session, &self.targets, recordings)))
+            .clone()
     }
 
     /// When the session's bench read its currents (found in the data);
@@ -186,7 +217,10 @@ impl<'a> Fitter<'a> {
     /// Runs the model on recording `index` and returns its weighted
     /// residuals, target by target.
     fn residuals_of(&self, index: usize, spec: &ModelSpec) -> Result<Vec<Vec<f64>>, FitError> {
-        self.weighted(index, &self.traces(index, spec)?, |_| true, &Inflation::ONE)
+        let mut res =
+            vec![self.weighted(index, &self.traces(index, spec)?, |_| true, &Inflation::ONE)];
+        self.drift_set(&[index]).remove(&mut res);
+        Ok(res.remove(0).into_iter().flatten().collect())
     }
 
     /// The model's outputs on recording `index` (the camera only where it
@@ -209,28 +243,30 @@ impl<'a> Fitter<'a> {
         })
     }
 
-    /// Weighted residuals `(ŷ − y)/σ` of the targets of recording `index`
-    /// that `keep` accepts, target by target, each sensor's `σ` its rests'
-    /// noise times `inflation`'s factor.
+    /// Weighted residuals `(ŷ − y)/σ` of the targets of recording `index`,
+    /// target by target (`None` for those `keep` refuses), each sensor's
+    /// `σ` its rests' noise times `inflation`'s factor; drift not removed
+    /// (it is fitted over every recording fitted together: [`DriftSet`]).
     fn weighted(
         &self,
         index: usize,
         traces: &Traces,
         keep: impl Fn(&super::data::Target) -> bool,
         inflation: &Inflation,
-    ) -> Result<Vec<Vec<f64>>, FitError> {
-        Ok(self.targets.recordings[index]
+    ) -> Vec<Option<Vec<f64>>> {
+        self.targets.recordings[index]
             .targets
             .iter()
-            .filter(|t| keep(t))
             .map(|t| {
-                let sigma = t.sigma * inflation.sigma_factor(Sensor::of(t.channel));
-                t.model(traces)
-                    .zip(&t.values)
-                    .map(|(m, y)| (m - y) / sigma)
-                    .collect()
+                keep(t).then(|| {
+                    let sigma = t.sigma * inflation.sigma_factor(Sensor::of(t.channel));
+                    t.model(traces)
+                        .zip(&t.values)
+                        .map(|(m, y)| (m - y) / sigma)
+                        .collect()
+                })
             })
-            .collect())
+            .collect()
     }
 
     /// The weighted residuals that `stage` sees over `recordings`,
@@ -243,7 +279,7 @@ impl<'a> Fitter<'a> {
         spec: &ModelSpec,
         inflation: &Inflation,
     ) -> Result<Vec<f64>, FitError> {
-        let parts: Result<Vec<Vec<Vec<f64>>>, FitError> = recordings
+        let parts: Result<Vec<Vec<Option<Vec<f64>>>>, FitError> = recordings
             .par_iter()
             .map(|&i| {
                 let traces = match stage {
@@ -260,10 +296,54 @@ impl<'a> Fitter<'a> {
                     }
                     Stage::Beam => self.traces(i, spec)?,
                 };
-                self.weighted(i, &traces, |t| stage.sees(t.channel), inflation)
+                Ok(self.weighted(i, &traces, |t| stage.sees(t.channel), inflation))
             })
             .collect();
-        Ok(parts?.into_iter().flatten().flatten().collect())
+        let mut parts = parts?;
+        self.drift_set(recordings).remove(&mut parts);
+        Ok(parts.into_iter().flatten().flatten().flatten().collect())
+    }
+
+    /// The drift fitted on every camera and load-cell channel of
+    /// `recordings` under `spec` (`drift.rs`), channel by channel of each
+    /// recording.
+    pub fn drifts(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Vec<Drift>, FitError> {
+        let raw = pool().install(|| self.raw_residuals(recordings, spec))?;
+        let raw: Vec<Vec<Vec<f64>>> = raw
+            .into_iter()
+            .map(|r| r.into_iter().flatten().collect())
+            .collect();
+        Ok(self
+            .drift_set(recordings)
+            .measure(&raw)
+            .into_iter()
+            .map(|(k, j, range, significant)| {
+                let r = &self.session.recordings[recordings[k]];
+                let t = &self.targets.recordings[recordings[k]].targets[j];
+                let at = |row: Option<&usize>| row.map_or(0.0, |&row| r.rec.t_s[row]);
+                Drift {
+                    recording: r.name.clone(),
+                    channel: t.channel,
+                    peak_to_peak: range * t.sigma,
+                    peak_to_peak_in_noise: range,
+                    span_s: at(t.rows.last()) - at(t.rows.first()),
+                    significant,
+                }
+            })
+            .collect())
+    }
+
+    /// Every target's weighted residuals on `recordings` under `spec`,
+    /// drift not removed, in the pool.
+    fn raw_residuals(
+        &self,
+        recordings: &[usize],
+        spec: &ModelSpec,
+    ) -> Result<Vec<Vec<Option<Vec<f64>>>>, FitError> {
+        recordings
+            .par_iter()
+            .map(|&i| Ok(self.weighted(i, &self.traces(i, spec)?, |_| true, &Inflation::ONE)))
+            .collect()
     }
 
     /// Scores `spec` on `recordings`: per-channel fit and the pooled error.
@@ -272,11 +352,16 @@ impl<'a> Fitter<'a> {
     }
 
     fn score_here(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Score, FitError> {
+        let mut res = self.raw_residuals(recordings, spec)?;
+        self.drift_set(recordings).remove(&mut res);
         let mut channels = Vec::new();
-        for &i in recordings {
-            let res = self.residuals_of(i, spec)?;
-            for (t, r) in self.targets.recordings[i].targets.iter().zip(res) {
-                let rec = &self.session.recordings[i];
+        for (&i, res) in recordings.iter().zip(res) {
+            let rec = &self.session.recordings[i];
+            for (t, r) in self.targets.recordings[i]
+                .targets
+                .iter()
+                .zip(res.into_iter().flatten())
+            {
                 channels.push(ChannelFit::new(&rec.name, t, &r, &rec.rec.v_v, rec.dt_s));
             }
         }

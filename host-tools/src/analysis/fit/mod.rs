@@ -15,6 +15,8 @@
 
 mod covariance;
 mod data;
+pub mod drift;
+mod drift_set;
 mod effect;
 mod error;
 mod fitter;
@@ -32,6 +34,7 @@ mod start;
 mod stats;
 
 pub use data::{Sensor, SessionTargets, Target};
+pub use drift::{Drift, DriftBasis, DRIFT_MAX_DEGREE, DRIFT_SCALE_S};
 pub use effect::Effect;
 pub use error::FitError;
 pub use fitter::{FitResult, Fitter, FormCheck, FIT_ELEMENTS};

@@ -213,10 +213,15 @@ const B_FLOOR: f64 = 1e-15;
 /// Lowest `θ` a start gives `b/p` (`θ²` = 1e-6 of the unit): at `θ = 0`
 /// its gradient vanishes.
 const B_START_MIN: f64 = 1e-3;
-/// Lowest relaxation rate `p` a fit starts from, 1/s: a lag of 1000 s,
-/// off for every recording, whose terms still move the moment. At the
-/// logarithm's floor (1e-9) the lag's part of the moment is `b/(s + p)`
-/// with `b ∝ p`, a saddle where `p`'s and `b`'s gradients both vanish.
+/// Lowest relaxation rate `p` a fit reaches, 1/s: a relaxation slower
+/// than the drift's scale (a minute) is the bench's drift, not the
+/// strip's (`drift.rs`), and one the session cannot show beside it. Left
+/// free, a fit turned a real strip's curl into an integrator (`p` =
+/// 6.3e-6/s) and every relaxation parameter it reported was wrong. `p` is
+/// `P_MIN + e^θ`, smooth through the bound.
+pub const P_MIN: f64 = 1.0 / super::drift::DRIFT_SCALE_S;
+/// Least `p − P_MIN` a fit starts from, 1/s: at the logarithm's floor
+/// (1e-9) `p`'s gradient vanishes and a fit started there stays.
 const P_START_MIN: f64 = 1e-3;
 /// Lowest instant gain `a` a back-relaxed fit starts from, in units of
 /// the fixed model's DC moment per charge: there `a` is a logarithm, and a
@@ -358,7 +363,7 @@ impl Space {
                 Knob::C => p.c_f = t.exp(),
                 Knob::A => a_theta = Some(t),
                 Knob::B => b_theta = Some(t),
-                Knob::P => p.p_per_s = t.exp(),
+                Knob::P => p.p_per_s = P_MIN + t.exp(),
                 Knob::Ei => p.ei_nm2 = t.exp(),
                 Knob::Zeta => spec.ext.damping_ratio = damping_ratio(t),
                 Knob::Beta => spec.ext.damping_stiffness_s = ramp(t, BETA_SCALE),
@@ -421,7 +426,7 @@ impl Space {
     pub fn start_theta(&self, spec: &ModelSpec) -> Vec<f64> {
         let mut lifted = *spec;
         let p = &mut lifted.params;
-        p.p_per_s = p.p_per_s.max(P_START_MIN);
+        p.p_per_s = p.p_per_s.max(P_MIN + P_START_MIN);
         if self.has(Effect::BackRelaxation) {
             let a = p.a_nm_per_c.max(A_START_MIN * self.instant_unit());
             if p.a_nm_per_c > 0.0 {
@@ -460,7 +465,7 @@ impl Space {
                             .max(B_START_MIN)
                     }
                 }
-                Knob::P => ln(p.p_per_s, 1e-9),
+                Knob::P => ln(p.p_per_s - P_MIN, 1e-9),
                 Knob::Ei => ln(p.ei_nm2, 1e-15),
                 Knob::Zeta => spec.ext.damping_ratio / ZETA_SCALE,
                 Knob::Beta => spec.ext.damping_stiffness_s / BETA_SCALE,

@@ -33,18 +33,24 @@ pub fn from_data(
         spec.params.r2_ohm = r2;
         spec.params.c_f = c;
     }
-    // The network's gain by linear least squares over the mechanical channels.
+    // The network's gain by linear least squares over the mechanical
+    // channels, on the residuals as the fit sees them (drift removed):
+    // with the gain doubled, r₂ − r₁ is the model's part and r₂ − 2r₁
+    // the data's, both weighted and with their drift taken out.
+    let mut doubled = spec;
+    doubled.params.a_nm_per_c *= 2.0;
+    doubled.params.b_nm_per_c_s *= 2.0;
     let (mut num, mut den) = (0.0, 0.0);
     for &i in recordings {
-        let res = residuals_of(i, &spec)?;
-        for (t, r) in targets.recordings[i].targets.iter().zip(res) {
+        let (r1, r2) = (residuals_of(i, &spec)?, residuals_of(i, &doubled)?);
+        for ((t, r1), r2) in targets.recordings[i].targets.iter().zip(r1).zip(r2) {
             if matches!(t.channel, Channel::Current(_)) {
                 continue;
             }
-            for (&y, r) in t.values.iter().zip(r) {
-                let m = y + r * t.sigma;
-                num += m * y / (t.sigma * t.sigma);
-                den += m * m / (t.sigma * t.sigma);
+            for (a, b) in r1.iter().zip(&r2) {
+                let (model, data) = (b - a, b - 2.0 * a);
+                num += model * data;
+                den += model * model;
             }
         }
     }

@@ -1,0 +1,89 @@
+//! Drift reported as what it is: a bench imperfection (docs/FORMAT.md),
+//! the strip's own curl or a sensor's zero wandering, fitted beside every
+//! model (`fit/drift.rs`) and never named as a catalogue effect, as hum
+//! and coloured noise are not.
+
+use std::collections::BTreeMap;
+
+use super::rests::BenchFinding;
+use crate::analysis::fit::Drift;
+use crate::recording::Channel;
+
+/// One finding per channel whose drift stands out of the noise in some
+/// recording: its largest range, where, and in how many recordings.
+pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
+    let mut by_channel: BTreeMap<String, Vec<&Drift>> = BTreeMap::new();
+    for d in drifts {
+        by_channel.entry(d.channel.name()).or_default().push(d);
+    }
+    by_channel
+        .into_iter()
+        .filter_map(|(channel, ds)| {
+            let significant: Vec<&&Drift> = ds.iter().filter(|d| d.significant).collect();
+            let worst = significant
+                .iter()
+                .max_by(|a, b| a.peak_to_peak_in_noise.total_cmp(&b.peak_to_peak_in_noise))?;
+            let (scale, unit) = match worst.channel {
+                Channel::Force => (1e3, "mN"),
+                _ => (1e3, "mm"),
+            };
+            let minutes = worst.span_s / 60.0;
+            let span = if worst.span_s < 120.0 {
+                format!("{:.1} s", worst.span_s)
+            } else {
+                format!("{minutes:.1} min")
+            };
+            let detail = format!(
+                "{channel} drifts by up to {:.3} {unit} ({:.1}× its noise) over {span} ({:.3} {unit}/min) in {}; in {} of {} recordings: the strip's own curl or the sensor's zero, fitted beside the model and left out of the diagnosis",
+                worst.peak_to_peak * scale,
+                worst.peak_to_peak_in_noise,
+                worst.peak_to_peak * scale / minutes.max(f64::MIN_POSITIVE),
+                worst.recording,
+                significant.len(),
+                ds.len(),
+            );
+            Some(BenchFinding {
+                what: "drift".to_string(),
+                channel,
+                mains_hz: None,
+                strength: worst.peak_to_peak_in_noise,
+                detail,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drift(recording: &str, channel: Channel, p2p: f64, significant: bool) -> Drift {
+        Drift {
+            recording: recording.to_string(),
+            channel,
+            peak_to_peak: p2p,
+            peak_to_peak_in_noise: p2p / 5e-5,
+            span_s: 240.0,
+            significant,
+        }
+    }
+
+    #[test]
+    fn each_drifting_channel_once_by_its_largest_drift() {
+        let found = findings(&[
+            drift("a.csv", Channel::DotY(0), 1e-3, true),
+            drift("b.csv", Channel::DotY(0), 3e-3, true),
+            drift("c.csv", Channel::DotY(0), 9e-3, false),
+            drift("a.csv", Channel::TipX, 1e-5, false),
+        ]);
+        assert_eq!(found.len(), 1);
+        let f = &found[0];
+        assert_eq!((f.what.as_str(), f.channel.as_str()), ("drift", "dot1_y_m"));
+        assert!((f.strength - 60.0).abs() < 1e-9, "{}", f.strength);
+        assert!(
+            f.detail.starts_with("dot1_y_m drifts by up to 3.000 mm (60.0× its noise) over 4.0 min (0.750 mm/min) in b.csv; in 2 of 3 recordings"),
+            "{}",
+            f.detail
+        );
+    }
+}

@@ -1,0 +1,400 @@
+//! Drift: a bench term for the slow part of a mechanical channel that the
+//! drive does not explain (docs/FORMAT.md, bench imperfections). A real
+//! strip slowly curls by itself over minutes with no signal, by
+//! millimetres, either way; a camera's, a laser's or a load cell's zero
+//! wanders. Left in the residuals, a fit turns it into creep (a pole
+//! near 0, an integrator) or into a softer beam, and every standard error
+//! drowns in it.
+//!
+//! A drift is slow on the *session's* clock, not on a recording's: the
+//! strip curls on between recordings. So each camera and load-cell
+//! channel gets, over the recordings fitted together, an offset of its
+//! own in each recording (the rest shape a brush leaves, a tare) and one
+//! polynomial in session time they share, at least a line, which can bend
+//! once per [`DRIFT_SCALE_S`] (degree `1 + ⌊span/60 s⌋` over a span of
+//! the session, at most [`DRIFT_MAX_DEGREE`]). Its shortest feature is
+//! about a minute,
+//! far slower than the charging (`R1·C`, tens of milliseconds) and the
+//! relaxation the session can show, whose pole the fit keeps at or above
+//! `1/DRIFT_SCALE_S` (`space.rs`): what is slower than a minute is drift.
+//! A polynomial in each recording's own time would let a short
+//! recording's slope take any slow response the drive gives (a
+//! back-relaxation over a 3 s hold was absorbed whole): shared, a slope
+//! must hold over every recording. Where the session does not give every
+//! recording's `t_session_start_s`, or a recording is fitted alone, it
+//! has its own polynomial, of degree `⌊T/60 s⌋` over its own `T` seconds
+//! (an offset alone below a minute).
+//!
+//! Drift is fitted jointly with the model by variable projection: the
+//! residuals, and so every Jacobian taken of them, are those left after
+//! the least-squares drift is removed (Golub and Pereyra). The currents
+//! get none: their steady part is the leak the electrochemistry shows in.
+//!
+//! ```
+//! use finrs::analysis::fit::DriftBasis;
+//! // Two recordings of 20 s at 10 rows/s, half a minute apart on the
+//! // session's clock: an offset each and a shared line, removed exactly.
+//! let a: Vec<f64> = (0..200).map(|i| i as f64 * 0.1).collect();
+//! let b: Vec<f64> = a.iter().map(|t| t + 30.0).collect();
+//! let basis = DriftBasis::new(&[&a, &b], true);
+//! assert_eq!(basis.degree(), 1);
+//! let mut ra: Vec<f64> = a.iter().map(|t| 0.5 - 0.01 * t).collect();
+//! let mut rb: Vec<f64> = b.iter().map(|t| 0.9 - 0.01 * t).collect();
+//! basis.remove(&mut [&mut ra, &mut rb]);
+//! assert!(ra.iter().chain(&rb).all(|x| x.abs() < 1e-9));
+//! ```
+
+/// The time over which a drift's polynomial may bend once, s.
+pub const DRIFT_SCALE_S: f64 = 60.0;
+
+/// The highest degree of a drift's polynomial (a span of 24 minutes or
+/// more).
+pub const DRIFT_MAX_DEGREE: usize = 24;
+
+/// An orthonormal basis, over the samples of one channel in several
+/// recordings ("members"), of an offset per member and the polynomials
+/// of degree 1 to [`DriftBasis::degree`] in time: its columns `q_j`
+/// satisfy `q_iᵀ q_j = δ_ij` on those samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriftBasis {
+    /// Samples per member.
+    lens: Vec<usize>,
+    /// The polynomials' degree.
+    degree: usize,
+    /// The polynomial columns one after the other, each over every
+    /// member's samples in turn; the offsets are kept implicit (a
+    /// member's mean).
+    q: Vec<f64>,
+}
+
+impl DriftBasis {
+    /// The basis over members sampled at `times` (each increasing, on
+    /// one clock): with `shared`, one polynomial over all of them, of
+    /// degree `1 + ⌊span/60 s⌋`; without, the members must be one, and the
+    /// degree is `⌊span/60 s⌋`.
+    ///
+    /// # Panics
+    /// If not `shared` and there is not exactly one member.
+    pub fn new(times: &[&[f64]], shared: bool) -> DriftBasis {
+        assert!(shared || times.len() == 1, "one member unless shared");
+        let lens: Vec<usize> = times.iter().map(|t| t.len()).collect();
+        let total: usize = lens.iter().sum();
+        let (lo, hi) = times
+            .iter()
+            .flat_map(|t| t.iter())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t), hi.max(t))
+            });
+        let span_s = if hi > lo { hi - lo } else { 0.0 };
+        // Never as many columns as samples: some residual must be left.
+        let room = total.saturating_sub(lens.len()) / 2;
+        let degree = ((span_s / DRIFT_SCALE_S).floor() as usize + usize::from(shared))
+            .min(DRIFT_MAX_DEGREE)
+            .min(room);
+        let x: Vec<f64> = times
+            .iter()
+            .flat_map(|t| t.iter())
+            .map(|&t| {
+                if span_s > 0.0 {
+                    2.0 * (t - lo) / span_s - 1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut basis = DriftBasis {
+            lens,
+            degree: 0,
+            q: Vec::with_capacity(degree * total),
+        };
+        // Legendre polynomials on [-1, 1] (well conditioned on evenly
+        // spread samples), made orthogonal to the offsets and to each
+        // other over the samples themselves (twice: gaps and the pauses
+        // between recordings leave them unevenly spread).
+        let (mut p_prev, mut p) = (vec![0.0; total], vec![1.0; total]);
+        for n in 0..degree {
+            // (n + 1) P_{n+1} = (2n + 1) x P_n − n P_{n−1}.
+            let next: Vec<f64> = x
+                .iter()
+                .zip(&p)
+                .zip(&p_prev)
+                .map(|((&x, &pn), &pm)| {
+                    ((2 * n + 1) as f64 * x * pn - n as f64 * pm) / (n + 1) as f64
+                })
+                .collect();
+            p_prev = std::mem::replace(&mut p, next);
+            let mut col = p.clone();
+            for _ in 0..2 {
+                basis.remove_columns(&mut col);
+            }
+            let norm = col.iter().map(|c| c * c).sum::<f64>().sqrt();
+            if norm <= 1e-9 * (total as f64).sqrt() {
+                // The samples cannot tell this degree from the lower ones.
+                break;
+            }
+            basis.q.extend(col.iter().map(|c| c / norm));
+            basis.degree += 1;
+        }
+        basis
+    }
+
+    /// The shared polynomial's degree (0: offsets alone).
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+
+    /// The degrees of freedom the drift takes: an offset per member and
+    /// the polynomial's columns.
+    pub fn columns(&self) -> usize {
+        self.lens.len() + self.degree
+    }
+
+    /// The samples of all members, end to end.
+    fn total(&self) -> usize {
+        self.lens.iter().sum()
+    }
+
+    /// Removes the offsets and the polynomial columns built so far from
+    /// `x`, one value per sample of every member end to end.
+    fn remove_columns(&self, x: &mut [f64]) {
+        let mut at = 0;
+        for &len in &self.lens {
+            let part = &mut x[at..at + len];
+            let mean = part.iter().sum::<f64>() / len.max(1) as f64;
+            part.iter_mut().for_each(|v| *v -= mean);
+            at += len;
+        }
+        let total = self.total();
+        for qj in self.q.chunks_exact(total.max(1)) {
+            let dot: f64 = qj.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+            for (v, a) in x.iter_mut().zip(qj) {
+                *v -= dot * a;
+            }
+        }
+    }
+
+    /// Removes from the members' residuals `parts` (one value per sample,
+    /// member by member) their least-squares drift: `r ← r − Q Qᵀ r`.
+    /// Returns the polynomial's share of `‖r‖²` (the offsets' not
+    /// counted), what tells a drift from noise.
+    ///
+    /// # Panics
+    /// If `parts` does not hold one value per sample of each member.
+    pub fn remove(&self, parts: &mut [&mut Vec<f64>]) -> f64 {
+        assert_eq!(parts.len(), self.lens.len(), "one part per member");
+        for (p, &len) in parts.iter().zip(&self.lens) {
+            assert_eq!(p.len(), len, "one residual per sample");
+        }
+        for p in parts.iter_mut() {
+            let mean = p.iter().sum::<f64>() / p.len().max(1) as f64;
+            p.iter_mut().for_each(|v| *v -= mean);
+        }
+        let total = self.total();
+        let mut explained = 0.0;
+        for qj in self.q.chunks_exact(total.max(1)) {
+            let mut dot = 0.0;
+            let mut at = 0;
+            for p in parts.iter() {
+                dot += qj[at..at + p.len()]
+                    .iter()
+                    .zip(p.iter())
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+                at += p.len();
+            }
+            explained += dot * dot;
+            let mut at = 0;
+            for p in parts.iter_mut() {
+                let len = p.len();
+                for (v, a) in p.iter_mut().zip(&qj[at..at + len]) {
+                    *v -= dot * a;
+                }
+                at += len;
+            }
+        }
+        explained
+    }
+
+    /// The drift on the members' residuals `r = (ŷ − y)/σ` before its
+    /// removal, in `σ` units of `y − ŷ`: per member, the range of the
+    /// shared polynomial over its samples; and whether the polynomial
+    /// stands out of the noise (the sum of squares it takes beyond the
+    /// 99.9 % point of `χ²` with as many degrees of freedom as it has
+    /// columns: what white noise alone would give it).
+    pub fn measure(&self, parts: &[&[f64]]) -> (Vec<f64>, bool) {
+        let mut left: Vec<Vec<f64>> = parts.iter().map(|p| p.to_vec()).collect();
+        let mut refs: Vec<&mut Vec<f64>> = left.iter_mut().collect();
+        let explained = self.remove(&mut refs);
+        // The polynomial alone: what the removal took, less each member's
+        // offset (its mean), which is not drift.
+        let ranges = parts
+            .iter()
+            .zip(&left)
+            .map(|(p, l)| {
+                let taken: Vec<f64> = p.iter().zip(l).map(|(a, b)| a - b).collect();
+                let (lo, hi) = taken
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                        (lo.min(x), hi.max(x))
+                    });
+                if hi >= lo {
+                    hi - lo
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let significant = self.degree > 0 && explained > chi2_999(self.degree);
+        (ranges, significant)
+    }
+}
+
+/// The 99.9 % point of `χ²` with `dof` degrees of freedom.
+fn chi2_999(dof: usize) -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    ChiSquared::new(dof as f64).map_or(f64::INFINITY, |d| d.inverse_cdf(0.999))
+}
+
+/// The drift fitted on one channel of one recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Drift {
+    /// The recording's file name.
+    pub recording: String,
+    /// The channel.
+    pub channel: crate::recording::Channel,
+    /// The drift's range over the recording (highest minus lowest), in
+    /// the channel's SI unit.
+    pub peak_to_peak: f64,
+    /// The same in units of the channel's noise.
+    pub peak_to_peak_in_noise: f64,
+    /// The time it spans, s.
+    pub span_s: f64,
+    /// Whether the channel's drift, over the recordings fitted together,
+    /// stands out of the noise ([`DriftBasis::measure`]).
+    pub significant: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn times(n: usize, dt_s: f64, from_s: f64) -> Vec<f64> {
+        (0..n).map(|i| from_s + i as f64 * dt_s).collect()
+    }
+
+    /// The columns, offsets included, made explicit.
+    fn explicit(b: &DriftBasis) -> Vec<Vec<f64>> {
+        let total = b.total();
+        let mut cols = Vec::new();
+        let mut at = 0;
+        for &len in &b.lens {
+            let mut c = vec![0.0; total];
+            c[at..at + len].fill(1.0 / (len as f64).sqrt());
+            cols.push(c);
+            at += len;
+        }
+        cols.extend(b.q.chunks_exact(total).map(<[f64]>::to_vec));
+        cols
+    }
+
+    #[test]
+    fn the_degree_follows_the_span() {
+        let one = |n, dt| DriftBasis::new(&[&times(n, dt, 0.0)], false).degree();
+        assert_eq!(one(5000, 0.01), 0);
+        assert_eq!(one(6001, 0.01), 1);
+        assert_eq!(one(30_001, 0.01), 5);
+        assert_eq!(one(200_000, 0.01), 24);
+        // Too few samples: some residual is left.
+        assert_eq!(one(5, 100.0), 2);
+        assert_eq!(DriftBasis::new(&[&[]], false).columns(), 1);
+        // Two short recordings four minutes apart share a quintic; a
+        // minute apart, a quadratic.
+        let (a, b) = (times(800, 0.01, 0.0), times(800, 0.01, 240.0));
+        assert_eq!(DriftBasis::new(&[&a, &b], true).degree(), 5);
+        let b = times(800, 0.01, 60.0);
+        assert_eq!(DriftBasis::new(&[&a, &b], true).degree(), 2);
+    }
+
+    #[test]
+    fn columns_are_orthonormal_over_members_and_gaps() {
+        // Five minutes at 100 rows/s with a minute out of range, and a
+        // second recording after a pause.
+        let a: Vec<f64> = times(30_000, 0.01, 0.0)
+            .into_iter()
+            .filter(|&t| !(100.0..160.0).contains(&t))
+            .collect();
+        let b = times(9000, 0.01, 330.0);
+        let basis = DriftBasis::new(&[&a, &b], true);
+        assert_eq!(basis.degree(), 7);
+        let cols = explicit(&basis);
+        for (i, ci) in cols.iter().enumerate() {
+            for (j, cj) in cols.iter().enumerate() {
+                let dot: f64 = ci.iter().zip(cj).map(|(a, c)| a * c).sum();
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((dot - want).abs() < 1e-10, "{i} {j}: {dot}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_drift_is_removed_and_measured_and_a_fast_step_kept() {
+        let (a, b) = (times(12_001, 0.01, 0.0), times(6000, 0.01, 150.0));
+        let basis = DriftBasis::new(&[&a, &b], true);
+        assert_eq!(basis.degree(), 4);
+        let drift = |t: f64| 2e-3 - 3e-5 * t + 4e-7 * t * t - 1e-9 * t * t * t;
+        // Residuals of a model that misses the drift, in units of a noise
+        // of 0.05 mm (r = −drift/σ), each recording off by its own offset.
+        let sigma = 5e-5;
+        let ra: Vec<f64> = a.iter().map(|&t| -(drift(t) + 1e-4) / sigma).collect();
+        let rb: Vec<f64> = b.iter().map(|&t| -(drift(t) - 3e-4) / sigma).collect();
+        let (ranges, significant) = basis.measure(&[&ra, &rb]);
+        assert!(significant);
+        let range = |ts: &[f64]| {
+            let d: Vec<f64> = ts.iter().map(|&t| drift(t)).collect();
+            d.iter().cloned().fold(f64::MIN, f64::max) - d.iter().cloned().fold(f64::MAX, f64::min)
+        };
+        assert!((ranges[0] * sigma - range(&a)).abs() < 1e-9, "{ranges:?}");
+        assert!((ranges[1] * sigma - range(&b)).abs() < 1e-9, "{ranges:?}");
+        let (mut ra, mut rb) = (ra, rb);
+        basis.remove(&mut [&mut ra, &mut rb]);
+        assert!(ra.iter().chain(&rb).all(|x| x.abs() < 1e-9));
+        // A step held from 10 s to 70 s keeps its edges: the polynomial
+        // cannot bend fast enough to follow them (its plateau, a minute
+        // long, it can: what a drift of minutes hides).
+        let mut step: Vec<f64> = a
+            .iter()
+            .map(|&t| if (10.0..70.0).contains(&t) { 1.0 } else { 0.0 })
+            .collect();
+        basis.remove(&mut [&mut step, &mut vec![0.0; b.len()]]);
+        let mean = |from_s: f64, to_s: f64| {
+            let (i, j) = ((from_s * 100.0) as usize, (to_s * 100.0) as usize);
+            step[i..j].iter().sum::<f64>() / (j - i) as f64
+        };
+        let rise = mean(10.0, 11.0) - mean(9.0, 10.0);
+        let fall = mean(69.0, 70.0) - mean(70.0, 71.0);
+        assert!(rise > 0.9 && fall > 0.9, "{rise} {fall}");
+    }
+
+    #[test]
+    fn noise_alone_is_no_drift() {
+        let a = times(6000, 0.01, 0.0);
+        let b = times(6000, 0.01, 100.0);
+        let basis = DriftBasis::new(&[&a, &b], true);
+        let mut x = 12345u64;
+        let mut unit = || {
+            // Sums of twelve uniforms: near-Gaussian, unit variance.
+            (0..12)
+                .map(|_| {
+                    x = x
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    (x >> 11) as f64 / (1u64 << 53) as f64
+                })
+                .sum::<f64>()
+                - 6.0
+        };
+        let na: Vec<f64> = (0..6000).map(|_| unit()).collect();
+        let nb: Vec<f64> = (0..6000).map(|_| unit()).collect();
+        assert!(!basis.measure(&[&na, &nb]).1);
+    }
+}
