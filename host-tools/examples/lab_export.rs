@@ -129,10 +129,12 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `x` rounded to a multiple of `step`, as the export writes it.
+/// `x` rounded to a multiple of `step`, as the export writes it (0, not
+/// -0).
 fn round_to(x: f64, step: f64) -> f64 {
     let digits = (-step.log10()).round().max(0.0) as usize;
-    format!("{:.*}", digits, (x / step).round() * step)
+    let y: f64 = format!("{:.*}", digits, (x / step).round() * step)
         .parse()
-        .expect("a formatted number")
+        .expect("a formatted number");
+    y + 0.0
 }

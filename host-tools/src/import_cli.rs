@@ -150,10 +150,11 @@ fn summary(input: &Path, out: &Path, mapping: &Mapping, imported: &Imported) -> 
     for (report, map) in imported.channels.iter().zip(mapping.channels()) {
         let mut parts = Vec::new();
         if let Zero::Opening { opening_s } = map.zero {
-            parts.push(format!(
-                "zero {} (mean of the first {opening_s} s)",
-                report.zero_raw
-            ));
+            // Nine digits: a mean's last bits are no reading's.
+            let zero = format!("{:.8e}", report.zero_raw)
+                .parse::<f64>()
+                .unwrap_or(report.zero_raw);
+            parts.push(format!("zero {zero} (mean of the first {opening_s} s)"));
         }
         for (n, what) in [
             (report.sentinels, "sentinels"),

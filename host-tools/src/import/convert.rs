@@ -299,7 +299,7 @@ fn describe(cell: &Cell) -> String {
             // Line ends and controls shown as escapes: one line a refusal.
             let cut: String = s.chars().take(40).collect();
             let more = if cut.len() < s.len() { "..." } else { "" };
-            format!("the text `{}{more}`", cut.escape_debug())
+            format!("`{}{more}`", cut.escape_debug())
         }
         Cell::Error(e) => format!("the formula error {e}"),
         Cell::Other(what) => what.to_string(),
@@ -316,26 +316,25 @@ fn number(cell: &Cell, decimal_comma: bool) -> Result<Option<f64>, String> {
             return Err(format!("holds {}, not a number", describe(cell)))
         }
     };
+    let cell = format!("the text {}", describe(cell));
     let parsed = if decimal_comma {
         if text.contains('.') {
             return Err(format!(
-                "holds {}: with source.decimal_comma = true a number has no `.`",
-                describe(cell)
+                "holds {cell}: with source.decimal_comma = true a number has no `.`"
             ));
         }
         text.replacen(',', ".", 1).parse::<f64>()
     } else {
         if text.contains(',') {
             return Err(format!(
-                "holds {}, not a number (a decimal comma? set source.decimal_comma = true)",
-                describe(cell)
+                "holds {cell}, not a number (a decimal comma? set source.decimal_comma = true)"
             ));
         }
         text.parse::<f64>()
     };
     parsed
         .map(Some)
-        .map_err(|_| format!("holds {}, not a number", describe(cell)))
+        .map_err(|_| format!("holds {cell}, not a number"))
 }
 
 /// Each data row's time, s.
@@ -752,7 +751,7 @@ mod tests {
         let err = run(&m, &t).unwrap_err().to_string();
         assert!(
             err.starts_with("x.xlsx: S row 3: a blank row inside the data")
-                && err.contains("S!A4 (v1_V) holds the text `0`"),
+                && err.contains("S!A4 (v1_V) holds `0` after it"),
             "{err}"
         );
         // A sheet's row not listed is blank.
