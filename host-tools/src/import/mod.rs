@@ -96,3 +96,37 @@ pub fn exports_in(folder: &Path) -> Result<Vec<PathBuf>, ImportError> {
     found.sort();
     Ok(found)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_s_exports_are_its_known_files_by_name() {
+        let dir = std::env::temp_dir().join(format!("finrs-exports-in-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("sub.csv")).unwrap();
+        for name in ["02.XLSX", "01.csv", "notes.md", "03.tsv", "plot.png"] {
+            std::fs::write(dir.join(name), "").unwrap();
+        }
+        let found: Vec<String> = exports_in(&dir)
+            .unwrap()
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(found, ["01.csv", "02.XLSX", "03.tsv"]);
+        for name in ["02.XLSX", "01.csv", "03.tsv"] {
+            std::fs::remove_file(dir.join(name)).unwrap();
+        }
+        let err = exports_in(&dir).unwrap_err().to_string();
+        assert!(
+            err.ends_with("the folder holds no export (.xlsx, .xlsm, .csv, .tsv, .tab, .txt)"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(exports_in(&dir)
+            .unwrap_err()
+            .to_string()
+            .ends_with("cannot read"));
+    }
+}
