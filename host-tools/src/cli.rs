@@ -67,6 +67,9 @@ pub enum Command {
     ClearFault(SendArgs),
     /// Merge a camera's tracked dots into a free recording from the board.
     MergeCamera(MergeCameraArgs),
+    /// Make a lab's own exports (XLSX, CSV, TSV) ipmc-bench/1 recordings,
+    /// by a mapping of their columns (docs/import.md).
+    Import(ImportArgs),
     /// Record a whole session from the board by a protocol, through one
     /// link.
     Bench {
@@ -131,6 +134,23 @@ pub struct MergeCameraArgs {
     /// The sync event's camera time, s, if the track has no `sync` row.
     #[arg(long)]
     pub sync_time_s: Option<f64>,
+}
+
+/// `finrs import`.
+#[derive(Args)]
+pub struct ImportArgs {
+    /// The lab's exports: XLSX workbooks, CSV or TSV files, or folders of
+    /// them (taken in name order).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// The mapping of the exports' columns to ipmc-bench/1 (TOML,
+    /// finrs-import/1).
+    #[arg(long)]
+    pub mapping: PathBuf,
+    /// Where to write: a folder, a recording per export
+    /// (FOLDER/<export's name>.csv); or a .csv file for one export.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// `finrs bench`'s commands.

@@ -7,8 +7,9 @@
 //! (`scripts/module-graph` checks this, and `cargo test` runs it):
 //! - [`recording`] (the `ipmc-bench/1` format) and [`wave`] (the `--wave`
 //!   syntax on the firmware's generator), at the bottom;
-//! - [`session`] (the recordings of one sample) and [`camera`] (a
-//!   tracker's dots merged into a free recording);
+//! - [`session`] (the recordings of one sample), [`camera`] (a
+//!   tracker's dots merged into a free recording) and [`import`] (a
+//!   lab's own exports made recordings);
 //! - [`model`] (parameters, prediction, simulation, drives from waves),
 //!   [`link`] (probe, force stream, commands to the firmware), [`plot`]
 //!   and [`protocol`] (the recordings a session is to hold);
@@ -20,6 +21,7 @@
 pub mod analysis;
 pub mod bench;
 pub mod camera;
+pub mod import;
 pub mod link;
 pub mod model;
 pub mod plot;

@@ -2,7 +2,8 @@
 //!
 //! [`cli`] declares the commands and options, [`commands`] runs each one
 //! (progress bars, Ctrl-C and the files it writes), [`calibrate`] the
-//! board's calibration and model, [`bench_cli`] a session by protocol, [`stages`]
+//! board's calibration and model, [`bench_cli`] a session by protocol,
+//! [`import_cli`] a lab's exports made recordings, [`stages`]
 //! a long run's time per stage, [`new_folders`] the folders made for
 //! outputs; this file
 //! only parses and dispatches.
@@ -11,6 +12,7 @@ mod bench_cli;
 mod calibrate;
 mod cli;
 mod commands;
+mod import_cli;
 mod new_folders;
 mod stages;
 
@@ -51,5 +53,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tune(args) => calibrate::tune(args),
         Command::Bench { what } => bench_cli::run(what),
         Command::MergeCamera(args) => commands::merge_camera(args),
+        Command::Import(args) => import_cli::run(args),
     }
 }

@@ -1,6 +1,7 @@
 //! A sweep of the `finrs` command line for panics: every subcommand run as
 //! a user could run it, over generated arguments and small generated files
-//! (recordings, sessions, parameter files, byte dumps), valid-looking and
+//! (recordings, sessions, parameter files, byte dumps, a lab's exports
+//! as XLSX, CSV and TSV with their import mappings), valid-looking and
 //! broken. Whatever the input, the process must end within a time bound
 //! with success or a clear error: never a panic (exit code 101, `panicked`),
 //! never killed by a signal (abort, stack overflow), never silent on failure.
@@ -842,6 +843,302 @@ fn byte_dump(seed: u64, frames: usize, damage: Damage) -> Vec<u8> {
     out
 }
 
+// ------------------------------------------------------- lab exports
+
+/// What a generated export's mapped cell is spoiled with.
+#[derive(Clone, Copy, Debug)]
+enum Spoil {
+    Text(&'static str),
+    Number(f64),
+    Blank,
+    /// A formula whose cached result is an error (a workbook's only).
+    DivZero,
+    /// A TRUE/FALSE cell (a workbook's only).
+    Boolean,
+}
+
+/// A lab's export to generate: columns `t (ms)`, `V1 (V)`, `I1 (mA)`,
+/// `d (mm)` (a laser's distance) and an unmapped `note`, then spoiled.
+#[derive(Clone, Debug)]
+struct ExportSpec {
+    /// `xlsx`, `csv`, `tsv` or an extension nobody reads.
+    extension: &'static str,
+    rows: usize,
+    decimal_comma: bool,
+    /// A mapped column's header renamed (0: time, 1..=3 the channels).
+    renamed: Option<usize>,
+    /// The voltage's header given to the unmapped column too.
+    duplicated: bool,
+    /// A workbook with its sheet left empty.
+    empty_sheet: bool,
+    /// Merged cells: first row, first column, rows, columns (0-based).
+    merged: Option<(u32, u16, u32, u16)>,
+    /// Cells spoiled: data row, column (0..5), with what.
+    spoiled: Vec<(usize, usize, Spoil)>,
+    /// A data row left blank.
+    blank_row: Option<usize>,
+    random_bytes: Option<usize>,
+    seed: u64,
+}
+
+/// A generated export's cell: a number, spoiled, or empty.
+type ExportCell = Option<Result<f64, Spoil>>;
+
+fn spoil() -> impl Strategy<Value = Spoil> {
+    prop_oneof![
+        4 => prop::sample::select(vec![
+            "abc", "Inf", "-inf", "NaN", "1,5", "1.5.5", "#N/A", " ", "2e400", "0x10", "−1",
+        ])
+        .prop_map(Spoil::Text),
+        3 => prop::sample::select(vec![-99.9999, 4.5, -4.0001, 1e308, -1e308, 0.0, -0.0, 1e-320])
+            .prop_map(Spoil::Number),
+        2 => Just(Spoil::Blank),
+        1 => Just(Spoil::DivZero),
+        1 => Just(Spoil::Boolean),
+    ]
+}
+
+fn export_spec() -> impl Strategy<Value = ExportSpec> {
+    (
+        (
+            prop::sample::select(vec!["xlsx", "xlsx", "xlsx", "csv", "csv", "tsv", "dat"]),
+            prop_oneof![Just(0usize), Just(1), Just(2), 0usize..300],
+            any::<bool>(),
+            prop::option::weighted(0.15, 0usize..4),
+            prop::bool::weighted(0.1),
+            prop::bool::weighted(0.05),
+        ),
+        (
+            prop::option::weighted(0.15, (0u32..40, 0u16..6, 0u32..3, 0u16..3)),
+            prop::collection::vec((0usize..300, 0usize..5, spoil()), 0..3),
+            prop::option::weighted(0.1, 0usize..300),
+            prop::option::weighted(0.05, 0usize..3000),
+            any::<u64>(),
+        ),
+    )
+        .prop_map(
+            |(
+                (extension, rows, decimal_comma, renamed, duplicated, empty_sheet),
+                (merged, spoiled, blank_row, random_bytes, seed),
+            )| ExportSpec {
+                extension,
+                rows,
+                decimal_comma,
+                renamed,
+                duplicated,
+                empty_sheet,
+                merged,
+                spoiled,
+                blank_row,
+                random_bytes,
+                seed,
+            },
+        )
+}
+
+impl ExportSpec {
+    /// The header and the data rows, unspoiled numbers as `f64`.
+    fn cells(&self) -> (Vec<String>, Vec<Vec<ExportCell>>) {
+        let mut header: Vec<String> = ["t (ms)", "V1 (V)", "I1 (mA)", "d (mm)", "note"]
+            .map(String::from)
+            .into();
+        if let Some(c) = self.renamed {
+            header[c] += " renamed";
+        }
+        if self.duplicated {
+            header[4] = header[1].clone();
+        }
+        let mut rng = rand::rngs::StdRng::seed_from_u64(self.seed);
+        let mut rows: Vec<Vec<ExportCell>> = (0..self.rows)
+            .map(|i| {
+                let on = i >= 100;
+                vec![
+                    Some(Ok(i as f64 * 10.0)),
+                    Some(Ok(if on { 2.0 } else { 0.0007 })),
+                    Some(Ok((rng.gen_range(-200.0..200.0f64)).round() / 10.0)),
+                    Some(Ok(if rng.gen_bool(0.05) {
+                        -99.9999
+                    } else {
+                        30.0 + rng.gen_range(-0.01..0.01)
+                    })),
+                    rng.gen_bool(0.1).then_some(Ok(1.0)),
+                ]
+            })
+            .collect();
+        for &(r, c, spoil) in &self.spoiled {
+            if let Some(row) = rows.get_mut(r) {
+                row[c] = Some(Err(spoil));
+            }
+        }
+        if let Some(row) = self.blank_row.and_then(|r| rows.get_mut(r)) {
+            row.iter_mut().for_each(|c| *c = None);
+        }
+        (header, rows)
+    }
+
+    fn render(&self, path: &std::path::Path) {
+        if let Some(n) = self.random_bytes {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(self.seed);
+            let bytes: Vec<u8> = (0..n).map(|_| rng.gen()).collect();
+            std::fs::write(path, bytes).unwrap();
+            return;
+        }
+        let (header, rows) = self.cells();
+        if self.extension == "xlsx" {
+            let mut book = rust_xlsxwriter::Workbook::new();
+            let ws = book.add_worksheet();
+            if !self.empty_sheet {
+                for (c, h) in header.iter().enumerate() {
+                    ws.write_string(0, c as u16, h).unwrap();
+                }
+                for (r, row) in rows.iter().enumerate() {
+                    for (c, cell) in row.iter().enumerate() {
+                        let (r, c) = (r as u32 + 1, c as u16);
+                        match cell {
+                            None | Some(Err(Spoil::Blank)) => {}
+                            Some(Ok(x)) | Some(Err(Spoil::Number(x))) => {
+                                ws.write_number(r, c, *x).unwrap();
+                            }
+                            Some(Err(Spoil::Text(t))) => {
+                                ws.write_string(r, c, *t).unwrap();
+                            }
+                            Some(Err(Spoil::DivZero)) => {
+                                let f = rust_xlsxwriter::Formula::new("=1/0").set_result("#DIV/0!");
+                                ws.write_formula(r, c, f).unwrap();
+                            }
+                            Some(Err(Spoil::Boolean)) => {
+                                ws.write_boolean(r, c, true).unwrap();
+                            }
+                        }
+                    }
+                }
+                if let Some((r, c, dr, dc)) = self.merged {
+                    let f = rust_xlsxwriter::Format::new();
+                    // One cell is no block: rust_xlsxwriter refuses it.
+                    let _ = ws.merge_range(r, c, r + dr, c + dc.max(u16::from(dr == 0)), "", &f);
+                }
+            }
+            book.save(path).unwrap();
+            return;
+        }
+        let sep = match (self.extension, self.decimal_comma) {
+            ("tsv", _) => "\t",
+            (_, true) => ";",
+            _ => ",",
+        };
+        let number = |x: f64| {
+            let s = format!("{x}");
+            if self.decimal_comma {
+                s.replace('.', ",")
+            } else {
+                s
+            }
+        };
+        let mut text = header.join(sep) + "\n";
+        for row in &rows {
+            let fields: Vec<String> = row
+                .iter()
+                .map(|cell| match cell {
+                    None | Some(Err(Spoil::Blank)) => String::new(),
+                    Some(Ok(x)) | Some(Err(Spoil::Number(x))) => number(*x),
+                    Some(Err(Spoil::Text(t))) => t.to_string(),
+                    Some(Err(Spoil::DivZero)) => "#DIV/0!".to_string(),
+                    Some(Err(Spoil::Boolean)) => "TRUE".to_string(),
+                })
+                .collect();
+            text += &fields.join(sep);
+            text += "\n";
+        }
+        std::fs::write(path, text).unwrap();
+    }
+}
+
+/// A mapping of [`ExportSpec`]'s columns to generate, then spoil.
+#[derive(Clone, Debug)]
+struct ImportMappingSpec {
+    /// The time from a rate instead of the `t (ms)` column.
+    rate: bool,
+    /// Values put in place of others: an assignment's index, the value.
+    replace: Vec<(usize, String)>,
+    /// A key nobody knows, in a table.
+    unknown_key: Option<usize>,
+    drop_line: Option<usize>,
+    random_bytes: Option<u64>,
+}
+
+fn import_mapping_spec() -> impl Strategy<Value = ImportMappingSpec> {
+    (
+        any::<bool>(),
+        // Mostly a mapping that holds, so that the exports are read.
+        prop_oneof![
+            3 => Just(Vec::new()),
+            1 => prop::collection::vec((0usize..40, toml_value()), 1..3),
+        ],
+        prop::option::weighted(0.1, 0usize..6),
+        prop::option::weighted(0.1, 0usize..40),
+        prop::option::weighted(0.03, any::<u64>()),
+    )
+        .prop_map(
+            |(rate, replace, unknown_key, drop_line, random_bytes)| ImportMappingSpec {
+                rate,
+                replace,
+                unknown_key,
+                drop_line,
+                random_bytes,
+            },
+        )
+}
+
+impl ImportMappingSpec {
+    fn render(&self, export: &ExportSpec) -> Vec<u8> {
+        if let Some(seed) = self.random_bytes {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+            return (0..rng.gen_range(0..500)).map(|_| rng.gen()).collect();
+        }
+        let time = if self.rate {
+            "rate_hz = 100.0".to_string()
+        } else {
+            "column = \"t (ms)\"\nscale = 0.001".to_string()
+        };
+        let source = match (export.extension, export.decimal_comma) {
+            ("tsv", comma) => format!("decimal_comma = {comma}"),
+            ("csv" | "dat", true) => "delimiter = \";\"\ndecimal_comma = true".to_string(),
+            ("dat", false) => "delimiter = \",\"".to_string(),
+            _ => "header_row = 1".to_string(),
+        };
+        let text = format!(
+            "format = \"finrs-import/1\"\n[source]\n{source}\n[time]\n{time}\n\
+             [[channel]]\nto = \"v1_V\"\ncolumn = \"V1 (V)\"\n\
+             [[channel]]\nto = \"i1_A\"\ncolumn = \"I1 (mA)\"\nscale = 0.001\n\
+             [[channel]]\nto = \"tip_y_m\"\nletter = \"D\"\nscale = 0.001\nsign = -1\n\
+             zero = \"opening\"\nopening_s = 0.5\nout_of_range = [-99.9999]\nvalid = [0.0, 60.0]\n\
+             [metadata]\nsegments = 1\nlength_m = 0.03\nwidth_m = 0.005\nthickness_m = 0.0002\n\
+             fixture = \"free\"\nmedium = \"air\"\n\
+             [files.\"export.{}\"]\nt_session_start_s = 12.5\n",
+            export.extension
+        );
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        let assignments: Vec<usize> = (0..lines.len())
+            .filter(|&i| lines[i].contains(" = "))
+            .collect();
+        for (k, value) in &self.replace {
+            let i = assignments[k % assignments.len()];
+            let key = lines[i].split(" = ").next().unwrap().to_string();
+            lines[i] = format!("{key} = {value}");
+        }
+        if let Some(k) = self.unknown_key {
+            let tables: Vec<usize> = (0..lines.len())
+                .filter(|&i| lines[i].starts_with('['))
+                .collect();
+            lines.insert(tables[k % tables.len()] + 1, "units = \"mm\"".to_string());
+        }
+        if let Some(k) = self.drop_line {
+            lines.remove(k % lines.len());
+        }
+        (lines.join("\n") + "\n").into_bytes()
+    }
+}
+
 /// Where a command is told to write: a fresh file, a folder, a missing
 /// folder's file, a file that cannot be written.
 fn out_path(dir: &CaseDir, kind: u8, name: &str) -> String {
@@ -1056,6 +1353,46 @@ proptest! {
             }
         }
         run_finrs(&dir, &args)?;
+    }
+
+    #[test]
+    fn import(exports in prop::collection::vec(export_spec(), 1..3), mapping in import_mapping_spec(),
+              folder in prop::bool::weighted(0.2), out_kind in any::<u8>()) {
+        let dir = CaseDir::new();
+        let mut args = vec!["import".to_string()];
+        for (k, e) in exports.iter().enumerate() {
+            // The first export is the one the mapping's [files] names.
+            let name = match k {
+                0 => format!("exports/export.{}", e.extension),
+                _ => format!("exports/export{k}.{}", e.extension),
+            };
+            std::fs::create_dir_all(dir.path("exports")).unwrap();
+            e.render(&dir.path(&name));
+            if !folder {
+                args.push(dir.arg(&name));
+            }
+        }
+        if folder {
+            args.push(dir.arg("exports"));
+        }
+        let toml = dir.write("lab.toml", &mapping.render(&exports[0]));
+        let out = match out_kind % 8 {
+            6 => dir.arg("missing/dir/one.csv"),
+            7 => dir.arg("exports"),
+            k => out_path(&dir, k, "out"),
+        };
+        args.extend(["--mapping".into(), toml, "--out".into(), out.clone()]);
+        run_finrs(&dir, &args)?;
+        // A refusal names what it refuses: an export, the mapping or the
+        // output.
+        let stderr = std::fs::read_to_string(dir.path("stderr.txt")).unwrap_or_default();
+        if let Some(error) = stderr.lines().find(|l| l.starts_with("error:")) {
+            prop_assert!(
+                error.contains("export") || error.contains("lab.toml") || error.contains(&out)
+                    || error.contains("/dev/full") || error.contains("/proc"),
+                "an error naming nothing: {error}\n{}", shell_words(&args)
+            );
+        }
     }
 
     #[test]
