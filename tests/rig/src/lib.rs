@@ -38,6 +38,8 @@ pub mod bench;
 pub mod coverage;
 pub mod expect;
 pub mod heatmap;
+pub mod lab;
+pub mod lab_session;
 pub mod runner;
 pub mod sample;
 pub mod session;
@@ -47,6 +49,8 @@ pub mod sweep;
 pub use beam::Tip;
 pub use bench::{Bench, IMPERFECTIONS};
 pub use expect::{expected, score, Expected, Protocol, Score};
+pub use lab::{LabBench, LabProtocol, DRIFT, LAB_ARTEFACTS};
+pub use lab_session::{write_lab, Layout, Tracker};
 pub use sample::{
     Hidden, Sample, SegmentFactors, Water, CATALOGUE, OFF_CLASS_DEPARTURES, OUTSIDE,
     SEGMENT_VARIATION,
