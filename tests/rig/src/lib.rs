@@ -20,6 +20,13 @@
 //! that gives, camera exposure. [`expect`] says, for each, what a right
 //! diagnosis names, written from the contract before any tuning.
 //!
+//! The *lab-like* bench ([`lab`], [`write_lab`]) is what real labs add
+//! besides: the strip's own curl and the sensors' wandering zeros (drift),
+//! dropouts and out-of-range stretches, quantised channels, the voltage
+//! as a DAQ reads it back, contact faults, recordings that carry the last
+//! one's state over, a moment that differs by sign; and the lab's own
+//! protocol (one segment, steps held for minutes, 100 rows/s, a laser).
+//!
 //! ```no_run
 //! use rand::SeedableRng;
 //! let mut rng = rand::rngs::StdRng::seed_from_u64(7);

@@ -428,7 +428,7 @@ pub fn run_lab(
     let mut open_row = vec![false; n];
     for (row, v_row) in volts.rows().enumerate() {
         let t_s = t_session_s + row as f64 * dt_s;
-        let gain = hidden.drying_s.map_or(1.0, |tau| 1.0 / (1.0 + t_s / tau));
+        let gain = gain_at(t_s);
         let open = lab.open.map(|o| {
             for (f, seg) in open_row.iter_mut().zip(o) {
                 *f = seg.get(row).copied().unwrap_or(false);
