@@ -20,6 +20,13 @@
 //! that gives, camera exposure. [`expect`] says, for each, what a right
 //! diagnosis names, written from the contract before any tuning.
 //!
+//! The *lab-like* bench ([`lab`], [`write_lab`]) is what real labs add
+//! besides: the strip's own curl and the sensors' wandering zeros (drift),
+//! dropouts and out-of-range stretches, quantised channels, the voltage
+//! as a DAQ reads it back, contact faults, recordings that carry the last
+//! one's state over, a moment that differs by sign; and the lab's own
+//! protocol (one segment, steps held for minutes, 100 rows/s, a laser).
+//!
 //! ```no_run
 //! use rand::SeedableRng;
 //! let mut rng = rand::rngs::StdRng::seed_from_u64(7);
@@ -38,6 +45,8 @@ pub mod bench;
 pub mod coverage;
 pub mod expect;
 pub mod heatmap;
+pub mod lab;
+pub mod lab_session;
 pub mod runner;
 pub mod sample;
 pub mod session;
@@ -47,6 +56,8 @@ pub mod sweep;
 pub use beam::Tip;
 pub use bench::{Bench, IMPERFECTIONS};
 pub use expect::{expected, score, Expected, Protocol, Score};
+pub use lab::{LabBench, LabProtocol, DRIFT, LAB_ARTEFACTS};
+pub use lab_session::{write_lab, Layout, Tracker};
 pub use sample::{
     Hidden, Sample, SegmentFactors, Water, CATALOGUE, OFF_CLASS_DEPARTURES, OUTSIDE,
     SEGMENT_VARIATION,

@@ -21,7 +21,7 @@ pub struct Run {
     /// File name without `.csv`.
     pub name: String,
     /// Wave as `finrs simulate --wave` takes it.
-    pub wave: &'static str,
+    pub wave: String,
     /// How the tip is held.
     pub fixture: Fixture,
     /// Rest before, s.
@@ -70,9 +70,9 @@ pub fn board_protocol(hold_scale: f64) -> Vec<Run> {
 }
 
 fn protocol_scaled(scale: f64) -> Vec<Run> {
-    let run = |name: &str, wave, fixture, hold_s: f64, description: &str| Run {
+    let run = |name: &str, wave: &str, fixture, hold_s: f64, description: &str| Run {
         name: name.to_string(),
-        wave,
+        wave: wave.to_string(),
         fixture,
         rest_s: 1.5,
         hold_s: hold_s * scale,
@@ -206,7 +206,7 @@ pub fn write(
     std::fs::create_dir_all(dir)?;
     let mut t_session = 0.0;
     for (index, r) in runs.iter().enumerate() {
-        let wave = Wave::parse(r.wave).map_err(anyhow::Error::msg)?;
+        let wave = Wave::parse(&r.wave).map_err(anyhow::Error::msg)?;
         let drive = Drive {
             segments: SEGMENTS,
             fixture: r.fixture,
@@ -270,16 +270,26 @@ pub fn write(
 /// spring that puts the held strip's first mode at the bench's fraction
 /// of the rigid one's.
 fn load_cell(sample: &Sample, hidden: &Hidden, bench: &Bench) -> Tip {
+    load_cell_of(sample, hidden, bench, SEGMENTS)
+}
+
+/// [`load_cell`] for a strip of `segments` segments.
+pub(crate) fn load_cell_of(
+    sample: &Sample,
+    hidden: &Hidden,
+    bench: &Bench,
+    segments: usize,
+) -> Tip {
     let Some(ratio) = bench.load_cell_mode_ratio else {
         return Tip::Pinned;
     };
     let (ei, mass) = section(sample, hidden);
     let Mesh { per_segment, .. } = BLOCKED_MESH;
-    let beam = |tip| Beam::new(sample.length_m, SEGMENTS, per_segment, ei, mass, tip);
+    let beam = |tip| Beam::new(sample.length_m, segments, per_segment, ei, mass, tip);
     let pinned_hz = beam(Tip::Pinned).omega[0] / (2.0 * PI);
     Beam::spring_for_first_mode(
         sample.length_m,
-        SEGMENTS,
+        segments,
         per_segment,
         ei,
         mass,
@@ -290,7 +300,7 @@ fn load_cell(sample: &Sample, hidden: &Hidden, bench: &Bench) -> Tip {
 
 /// Rows whose positions a camera exposing for `window` rows up to each
 /// frame needs.
-fn exposed_rows(camera: &[bool], window: usize) -> Vec<bool> {
+pub(crate) fn exposed_rows(camera: &[bool], window: usize) -> Vec<bool> {
     let mut need = vec![false; camera.len()];
     for (r, _) in camera.iter().enumerate().filter(|(_, &f)| f) {
         for n in &mut need[r + 1 - window.min(r + 1)..=r] {
@@ -302,7 +312,7 @@ fn exposed_rows(camera: &[bool], window: usize) -> Vec<bool> {
 
 /// Each frame's positions become the mean over its exposure window; the
 /// other rows go back to "not sampled".
-fn expose(truth: &mut Truth, camera: &[bool], window: usize) {
+pub(crate) fn expose(truth: &mut Truth, camera: &[bool], window: usize) {
     for series in &mut truth.points_m {
         let exposed: Vec<(f64, f64)> = (0..series.len())
             .map(|r| {
@@ -322,7 +332,7 @@ fn expose(truth: &mut Truth, camera: &[bool], window: usize) {
 }
 
 /// Camera frames at 30/s, each on the nearest DAQ row.
-fn camera_rows(rows: usize) -> Vec<bool> {
+pub(crate) fn camera_rows(rows: usize) -> Vec<bool> {
     let mut frame = vec![false; rows];
     for f in 0.. {
         let row = (f as f64 / CAMERA_HZ * DAQ_HZ).round() as usize;
@@ -467,7 +477,7 @@ fn daq_channel(raw: Vec<f64>, extra: Option<Vec<f64>>) -> Vec<Option<f64>> {
     }
 }
 
-fn round(x: f64, q: f64) -> f64 {
+pub(crate) fn round(x: f64, q: f64) -> f64 {
     (x / q).round() * q
 }
 

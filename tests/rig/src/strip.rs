@@ -2,8 +2,11 @@
 //! Runge–Kutta on a tenth of the DAQ's sample time (they are nonlinear
 //! here), the beam mode by mode, each integrated exactly for a moment that
 //! is linear across the sub-step (first-order hold), not the fitted
-//! models' zero-order hold. Modes above [`DYNAMIC_LIMIT_HZ`] answer
-//! statically. Every recording starts with the strip at rest.
+//! models' zero-order hold. Modes above the mesh's dynamic limit answer
+//! statically. [`run`] starts every recording with the strip at rest;
+//! [`run_lab`] adds what a lab bench has ([`Lab`]): a recording that
+//! starts from the state the last one left, the strip's own curl, an open
+//! contact, a moment that differs by sign.
 
 use finrs::recording::Voltages;
 use nalgebra::{DVector, Matrix4};
@@ -60,7 +63,7 @@ pub struct Truth {
 
 /// Per-segment electrical state: charge, the lead network's state, the
 /// back-relaxation branch, the lagged charge its neighbours feel.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Elec {
     q: f64,
     r: f64,
@@ -71,9 +74,52 @@ struct Elec {
     v: f64,
 }
 
+/// The strip's electrical state where a recording (or a pause) ended:
+/// what the next one starts from on a bench that carries it over. The
+/// default is at rest. The beam's motion is not kept: after a pause the
+/// strip stands still under its moment (see [`run_lab`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct State {
+    elec: Vec<Elec>,
+}
+
+impl State {
+    /// Each segment's charge, C.
+    pub fn charge_c(&self) -> Vec<f64> {
+        self.elec.iter().map(|e| e.q).collect()
+    }
+
+    /// Whether the strip is at rest: no charge and no relaxation left.
+    pub fn is_rest(&self) -> bool {
+        self.elec.iter().all(|e| *e == Elec::default())
+    }
+}
+
+/// What a lab bench adds to a run of the strip ([`run_lab`]); the default
+/// adds nothing, and [`run_lab`] is then [`run`] bit for bit.
+#[derive(Clone, Copy, Default)]
+pub struct Lab<'a> {
+    /// The electrical state to start from (carried over from the last
+    /// recording); `None`: at rest.
+    pub start: Option<&'a State>,
+    /// The strip's own curl: a moment on every segment, N·m, at session
+    /// time `t`, s (a uniform curvature `κ` is a moment `EI κ` along the
+    /// whole strip).
+    pub curl_nm: Option<&'a dyn Fn(f64) -> f64>,
+    /// `open[segment][row]`: the segment's electrode contact is open on
+    /// that row: no current flows and it does not charge.
+    pub open: Option<&'a [Vec<bool>]>,
+    /// `a`: each segment's own moment is `(1 + a/2)` times the model's when
+    /// positive and `(1 - a/2)` times when negative, so that the strip
+    /// bends `(1 + a/2)/(1 - a/2) ≈ 1 + a` times more one way.
+    pub asymmetry: f64,
+}
+
 struct Electrics<'a> {
     s: &'a Sample,
     h: &'a Hidden,
+    /// [`Lab::asymmetry`].
+    asym: f64,
 }
 
 impl Electrics<'_> {
@@ -114,9 +160,14 @@ impl Electrics<'_> {
         let s = self.s;
         let k = s.k_nm_per_c * self.h.segment(i).k;
         let lead = k * (e.q + (s.z_per_s - s.p_per_s) * e.r);
-        match self.h.back_branch {
+        let m = match self.h.back_branch {
             Some((beta, _)) => lead - beta * k * s.z_per_s / s.p_per_s * e.b,
             None => lead,
+        };
+        if self.asym == 0.0 {
+            m
+        } else {
+            m * (1.0 + 0.5 * self.asym * m.signum())
         }
     }
 
@@ -139,11 +190,17 @@ impl Electrics<'_> {
         }
     }
 
-    fn derivative(&self, x: &[Elec], volts: &[f64], dx: &mut [Elec]) {
+    /// `open[i]`: segment `i`'s contact is open; its strip floats and the
+    /// double layer discharges through `R1` and `R2` in series (the linear
+    /// leak even with the `sinh` one: a fault lasts seconds at most).
+    fn derivative(&self, x: &[Elec], volts: &[f64], open: Option<&[bool]>, dx: &mut [Elec]) {
         let s = self.s;
         for i in 0..x.len() {
             let v = self.voltage(i, x[i].q, x[i].v);
-            let dq = (volts[i] - v) / self.r1_ohm(i);
+            let dq = match open {
+                Some(o) if o[i] => -v / (self.r1_ohm(i) + s.r2_ohm),
+                _ => (volts[i] - v) / self.r1_ohm(i),
+            };
             let tau_b = self.h.back_branch.map_or(1.0, |(_, t)| t);
             dx[i] = Elec {
                 q: dq,
@@ -162,7 +219,7 @@ impl Electrics<'_> {
         }
     }
 
-    fn rk4(&self, x: &mut [Elec], volts: &[f64], h: f64) {
+    fn rk4(&self, x: &mut [Elec], volts: &[f64], open: Option<&[bool]>, h: f64) {
         let n = x.len();
         let mut k = [
             vec![Elec::default(); n],
@@ -180,13 +237,13 @@ impl Electrics<'_> {
                 y.v = x.v;
             }
         };
-        self.derivative(x, volts, &mut k[0]);
+        self.derivative(x, volts, open, &mut k[0]);
         add(&mut y, x, &k[0], 0.5 * h);
-        self.derivative(&y, volts, &mut k[1]);
+        self.derivative(&y, volts, open, &mut k[1]);
         add(&mut y, x, &k[1], 0.5 * h);
-        self.derivative(&y, volts, &mut k[2]);
+        self.derivative(&y, volts, open, &mut k[2]);
         add(&mut y, x, &k[2], h);
-        self.derivative(&y, volts, &mut k[3]);
+        self.derivative(&y, volts, open, &mut k[3]);
         for (i, e) in x.iter_mut().enumerate() {
             e.q += h / 6.0 * (k[0][i].q + 2.0 * k[1][i].q + 2.0 * k[2][i].q + k[3][i].q);
             e.r += h / 6.0 * (k[0][i].r + 2.0 * k[1][i].r + 2.0 * k[2][i].r + k[3][i].r);
@@ -246,7 +303,7 @@ pub fn section(sample: &Sample, hidden: &Hidden) -> (f64, f64) {
 /// Runs the strip through the voltages `volts[row][segment]` held for
 /// `dt_s` each, starting `t_session_s` into the session, its tip held as
 /// `tip` says. `camera[row]` says where positions are wanted, at arc
-/// lengths `points_s_m`.
+/// lengths `points_s_m`. The strip starts at rest.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     sample: &Sample,
@@ -259,6 +316,41 @@ pub fn run(
     camera: &[bool],
     points_s_m: &[f64],
 ) -> Truth {
+    let lab = Lab::default();
+    run_lab(
+        sample,
+        hidden,
+        mesh,
+        tip,
+        volts,
+        dt_s,
+        t_session_s,
+        camera,
+        points_s_m,
+        &lab,
+    )
+    .0
+}
+
+/// As [`run`], on a lab bench: `lab` says what the strip starts from and
+/// what the bench adds. A carried-over state starts the beam standing
+/// still in static equilibrium under its moment (and the curl's): the
+/// pause before it lets a damped strip's ringing die out, and handling the
+/// strip between recordings stops the ideal strip's. Returns what the
+/// strip did and its electrical state after the last row.
+#[allow(clippy::too_many_arguments)]
+pub fn run_lab(
+    sample: &Sample,
+    hidden: &Hidden,
+    mesh: Mesh,
+    tip: Tip,
+    volts: &Voltages,
+    dt_s: f64,
+    t_session_s: f64,
+    camera: &[bool],
+    points_s_m: &[f64],
+    lab: &Lab,
+) -> (Truth, State) {
     let n = volts.segments();
     let width = sample.width_m;
     let (ei, mass) = section(sample, hidden);
@@ -290,8 +382,15 @@ pub fn run(
     let elec = Electrics {
         s: sample,
         h: hidden,
+        asym: lab.asymmetry,
     };
-    let mut x = vec![Elec::default(); n];
+    let mut x = match lab.start {
+        Some(state) if !state.elec.is_empty() => {
+            assert_eq!(state.elec.len(), n, "a carried state of another strip");
+            state.elec.clone()
+        }
+        _ => vec![Elec::default(); n],
+    };
     let mut eta = vec![0.0; dynamic.len()];
     let mut y2 = vec![0.0; dynamic.len()];
     let mut u0 = vec![0.0; n];
@@ -309,17 +408,50 @@ pub fn run(
     let modal_force =
         |u: &[f64], k: usize| -> f64 { (0..n).map(|i| beam.forcing[(k, i)] * u[i]).sum() };
     let mut drag_modal = vec![0.0; dynamic.len()];
+    // The curl's modal force per unit moment on every segment.
+    let curl_forcing: Vec<f64> = dynamic
+        .iter()
+        .map(|&k| (0..n).map(|i| beam.forcing[(k, i)]).sum())
+        .collect();
+    let curl_at = |t: f64| lab.curl_nm.map_or(0.0, |c| c(t));
+    let gain_at = |t: f64| hidden.drying_s.map_or(1.0, |tau| 1.0 / (1.0 + t / tau));
+    if lab.start.is_some() || lab.curl_nm.is_some() {
+        // Standing still under the opening moment: each mode at its static
+        // deflection.
+        elec.moments(&x, &mut u0);
+        let (gain, curl) = (gain_at(t_session_s), curl_at(t_session_s));
+        u0.iter_mut().for_each(|u| *u = *u * gain + curl);
+        for (j, &k) in dynamic.iter().enumerate() {
+            eta[j] = modal_force(&u0, k) / (beam.omega[k] * beam.omega[k]);
+        }
+    }
+    let mut open_row = vec![false; n];
     for (row, v_row) in volts.rows().enumerate() {
         let t_s = t_session_s + row as f64 * dt_s;
-        let gain = hidden.drying_s.map_or(1.0, |tau| 1.0 / (1.0 + t_s / tau));
+        let gain = gain_at(t_s);
+        let open = lab.open.map(|o| {
+            for (f, seg) in open_row.iter_mut().zip(o) {
+                *f = seg.get(row).copied().unwrap_or(false);
+            }
+            &open_row[..]
+        });
         // Outputs at the row's instant, with the row's voltage just applied.
         for (i, c) in truth.currents_a.iter_mut().enumerate() {
+            if open.is_some_and(|o| o[i]) {
+                // An open contact: nothing flows, the leak neither.
+                c.push(0.0);
+                continue;
+            }
             c.push(elec.leak_a(v_row[i]) + (v_row[i] - x[i].v) / elec.r1_ohm(i));
         }
         let want_shape = held || camera.get(row).copied().unwrap_or(false);
         if want_shape {
             elec.moments(&x, &mut u0);
             u0.iter_mut().for_each(|u| *u *= gain);
+            if lab.curl_nm.is_some() {
+                let curl = curl_at(t_s);
+                u0.iter_mut().for_each(|u| *u += curl);
+            }
             let mut full = DVector::<f64>::zeros(modes);
             for k in 0..modes {
                 full[k] = modal_force(&u0, k) / (beam.omega[k] * beam.omega[k]);
@@ -347,9 +479,9 @@ pub fn run(
                 }
             }
         }
-        for _ in 0..SUBSTEPS {
+        for sub in 0..SUBSTEPS {
             elec.moments(&x, &mut u0);
-            elec.rk4(&mut x, v_row, h);
+            elec.rk4(&mut x, v_row, open, h);
             elec.moments(&x, &mut u1);
             if let Some(d) = &drag {
                 // Node velocities from the dynamic modes; drag held over the sub-step.
@@ -373,9 +505,19 @@ pub fn run(
                 let m = shapes_drag.transpose() * f;
                 drag_modal[..dragged].copy_from_slice(m.as_slice());
             }
+            // The curl at the sub-step's ends, linear between them as the
+            // electrics' moment is.
+            let curl = lab.curl_nm.map(|_| {
+                let t0 = t_s + sub as f64 * h;
+                (curl_at(t0), curl_at(t0 + h))
+            });
             for (j, &k) in dynamic.iter().enumerate() {
-                let f0 = gain * modal_force(&u0, k) + drag_modal[j];
-                let f1 = gain * modal_force(&u1, k) + drag_modal[j];
+                let mut f0 = gain * modal_force(&u0, k) + drag_modal[j];
+                let mut f1 = gain * modal_force(&u1, k) + drag_modal[j];
+                if let Some((c0, c1)) = curl {
+                    f0 += c0 * curl_forcing[j];
+                    f1 += c1 * curl_forcing[j];
+                }
                 let slope = f1 - f0;
                 let m = &steps[j].m;
                 let (e, z) = (eta[j], y2[j]);
@@ -384,5 +526,26 @@ pub fn run(
             }
         }
     }
-    truth
+    (truth, State { elec: x })
+}
+
+/// The strip at 0 V for `seconds` from `state` (a pause between
+/// recordings: the DAQ holds its outputs at zero, so the strip discharges
+/// through `R1` and relaxes), on sub-steps of `dt_s / SUBSTEPS`; the
+/// electrics alone, the beam follows at the next recording's start.
+pub fn pause(sample: &Sample, hidden: &Hidden, state: &mut State, seconds: f64, dt_s: f64) {
+    if state.elec.is_empty() {
+        return;
+    }
+    let elec = Electrics {
+        s: sample,
+        h: hidden,
+        asym: 0.0,
+    };
+    let h = dt_s / SUBSTEPS as f64;
+    let zero = vec![0.0; state.elec.len()];
+    let steps = (seconds / h).round() as usize;
+    for _ in 0..steps {
+        elec.rk4(&mut state.elec, &zero, None, h);
+    }
 }

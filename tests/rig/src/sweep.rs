@@ -15,12 +15,29 @@ use std::path::Path;
 use rand::SeedableRng;
 
 use crate::bench::{Bench, IMPERFECTIONS};
-use crate::expect::{expected, Expected, Protocol, Score, BENCH_COLOURED, BENCH_HUM};
+use crate::expect::{expected, expected_lab, Expected, Protocol, Score, BENCH_COLOURED, BENCH_HUM};
+use crate::lab::{first_mode_hz, LabBench, LabProtocol, DRIFT, LAB_ARTEFACTS, LAB_RATE_HZ};
+use crate::lab_session::{write_lab, Layout};
 use crate::sample::{Hidden, Sample, CATALOGUE, OFF_CLASS_DEPARTURES, SEGMENT_VARIATION};
-use crate::session::{board_protocol, short_protocol, write, Sensors};
+use crate::session::{board_protocol, short_protocol, write, Run, Sensors};
+
+/// Which lab-like session a scenario is ([`crate::lab`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LabKind {
+    /// The off-class strip on the short protocol, every lab artefact.
+    Bench,
+    /// The ideal strip (the baseline's own class) on the short protocol,
+    /// a perfect bench but for drift: the strip's curl and the sensors'
+    /// zeros.
+    DriftOnly,
+    /// The off-class strip drawn as a lab's, on the lab protocol (one
+    /// segment, steps held for minutes, 100 rows/s, a laser), every lab
+    /// artefact.
+    Protocol,
+}
 
 /// One session of a sweep.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scenario {
     /// Seed of every draw of the session.
     pub seed: u64,
@@ -30,12 +47,19 @@ pub struct Scenario {
     pub bench: Vec<&'static str>,
     /// Recorded by the board alone.
     pub board: bool,
+    /// On the lab-like bench, which session (`None`: the off-class
+    /// sweep's).
+    pub lab: Option<LabKind>,
+    /// Lab artefacts left out (e.g. `readback`, for a reader that refuses
+    /// a DAQ's rests); the others are drawn as they would be with it.
+    pub lab_without: Vec<String>,
 }
 
 impl Scenario {
     /// The matrix row the session counts in: what was hidden, or `base`
     /// for the off-class strip alone; `board:` in front for the board's
-    /// protocol.
+    /// protocol, `lab:` on the lab bench, `lab-protocol:` on the lab's
+    /// protocol; `lab:ideal-drift` for the ideal strip with drift alone.
     pub fn row(&self) -> String {
         let mut parts: Vec<&str> = self.hidden.clone();
         parts.extend(self.bench.iter().copied());
@@ -44,11 +68,30 @@ impl Scenario {
         } else {
             parts.join("+")
         };
+        match self.lab {
+            Some(LabKind::DriftOnly) => return "lab:ideal-drift".to_string(),
+            Some(LabKind::Bench) => return format!("lab:{what}"),
+            Some(LabKind::Protocol) => return format!("lab-protocol:{what}"),
+            None => {}
+        }
         if self.board {
             format!("board:{what}")
         } else {
             what
         }
+    }
+
+    /// The lab artefacts the scenario's bench has.
+    fn lab_artefacts(&self) -> Vec<&'static str> {
+        let all: &[&'static str] = match self.lab {
+            None => &[],
+            Some(LabKind::DriftOnly) => &DRIFT,
+            Some(_) => &LAB_ARTEFACTS,
+        };
+        all.iter()
+            .copied()
+            .filter(|a| !self.lab_without.iter().any(|w| w == a))
+            .collect()
     }
 }
 
@@ -82,6 +125,46 @@ pub fn plan(first: u64, count: usize) -> Vec<Scenario> {
                 hidden,
                 bench,
                 board,
+                ..Scenario::default()
+            }
+        })
+        .collect()
+}
+
+/// The seeds of the lab sweep ([`plan_lab`]) start here: above the
+/// off-class sweep's.
+pub const LAB_FIRST_SEED: u64 = 20_000;
+
+/// The lab sweep's scenarios for seeds `first..first + count`, in turn
+/// (docs/rig.md, "A lab-like bench"): the off-class strip on the lab
+/// bench alone and with one catalogue departure, on the short protocol
+/// or the lab's own, and the ideal strip with drift alone.
+pub fn plan_lab(first: u64, count: usize) -> Vec<Scenario> {
+    use LabKind::{Bench as B, DriftOnly as D, Protocol as P};
+    let turns: [(LabKind, &[&'static str]); 14] = [
+        (B, &[]),
+        (D, &[]),
+        (P, &[]),
+        (B, &["dehydration"]),
+        (B, &["back-relaxation"]),
+        (P, &["dehydration"]),
+        (B, &["large-deflection"]),
+        (D, &[]),
+        (B, &[SEGMENT_VARIATION]),
+        (B, &["electrochemical-nonlinearity"]),
+        (P, &["back-relaxation"]),
+        (B, &["segment-crosstalk"]),
+        (P, &["electrochemical-nonlinearity"]),
+        (B, &["hydrodynamic-loading"]),
+    ];
+    (0..count)
+        .map(|i| {
+            let (lab, hidden) = turns[i % turns.len()];
+            Scenario {
+                seed: first + i as u64,
+                hidden: hidden.to_vec(),
+                lab: Some(lab),
+                ..Scenario::default()
             }
         })
         .collect()
@@ -93,30 +176,80 @@ struct Draws {
     hidden: Hidden,
     sensors: Sensors,
     bench: Bench,
+    lab: LabBench,
+    /// The lab protocol's runs and laser, on its lab strip.
+    lab_protocol: Option<LabProtocol>,
     rng: rand::rngs::StdRng,
 }
 
 fn draw(s: &Scenario) -> anyhow::Result<Draws> {
     let mut rng = rand::rngs::StdRng::seed_from_u64(s.seed);
-    let sample = Sample::draw_off_class(&mut rng);
-    let hidden = Hidden::draw_off_class(&s.hidden, &mut rng).map_err(anyhow::Error::msg)?;
+    let ideal = s.lab == Some(LabKind::DriftOnly);
+    let mut sample = if ideal {
+        Sample::draw(&mut rng)
+    } else {
+        Sample::draw_off_class(&mut rng)
+    };
+    let hidden = if ideal {
+        anyhow::ensure!(
+            s.hidden.is_empty() && s.bench.is_empty(),
+            "the drift-only session hides nothing but drift"
+        );
+        Hidden::draw(&[], &mut rng)
+    } else {
+        Hidden::draw_off_class(&s.hidden, &mut rng)
+    }
+    .map_err(anyhow::Error::msg)?;
     let sensors = Sensors::draw(&mut rng);
     let bench = Bench::draw(&s.bench, &mut rng).map_err(anyhow::Error::msg)?;
+    let (lab, lab_protocol) = match s.lab {
+        None => (LabBench::default(), None),
+        Some(kind) => {
+            let lab = LabBench::draw(&s.lab_artefacts(), &mut rng).map_err(anyhow::Error::msg)?;
+            let p = (kind == LabKind::Protocol)
+                .then(|| LabProtocol::draw(&mut sample, &hidden, &mut rng));
+            (lab, p)
+        }
+    };
     Ok(Draws {
         sample,
         hidden,
         sensors,
         bench,
+        lab,
+        lab_protocol,
         rng,
     })
 }
 
-fn protocol(s: &Scenario) -> Protocol {
+fn protocol(s: &Scenario, d: &Draws) -> Protocol {
+    if d.lab_protocol.is_some() {
+        // Free runs, a laser across at 100 rows/s: the first mode is seen
+        // ringing only below a quarter of that.
+        let ringing = first_mode_hz(&d.sample, &d.hidden, 1) < LAB_RATE_HZ / 4.0;
+        return Protocol {
+            free: true,
+            blocked: false,
+            session_start: true,
+            along: false,
+            ringing,
+        };
+    }
     Protocol {
         free: !s.board,
         blocked: true,
         // The rig writes every recording's start into its notes.
         session_start: true,
+        along: !s.board,
+        ringing: true,
+    }
+}
+
+fn expected_draws(s: &Scenario, d: &Draws) -> Expected {
+    if s.lab.is_some() {
+        expected_lab(&d.hidden, &d.bench, &d.lab, protocol(s, d))
+    } else {
+        expected(&d.hidden, &d.bench, protocol(s, d))
     }
 }
 
@@ -124,7 +257,7 @@ fn protocol(s: &Scenario) -> Protocol {
 /// writing the session (the same draws as [`write_scenario`]).
 pub fn expected_of(s: &Scenario) -> anyhow::Result<Expected> {
     let d = draw(s)?;
-    Ok(expected(&d.hidden, &d.bench, protocol(s)))
+    Ok(expected_draws(s, &d))
 }
 
 /// The rig's true values behind the scenario's session, for the knobs
@@ -156,16 +289,27 @@ pub fn strip_of(s: &Scenario) -> anyhow::Result<(Sample, Hidden)> {
 /// diagnosis of it names.
 pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
     let mut d = draw(s)?;
-    let runs = if s.board {
-        board_protocol(HOLD_SCALE)
-    } else {
-        short_protocol(HOLD_SCALE)
+    let runs: Vec<Run> = match &d.lab_protocol {
+        Some(p) => p.runs.clone(),
+        None if s.board => board_protocol(HOLD_SCALE),
+        None => short_protocol(HOLD_SCALE),
     };
     let label = format!("SWEEP-{}", s.seed);
-    write(
-        dir, &d.sample, &d.hidden, &d.sensors, &d.bench, &runs, &label, &mut d.rng,
-    )?;
-    Ok(expected(&d.hidden, &d.bench, protocol(s)))
+    if s.lab.is_none() {
+        write(
+            dir, &d.sample, &d.hidden, &d.sensors, &d.bench, &runs, &label, &mut d.rng,
+        )?;
+    } else {
+        let layout = d
+            .lab_protocol
+            .as_ref()
+            .map_or_else(Layout::camera, |p| Layout::laser(p.laser));
+        write_lab(
+            dir, &d.sample, &d.hidden, &d.sensors, &d.bench, &d.lab, &runs, &layout, &label,
+            &mut d.rng,
+        )?;
+    }
+    Ok(expected_draws(s, &d))
 }
 
 /// One diagnosed session.
@@ -370,8 +514,7 @@ mod tests {
         let scenario = Scenario {
             seed: 1,
             hidden,
-            bench: vec![],
-            board: false,
+            ..Scenario::default()
         };
         let expected = Expected {
             required: vec!["damping"],
@@ -401,6 +544,35 @@ mod tests {
         }
         let seeds: std::collections::BTreeSet<u64> = p.iter().map(|s| s.seed).collect();
         assert_eq!(seeds.len(), p.len());
+    }
+
+    #[test]
+    fn the_lab_plan_has_each_kind_and_its_rows_say_so() {
+        let p = plan_lab(LAB_FIRST_SEED, 14);
+        let rows: std::collections::BTreeSet<String> = p.iter().map(Scenario::row).collect();
+        for r in [
+            "lab:base",
+            "lab:ideal-drift",
+            "lab-protocol:base",
+            "lab:dehydration",
+            "lab-protocol:back-relaxation",
+        ] {
+            assert!(rows.contains(r), "{r}: {rows:?}");
+        }
+        // Every departure at most one, on the off-class strip; drift alone
+        // on the ideal one.
+        assert!(p.iter().all(|s| s.hidden.len() <= 1 && s.bench.is_empty()));
+        let drift = p
+            .iter()
+            .find(|s| s.lab == Some(LabKind::DriftOnly))
+            .unwrap();
+        assert_eq!(drift.lab_artefacts(), DRIFT);
+        let e = expected_of(drift).unwrap();
+        assert!(e.required.is_empty() && !e.unexplained_ok, "{e:?}");
+        let mut s = p[0].clone();
+        s.lab_without = vec!["readback".to_string()];
+        assert!(!s.lab_artefacts().contains(&"readback"));
+        assert_eq!(s.lab_artefacts().len(), LAB_ARTEFACTS.len() - 1);
     }
 
     #[test]

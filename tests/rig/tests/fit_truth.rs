@@ -22,6 +22,7 @@ fn a_large_deflection_fit_finds_the_strips_stiffness_and_circuit() {
         hidden: vec!["large-deflection"],
         bench: vec![],
         board: false,
+        ..Scenario::default()
     };
     let dir = std::env::temp_dir().join(format!("finrs-fit-truth-{}", std::process::id()));
     write_scenario(&s, &dir).unwrap();

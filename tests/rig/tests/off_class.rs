@@ -243,6 +243,7 @@ fn a_resumed_sweep_scores_a_kept_result_against_the_same_expectation() {
         hidden: vec![SEGMENT_VARIATION],
         bench: vec!["hum"],
         board: true,
+        ..Scenario::default()
     };
     let dir = std::env::temp_dir().join(format!("finrs-rig-resume-{}", std::process::id()));
     let written = write_scenario(&s, &dir).unwrap();
@@ -263,6 +264,7 @@ fn the_last_dot_is_the_tips_mark_read_once_by_the_camera() {
         hidden: vec![],
         bench: vec![],
         board: false,
+        ..Scenario::default()
     };
     let dir = std::env::temp_dir().join(format!("finrs-rig-tipmark-{}", std::process::id()));
     write_scenario(&s, &dir).unwrap();

@@ -26,6 +26,7 @@ fn run(
         hidden: hidden.to_vec(),
         bench: bench.to_vec(),
         board: false,
+        ..Scenario::default()
     };
     let dir = std::env::temp_dir().join(format!("finrs-off-class-{seed}-{}", std::process::id()));
     let expected = write_scenario(&s, &dir).unwrap();

@@ -9,7 +9,9 @@ use anyhow::Context;
 use clap::Parser;
 use finrs_rig::expect::{names_given, score, Expected};
 use finrs_rig::runner::{each_session, SweepArgs};
-use finrs_rig::sweep::{csv, expected_of, markdown, plan, write_scenario, Outcome, Scenario};
+use finrs_rig::sweep::{
+    csv, expected_of, markdown, plan, plan_lab, write_scenario, Outcome, Scenario,
+};
 
 /// Writes and diagnoses off-class rig sessions, one seed each, and counts
 /// what the diagnosis names against what each session holds.
@@ -34,6 +36,16 @@ struct Cli {
     /// sweep's plan), e.g. to look again at the sessions it got wrong.
     #[arg(long, value_delimiter = ',')]
     only: Vec<u64>,
+    /// The lab sweep (`sweep::plan_lab`, docs/rig.md "A lab-like bench"):
+    /// the off-class strip on the lab bench, alone or with one departure,
+    /// on the short protocol or the lab's own, and the ideal strip with
+    /// drift alone (seeds from 20 000 are its own).
+    #[arg(long)]
+    lab: bool,
+    /// Lab artefacts left out of every lab session, comma-separated (e.g.
+    /// `readback`, for a reader that refuses a DAQ's rests).
+    #[arg(long, value_delimiter = ',', requires = "lab")]
+    lab_without: Vec<String>,
 }
 
 /// What `finrs diagnose` said of one session, as kept in OUT/results so
@@ -188,7 +200,25 @@ fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     cli.run.check()?;
     std::fs::create_dir_all(cli.out.join("results"))?;
-    let mut scenarios = plan(cli.run.first_seed, cli.run.sessions);
+    if let Some(w) = cli
+        .lab_without
+        .iter()
+        .find(|w| !finrs_rig::LAB_ARTEFACTS.contains(&w.as_str()))
+    {
+        anyhow::bail!(
+            "--lab-without `{w}`: the lab bench has {:?}",
+            finrs_rig::LAB_ARTEFACTS
+        );
+    }
+    let mut scenarios = if cli.lab {
+        let mut p = plan_lab(cli.run.first_seed, cli.run.sessions);
+        for s in &mut p {
+            s.lab_without = cli.lab_without.clone();
+        }
+        p
+    } else {
+        plan(cli.run.first_seed, cli.run.sessions)
+    };
     if let Some(s) = cli
         .only
         .iter()
