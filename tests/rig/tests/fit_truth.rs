@@ -41,8 +41,12 @@ fn a_large_deflection_fit_finds_the_strips_stiffness_and_circuit() {
     let from_data = fitter.fit(&all, &effects, None, fixed).unwrap();
     let either = fitter.fit_from_either_start(&all, &effects, fixed).unwrap();
     std::fs::remove_dir_all(&dir).ok();
-    // The lower of the two by the cost both descents minimised.
-    assert!(profile_cost(&either.score) <= profile_cost(&from_data.score));
+    // The lower of the two by the cost both descents minimised, to the
+    // last digits two descents to the same point can differ in (the race
+    // keeps either where the ends differ by less than a millionth; with
+    // the drift's projection this seed's two ends differ by 1e-11).
+    let (kept, data) = (profile_cost(&either.score), profile_cost(&from_data.score));
+    assert!(kept <= data * (1.0 + 1e-9), "{kept} against {data}");
     let truth = truth_of(&s).unwrap();
     let off = |knob: &str, value: f64| (value - truth[knob]).abs() / truth[knob];
     let p = &either.spec.params;

@@ -9,7 +9,16 @@ use super::rests::BenchFinding;
 use crate::analysis::fit::Drift;
 use crate::recording::Channel;
 
-/// One finding per channel whose drift stands out of the noise in some
+/// The least range of a drift over a recording, in units of its
+/// channel's noise, that is reported: over the thousands of samples of a
+/// session, a slope of a tenth of the noise is significant, and a model
+/// that is not the strip (every real one) leaves that much slow misfit;
+/// a drift that moves a channel by less than three noise standard
+/// deviations is not worth a finding.
+pub const REPORTED_NOISES: f64 = 3.0;
+
+/// One finding per channel whose drift stands out of the noise
+/// ([`Drift::significant`]) by at least [`REPORTED_NOISES`] over some
 /// recording: its largest range, where, and in how many recordings.
 pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
     let mut by_channel: BTreeMap<String, Vec<&Drift>> = BTreeMap::new();
@@ -19,12 +28,16 @@ pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
     by_channel
         .into_iter()
         .filter_map(|(channel, ds)| {
-            let significant: Vec<&&Drift> = ds.iter().filter(|d| d.significant).collect();
+            let significant: Vec<&&Drift> = ds
+                .iter()
+                .filter(|d| d.significant && d.peak_to_peak_in_noise >= REPORTED_NOISES)
+                .collect();
             let worst = significant
                 .iter()
                 .max_by(|a, b| a.peak_to_peak_in_noise.total_cmp(&b.peak_to_peak_in_noise))?;
             let (scale, unit) = match worst.channel {
                 Channel::Force => (1e3, "mN"),
+                Channel::Current(_) => (1e3, "mA"),
                 _ => (1e3, "mm"),
             };
             let minutes = worst.span_s / 60.0;
@@ -75,6 +88,9 @@ mod tests {
             drift("b.csv", Channel::DotY(0), 3e-3, true),
             drift("c.csv", Channel::DotY(0), 9e-3, false),
             drift("a.csv", Channel::TipX, 1e-5, false),
+            // Significant over a session's samples, but a tenth of a
+            // millimetre: no finding.
+            drift("a.csv", Channel::DotY(1), 1e-4, true),
         ]);
         assert_eq!(found.len(), 1);
         let f = &found[0];

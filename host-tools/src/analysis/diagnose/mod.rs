@@ -36,7 +36,7 @@
 //! Bench imperfections are not model effects: mains hum and coloured
 //! sensor noise, seen in the opening rests ([`rests`]), and drift, the
 //! strip's own curl or a sensor's wandering zero, fitted beside every
-//! model on each camera and load-cell channel ([`drift`]), are reported
+//! model on each measured channel ([`drift`]), are reported
 //! as bench findings beside the verdict, never as a catalogue name.
 
 pub mod analyses;

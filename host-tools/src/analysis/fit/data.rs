@@ -1,5 +1,5 @@
 //! What a fit compares: per recording, each measured channel at the rows
-//! where it was sampled, its rest offset removed, and its noise level.
+//! where it was sampled, taken from its opening rest, and its noise level.
 
 use crate::analysis::median::median;
 use crate::model::predict::Traces;
@@ -56,7 +56,7 @@ pub struct Target {
     pub channel: Channel,
     /// Rows where it was sampled.
     pub rows: Vec<usize>,
-    /// Its values there, minus the rest offset for camera channels.
+    /// Its values there, minus their mean over the opening rest.
     pub values: Vec<f64>,
     /// Noise level of its sensor (pooled over the session), in its unit.
     pub sigma: f64,
@@ -204,12 +204,15 @@ fn targets_of(
         } else {
             rest.iter().sum::<f64>() / rest.len() as f64
         };
+        // Every channel from its own opening rest: the camera measures
+        // from a rest shape that brushing can leave off by a fraction of a
+        // millimetre, a load cell from its tare, a shunt amplifier from a
+        // zero that wanders; the opening rest shows each (and the drift
+        // since it is fitted beside the model: `drift.rs`).
+        for v in &mut vals {
+            *v -= mean;
+        }
         if ch.is_camera() {
-            // The camera measures from a rest shape that brushing can leave
-            // off by a fraction of a millimetre: the opening rest shows it.
-            for v in &mut vals {
-                *v -= mean;
-            }
             for &i in &rows {
                 camera_rows[i] = true;
             }

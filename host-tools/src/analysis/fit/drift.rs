@@ -2,21 +2,29 @@
 //! drive does not explain (docs/FORMAT.md, bench imperfections). A real
 //! strip slowly curls by itself over minutes with no signal, by
 //! millimetres, either way; a camera's, a laser's or a load cell's zero
-//! wanders. Left in the residuals, a fit turns it into creep (a pole
+//! wanders, and so does a current amplifier's. Left in the residuals, a
+//! fit turns it into creep (a pole
 //! near 0, an integrator) or into a softer beam, and every standard error
 //! drowns in it.
 //!
 //! A drift is slow on the *session's* clock, not on a recording's: the
-//! strip curls on between recordings. So each camera and load-cell
-//! channel gets, over the recordings fitted together, an offset of its
-//! own in each recording (the rest shape a brush leaves, a tare) and one
-//! polynomial in session time they share, at least a line, which can bend
-//! once per [`DRIFT_SCALE_S`] (degree `1 + ⌊span/60 s⌋` over a span of
-//! the session, at most [`DRIFT_MAX_DEGREE`]). Its shortest feature is
-//! about a minute,
-//! far slower than the charging (`R1·C`, tens of milliseconds) and the
-//! relaxation the session can show, whose pole the fit keeps at or above
-//! `1/DRIFT_SCALE_S` (`space.rs`): what is slower than a minute is drift.
+//! strip curls on between recordings. Every channel is taken relative to
+//! its own opening rest (a camera's rest shape, which a brush can leave
+//! off, a load cell's tare, a shunt amplifier's zero: `data.rs`), so a
+//! drift is what moved since that rest. Over the recordings fitted
+//! together, each measured channel gets one polynomial in session time
+//! they share, at least a line, which can bend once per
+//! [`DRIFT_SCALE_S`] (degree `1 + ⌊span/60 s⌋` over a span of the
+//! session, at most [`DRIFT_MAX_DEGREE`]), each recording's part of it
+//! taken from its mean over that recording's rest. Its shortest feature
+//! is about a minute, far slower than the charging (`R1·C`, tens of
+//! milliseconds) and the relaxation the session can show, whose pole the
+//! fit keeps at or above `1/DRIFT_SCALE_S` (`space.rs`): what is slower
+//! than a minute is drift. An offset free in each recording, in place
+//! of its rest's, let a fit trade the offset against the slow part of
+//! the response: a fit of the virtual bench's strip then held a 30 s step
+//! 8.2 % off at its end, against 4.3 % with the rest as the reference
+//! (`host-tools/tests/virtual_bench.rs`, `a_held_step_from_a_fit_...`).
 //! A polynomial in each recording's own time would let a short
 //! recording's slope take any slow response the drive gives (a
 //! back-relaxation over a 3 s hold was absorbed whole): shared, a slope
@@ -28,18 +36,23 @@
 //! Drift is fitted jointly with the model by variable projection: the
 //! residuals, and so every Jacobian taken of them, are those left after
 //! the least-squares drift is removed (Golub and Pereyra). The currents
-//! get none: their steady part is the leak the electrochemistry shows in.
+//! have one too: a shunt amplifier's zero wanders as a camera's does
+//! (each recording's own offset alone was 1.75 times the currents' noise
+//! floor on the rig's lab bench). Their leak, the steady current under a
+//! held voltage that the electrochemistry shows in, is read where the
+//! drive switches, which no drift can follow.
 //!
 //! ```
 //! use finrs::analysis::fit::DriftBasis;
 //! // Two recordings of 20 s at 10 rows/s, half a minute apart on the
-//! // session's clock: an offset each and a shared line, removed exactly.
+//! // session's clock, each opening with 1 s at rest: a shared line, each
+//! // recording's part taken from its rest's mean, removed exactly.
 //! let a: Vec<f64> = (0..200).map(|i| i as f64 * 0.1).collect();
 //! let b: Vec<f64> = a.iter().map(|t| t + 30.0).collect();
-//! let basis = DriftBasis::new(&[&a, &b], true);
+//! let basis = DriftBasis::new(&[&a, &b], &[10, 10], true);
 //! assert_eq!(basis.degree(), 1);
-//! let mut ra: Vec<f64> = a.iter().map(|t| 0.5 - 0.01 * t).collect();
-//! let mut rb: Vec<f64> = b.iter().map(|t| 0.9 - 0.01 * t).collect();
+//! let mut ra: Vec<f64> = a.iter().map(|t| -0.01 * (t - 0.45)).collect();
+//! let mut rb: Vec<f64> = a.iter().map(|t| -0.01 * (t - 0.45)).collect();
 //! basis.remove(&mut [&mut ra, &mut rb]);
 //! assert!(ra.iter().chain(&rb).all(|x| x.abs() < 1e-9));
 //! ```
@@ -52,33 +65,43 @@ pub const DRIFT_SCALE_S: f64 = 60.0;
 pub const DRIFT_MAX_DEGREE: usize = 24;
 
 /// An orthonormal basis, over the samples of one channel in several
-/// recordings ("members"), of an offset per member and the polynomials
-/// of degree 1 to [`DriftBasis::degree`] in time: its columns `q_j`
-/// satisfy `q_iᵀ q_j = δ_ij` on those samples.
+/// recordings ("members"), of the polynomials of degree 1 to
+/// [`DriftBasis::degree`] in time, each taken relative to its mean over
+/// each member's opening rest: the data are taken relative to their own
+/// rest (a camera's rest shape, a load cell's tare, a shunt's zero), so a
+/// drift is what moved since. A member whose rest holds no sample has a
+/// free offset instead. Its columns `q_j` satisfy `q_iᵀ q_j = δ_ij` on
+/// those samples.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DriftBasis {
     /// Samples per member.
     lens: Vec<usize>,
+    /// Members with a free offset (no sample in their rest).
+    free: Vec<bool>,
     /// The polynomials' degree.
     degree: usize,
     /// The polynomial columns one after the other, each over every
-    /// member's samples in turn; the offsets are kept implicit (a
-    /// member's mean).
+    /// member's samples in turn, orthogonal to the free offsets (kept
+    /// implicit: a member's mean).
     q: Vec<f64>,
 }
 
 impl DriftBasis {
     /// The basis over members sampled at `times` (each increasing, on
-    /// one clock): with `shared`, one polynomial over all of them, of
-    /// degree `1 + ⌊span/60 s⌋`; without, the members must be one, and the
-    /// degree is `⌊span/60 s⌋`.
+    /// one clock), whose first `rests[m]` samples are member `m`'s opening
+    /// rest: with `shared`, one polynomial over all of them, of degree
+    /// `1 + ⌊span/60 s⌋`; without, the members must be one, and the degree
+    /// is `⌊span/60 s⌋`.
     ///
     /// # Panics
-    /// If not `shared` and there is not exactly one member.
-    pub fn new(times: &[&[f64]], shared: bool) -> DriftBasis {
+    /// If not `shared` and there is not exactly one member, or if `rests`
+    /// is not one count per member.
+    pub fn new(times: &[&[f64]], rests: &[usize], shared: bool) -> DriftBasis {
         assert!(shared || times.len() == 1, "one member unless shared");
+        assert_eq!(times.len(), rests.len(), "one rest per member");
         let lens: Vec<usize> = times.iter().map(|t| t.len()).collect();
         let total: usize = lens.iter().sum();
+        let free: Vec<bool> = rests.iter().map(|&r| r == 0).collect();
         let (lo, hi) = times
             .iter()
             .flat_map(|t| t.iter())
@@ -104,13 +127,15 @@ impl DriftBasis {
             .collect();
         let mut basis = DriftBasis {
             lens,
+            free,
             degree: 0,
             q: Vec::with_capacity(degree * total),
         };
         // Legendre polynomials on [-1, 1] (well conditioned on evenly
-        // spread samples), made orthogonal to the offsets and to each
-        // other over the samples themselves (twice: gaps and the pauses
-        // between recordings leave them unevenly spread).
+        // spread samples), each member's taken from its rest's mean, then
+        // made orthogonal to the free offsets and to each other over the
+        // samples themselves (twice: gaps and the pauses between
+        // recordings leave them unevenly spread).
         let (mut p_prev, mut p) = (vec![0.0; total], vec![1.0; total]);
         for n in 0..degree {
             // (n + 1) P_{n+1} = (2n + 1) x P_n − n P_{n−1}.
@@ -124,6 +149,16 @@ impl DriftBasis {
                 .collect();
             p_prev = std::mem::replace(&mut p, next);
             let mut col = p.clone();
+            let mut at = 0;
+            for (&len, &rest) in basis.lens.iter().zip(rests) {
+                let part = &mut col[at..at + len];
+                let rest = rest.min(len);
+                if rest > 0 {
+                    let mean = part[..rest].iter().sum::<f64>() / rest as f64;
+                    part.iter_mut().for_each(|v| *v -= mean);
+                }
+                at += len;
+            }
             for _ in 0..2 {
                 basis.remove_columns(&mut col);
             }
@@ -138,15 +173,15 @@ impl DriftBasis {
         basis
     }
 
-    /// The shared polynomial's degree (0: offsets alone).
+    /// The shared polynomial's degree (0: no drift but free offsets).
     pub fn degree(&self) -> usize {
         self.degree
     }
 
-    /// The degrees of freedom the drift takes: an offset per member and
-    /// the polynomial's columns.
+    /// The degrees of freedom the drift takes: the free offsets and the
+    /// polynomial's columns.
     pub fn columns(&self) -> usize {
-        self.lens.len() + self.degree
+        self.free.iter().filter(|&&f| f).count() + self.degree
     }
 
     /// The samples of all members, end to end.
@@ -154,14 +189,16 @@ impl DriftBasis {
         self.lens.iter().sum()
     }
 
-    /// Removes the offsets and the polynomial columns built so far from
-    /// `x`, one value per sample of every member end to end.
+    /// Removes the free offsets and the polynomial columns built so far
+    /// from `x`, one value per sample of every member end to end.
     fn remove_columns(&self, x: &mut [f64]) {
         let mut at = 0;
-        for &len in &self.lens {
-            let part = &mut x[at..at + len];
-            let mean = part.iter().sum::<f64>() / len.max(1) as f64;
-            part.iter_mut().for_each(|v| *v -= mean);
+        for (&len, &free) in self.lens.iter().zip(&self.free) {
+            if free {
+                let part = &mut x[at..at + len];
+                let mean = part.iter().sum::<f64>() / len.max(1) as f64;
+                part.iter_mut().for_each(|v| *v -= mean);
+            }
             at += len;
         }
         let total = self.total();
@@ -175,7 +212,7 @@ impl DriftBasis {
 
     /// Removes from the members' residuals `parts` (one value per sample,
     /// member by member) their least-squares drift: `r ← r − Q Qᵀ r`.
-    /// Returns the polynomial's share of `‖r‖²` (the offsets' not
+    /// Returns the polynomial's share of `‖r‖²` (free offsets not
     /// counted), what tells a drift from noise.
     ///
     /// # Panics
@@ -185,9 +222,11 @@ impl DriftBasis {
         for (p, &len) in parts.iter().zip(&self.lens) {
             assert_eq!(p.len(), len, "one residual per sample");
         }
-        for p in parts.iter_mut() {
-            let mean = p.iter().sum::<f64>() / p.len().max(1) as f64;
-            p.iter_mut().for_each(|v| *v -= mean);
+        for (p, &free) in parts.iter_mut().zip(&self.free) {
+            if free {
+                let mean = p.iter().sum::<f64>() / p.len().max(1) as f64;
+                p.iter_mut().for_each(|v| *v -= mean);
+            }
         }
         let total = self.total();
         let mut explained = 0.0;
@@ -217,24 +256,24 @@ impl DriftBasis {
 
     /// The drift on the members' residuals `r = (ŷ − y)/σ` before its
     /// removal, in `σ` units of `y − ŷ`: per member, the range of the
-    /// shared polynomial over its samples; and whether the polynomial
-    /// stands out of the noise (the sum of squares it takes beyond the
-    /// 99.9 % point of `χ²` with as many degrees of freedom as it has
-    /// columns: what white noise alone would give it).
+    /// fitted drift over its samples; and whether the polynomial stands
+    /// out of the noise (the sum of squares it takes beyond the 99.9 %
+    /// point of `χ²` with as many degrees of freedom as it has columns:
+    /// what white noise alone would give it).
     pub fn measure(&self, parts: &[&[f64]]) -> (Vec<f64>, bool) {
         let mut left: Vec<Vec<f64>> = parts.iter().map(|p| p.to_vec()).collect();
         let mut refs: Vec<&mut Vec<f64>> = left.iter_mut().collect();
         let explained = self.remove(&mut refs);
-        // The polynomial alone: what the removal took, less each member's
-        // offset (its mean), which is not drift.
+        // A free offset is constant over its member: no part of a range.
         let ranges = parts
             .iter()
             .zip(&left)
             .map(|(p, l)| {
-                let taken: Vec<f64> = p.iter().zip(l).map(|(a, b)| a - b).collect();
-                let (lo, hi) = taken
+                let (lo, hi) = p
                     .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    .zip(l)
+                    .map(|(a, b)| a - b)
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
                         (lo.min(x), hi.max(x))
                     });
                 if hi >= lo {
@@ -282,71 +321,64 @@ mod tests {
         (0..n).map(|i| from_s + i as f64 * dt_s).collect()
     }
 
-    /// The columns, offsets included, made explicit.
-    fn explicit(b: &DriftBasis) -> Vec<Vec<f64>> {
-        let total = b.total();
-        let mut cols = Vec::new();
-        let mut at = 0;
-        for &len in &b.lens {
-            let mut c = vec![0.0; total];
-            c[at..at + len].fill(1.0 / (len as f64).sqrt());
-            cols.push(c);
-            at += len;
-        }
-        cols.extend(b.q.chunks_exact(total).map(<[f64]>::to_vec));
-        cols
-    }
-
     #[test]
     fn the_degree_follows_the_span() {
-        let one = |n, dt| DriftBasis::new(&[&times(n, dt, 0.0)], false).degree();
+        let one = |n, dt| DriftBasis::new(&[&times(n, dt, 0.0)], &[1], false).degree();
         assert_eq!(one(5000, 0.01), 0);
         assert_eq!(one(6001, 0.01), 1);
         assert_eq!(one(30_001, 0.01), 5);
         assert_eq!(one(200_000, 0.01), 24);
         // Too few samples: some residual is left.
         assert_eq!(one(5, 100.0), 2);
-        assert_eq!(DriftBasis::new(&[&[]], false).columns(), 1);
+        assert_eq!(DriftBasis::new(&[&[]], &[0], false).columns(), 1);
         // Two short recordings four minutes apart share a quintic; a
         // minute apart, a quadratic.
         let (a, b) = (times(800, 0.01, 0.0), times(800, 0.01, 240.0));
-        assert_eq!(DriftBasis::new(&[&a, &b], true).degree(), 5);
+        assert_eq!(DriftBasis::new(&[&a, &b], &[100, 100], true).degree(), 5);
         let b = times(800, 0.01, 60.0);
-        assert_eq!(DriftBasis::new(&[&a, &b], true).degree(), 2);
+        assert_eq!(DriftBasis::new(&[&a, &b], &[100, 100], true).degree(), 2);
     }
 
     #[test]
-    fn columns_are_orthonormal_over_members_and_gaps() {
+    fn columns_are_orthonormal_and_free_offsets_orthogonal_to_them() {
         // Five minutes at 100 rows/s with a minute out of range, and a
-        // second recording after a pause.
+        // second recording after a pause, whose rest the camera missed.
         let a: Vec<f64> = times(30_000, 0.01, 0.0)
             .into_iter()
             .filter(|&t| !(100.0..160.0).contains(&t))
             .collect();
         let b = times(9000, 0.01, 330.0);
-        let basis = DriftBasis::new(&[&a, &b], true);
+        let basis = DriftBasis::new(&[&a, &b], &[100, 0], true);
         assert_eq!(basis.degree(), 7);
-        let cols = explicit(&basis);
+        assert_eq!(basis.columns(), 8);
+        let total = basis.total();
+        let cols: Vec<&[f64]> = basis.q.chunks_exact(total).collect();
         for (i, ci) in cols.iter().enumerate() {
             for (j, cj) in cols.iter().enumerate() {
-                let dot: f64 = ci.iter().zip(cj).map(|(a, c)| a * c).sum();
+                let dot: f64 = ci.iter().zip(*cj).map(|(a, c)| a * c).sum();
                 let want = if i == j { 1.0 } else { 0.0 };
                 assert!((dot - want).abs() < 1e-10, "{i} {j}: {dot}");
             }
+            let on_b: f64 = ci[a.len()..].iter().sum();
+            assert!(on_b.abs() < 1e-10, "{i}: {on_b}");
         }
     }
 
     #[test]
-    fn a_drift_is_removed_and_measured_and_a_fast_step_kept() {
+    fn a_drift_since_each_rest_is_removed_and_measured_and_a_fast_step_kept() {
         let (a, b) = (times(12_001, 0.01, 0.0), times(6000, 0.01, 150.0));
-        let basis = DriftBasis::new(&[&a, &b], true);
+        let rest = 100;
+        let basis = DriftBasis::new(&[&a, &b], &[rest, rest], true);
         assert_eq!(basis.degree(), 4);
         let drift = |t: f64| 2e-3 - 3e-5 * t + 4e-7 * t * t - 1e-9 * t * t * t;
-        // Residuals of a model that misses the drift, in units of a noise
-        // of 0.05 mm (r = −drift/σ), each recording off by its own offset.
+        // The residuals of a model that misses the drift since each
+        // recording's rest, in units of a 0.05 mm noise (r = −drift/σ).
         let sigma = 5e-5;
-        let ra: Vec<f64> = a.iter().map(|&t| -(drift(t) + 1e-4) / sigma).collect();
-        let rb: Vec<f64> = b.iter().map(|&t| -(drift(t) - 3e-4) / sigma).collect();
+        let since_rest = |ts: &[f64]| -> Vec<f64> {
+            let mean = ts[..rest].iter().map(|&t| drift(t)).sum::<f64>() / rest as f64;
+            ts.iter().map(|&t| -(drift(t) - mean) / sigma).collect()
+        };
+        let (ra, rb) = (since_rest(&a), since_rest(&b));
         let (ranges, significant) = basis.measure(&[&ra, &rb]);
         assert!(significant);
         let range = |ts: &[f64]| {
@@ -358,6 +390,16 @@ mod tests {
         let (mut ra, mut rb) = (ra, rb);
         basis.remove(&mut [&mut ra, &mut rb]);
         assert!(ra.iter().chain(&rb).all(|x| x.abs() < 1e-9));
+        // A jump at the rest's end is no drift: its edge is left (a
+        // polynomial that bends once a minute can follow an offset held
+        // for minutes, not the jump into it).
+        let mut shifted: Vec<f64> = (0..a.len())
+            .map(|i| if i < rest { 0.0 } else { 1.0 })
+            .collect();
+        basis.remove(&mut [&mut shifted, &mut vec![0.0; b.len()]]);
+        let edge = shifted[rest..2 * rest].iter().sum::<f64>() / rest as f64
+            - shifted[..rest].iter().sum::<f64>() / rest as f64;
+        assert!(edge > 0.9, "{edge}");
         // A step held from 10 s to 70 s keeps its edges: the polynomial
         // cannot bend fast enough to follow them (its plateau, a minute
         // long, it can: what a drift of minutes hides).
@@ -379,7 +421,7 @@ mod tests {
     fn noise_alone_is_no_drift() {
         let a = times(6000, 0.01, 0.0);
         let b = times(6000, 0.01, 100.0);
-        let basis = DriftBasis::new(&[&a, &b], true);
+        let basis = DriftBasis::new(&[&a, &b], &[100, 100], true);
         let mut x = 12345u64;
         let mut unit = || {
             // Sums of twelve uniforms: near-Gaussian, unit variance.

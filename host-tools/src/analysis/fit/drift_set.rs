@@ -1,7 +1,8 @@
 //! The drift terms of a set of recordings fitted together: for each
-//! camera and load-cell channel, its samples in every recording of the
-//! set and their basis (`drift.rs`), on the session's clock where every
-//! recording gives its place on it, else one recording at a time.
+//! measured channel, its samples in every recording of the set and their
+//! basis (`drift.rs`), on the session's clock where every recording gives
+//! its place on it and two or more have the channel, else one recording
+//! at a time.
 
 use super::data::SessionTargets;
 use super::drift::DriftBasis;
@@ -33,7 +34,7 @@ impl DriftSet {
         let mut channels: Vec<Channel> = Vec::new();
         for &i in recordings {
             for t in &targets.recordings[i].targets {
-                if !matches!(t.channel, Channel::Current(_)) && !channels.contains(&t.channel) {
+                if !channels.contains(&t.channel) {
                     channels.push(t.channel);
                 }
             }
@@ -51,6 +52,17 @@ impl DriftSet {
                 .iter()
                 .map(|&row| t0 + r.rec.t_s[row])
                 .collect()
+        };
+        // Samples in the recording's opening rest, which its values are
+        // taken relative to (`data.rs`).
+        let rest = |(k, j): (usize, usize)| -> usize {
+            let i = recordings[k];
+            let rest_rows = session.recordings[i].rest_rows;
+            targets.recordings[i].targets[j]
+                .rows
+                .iter()
+                .take_while(|&&row| row < rest_rows)
+                .count()
         };
         let mut groups = Vec::new();
         for ch in channels {
@@ -70,14 +82,15 @@ impl DriftSet {
             if on_session_clock && members.len() > 1 {
                 let t: Vec<Vec<f64>> = members.iter().map(|&m| times(m)).collect();
                 let refs: Vec<&[f64]> = t.iter().map(Vec::as_slice).collect();
+                let rests: Vec<usize> = members.iter().map(|&m| rest(m)).collect();
                 groups.push(Group {
-                    basis: DriftBasis::new(&refs, true),
+                    basis: DriftBasis::new(&refs, &rests, true),
                     members,
                 });
             } else {
                 for m in members {
                     groups.push(Group {
-                        basis: DriftBasis::new(&[&times(m)], false),
+                        basis: DriftBasis::new(&[&times(m)], &[rest(m)], false),
                         members: vec![m],
                     });
                 }

@@ -158,7 +158,7 @@ impl FitResult {
 pub struct Fitter<'a> {
     pub(super) session: &'a Session,
     targets: SessionTargets,
-    /// Whether camera and load-cell channels have drift terms.
+    /// Whether measured channels have drift terms.
     drift: bool,
     /// The drift terms of each set of recordings fitted or scored
     /// together, built once per set.
@@ -167,7 +167,7 @@ pub struct Fitter<'a> {
 
 impl<'a> Fitter<'a> {
     /// Prepares `session`, with the bench's drift on every camera and
-    /// load-cell channel fitted jointly (`drift.rs`).
+    /// load-cell channel and current fitted jointly (`drift.rs`).
     pub fn new(session: &'a Session) -> Fitter<'a> {
         Self::with_drift(session, true)
     }
@@ -304,7 +304,7 @@ impl<'a> Fitter<'a> {
         Ok(parts.into_iter().flatten().flatten().flatten().collect())
     }
 
-    /// The drift fitted on every camera and load-cell channel of
+    /// The drift fitted on every measured channel of
     /// `recordings` under `spec` (`drift.rs`), channel by channel of each
     /// recording.
     pub fn drifts(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Vec<Drift>, FitError> {
@@ -352,17 +352,23 @@ impl<'a> Fitter<'a> {
     }
 
     fn score_here(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Score, FitError> {
-        let mut res = self.raw_residuals(recordings, spec)?;
+        let raw = self.raw_residuals(recordings, spec)?;
+        let mut res = raw.clone();
         self.drift_set(recordings).remove(&mut res);
         let mut channels = Vec::new();
-        for (&i, res) in recordings.iter().zip(res) {
+        for ((&i, res), raw) in recordings.iter().zip(res).zip(raw) {
             let rec = &self.session.recordings[i];
-            for (t, r) in self.targets.recordings[i]
-                .targets
-                .iter()
-                .zip(res.into_iter().flatten())
-            {
-                channels.push(ChannelFit::new(&rec.name, t, &r, &rec.rec.v_v, rec.dt_s));
+            let targets = &self.targets.recordings[i].targets;
+            let both = res.into_iter().flatten().zip(raw.into_iter().flatten());
+            for (t, (r, raw)) in targets.iter().zip(both) {
+                channels.push(ChannelFit::new(
+                    &rec.name,
+                    t,
+                    &r,
+                    &raw,
+                    &rec.rec.v_v,
+                    rec.dt_s,
+                ));
             }
         }
         Ok(Score::new(channels))

@@ -95,11 +95,22 @@ impl ChannelFit {
         }
     }
 
-    /// From a target, its weighted residuals `r = (ŷ − y)/σ`, the
-    /// recording's voltages per row and segment and its sample time.
-    pub fn new(recording: &str, t: &Target, r: &[f64], v_v: &Voltages, dt_s: f64) -> ChannelFit {
-        let model = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
-        let e = nrmse(&t.values, model.clone());
+    /// From a target, its weighted residuals `r = (ŷ − y)/σ` with the
+    /// drift removed and `raw` without (the model alone: `ŷ` is rebuilt
+    /// from them), the recording's voltages per row and segment and its
+    /// sample time. The fit (`nrmse`) is the model's with the drift
+    /// beside it; whether it is zero, and its gain, the model's alone.
+    pub fn new(
+        recording: &str,
+        t: &Target,
+        r: &[f64],
+        raw: &[f64],
+        v_v: &Voltages,
+        dt_s: f64,
+    ) -> ChannelFit {
+        let with_drift = t.values.iter().zip(r).map(|(y, r)| y + r * t.sigma);
+        let e = nrmse(&t.values, with_drift);
+        let model = t.values.iter().zip(raw).map(|(y, r)| y + r * t.sigma);
         // ŷ is rebuilt from y and the residual, so "zero" is up to rounding.
         let scale = t.values.iter().fold(0.0f64, |m, y| m.max(y.abs()));
         let model_is_zero = model.clone().fold(0.0f64, |m, y| m.max(y.abs())) <= 1e-9 * scale;
