@@ -450,3 +450,77 @@ fn drift_alone_is_the_bench_not_an_effect() {
     let p = d.baseline.spec.params.p_per_s;
     assert!((p - 0.12).abs() < 0.03, "{p}");
 }
+
+/// Recordings that open while the strip still relaxes from the one before
+/// (a pause shorter than a few `1/p`): each free recording after the first
+/// carries a relaxation of 0.8 mm at the tip, either way, decaying at the
+/// strip's own pole from its start (and the blocked one a force doing the
+/// same), which its opening rest shows. It is the strip's state, not an
+/// effect: modelled from each opening rest, the verdict is `none` and the
+/// carry-over is reported.
+#[test]
+fn a_recording_that_opens_still_moving_is_carried_over() {
+    use finrs::recording::{Channel, Recording};
+    let spec = sample(Extensions::NONE);
+    let dir = std::env::temp_dir().join(format!("finrs-diag-carry-{}", std::process::id()));
+    common::write_session(&dir, &spec, &common::short_protocol(), 21);
+    let p = spec.params.p_per_s;
+    let mut carried = Vec::new();
+    for (n, path) in common::recordings_in(&dir).into_iter().enumerate().skip(1) {
+        let mut rec = Recording::read(&path).unwrap();
+        let length_m = rec.meta.length_m;
+        let dots = rec.meta.dots_s_m.clone().unwrap_or_default();
+        // Alternating in sign. (At 0.5 mm a 1.5 s rest of 45 frames
+        // shows the decay at 3 standard errors, short of the 4 that call
+        // a rest moving.)
+        let tip_m = if n % 2 == 0 { 8e-4 } else { -8e-4 };
+        let t_s = rec.t_s.clone();
+        for (ch, values) in &mut rec.channels {
+            let share = match *ch {
+                Channel::TipY => 1.0,
+                Channel::DotY(j) => (dots[j] / length_m).powi(2),
+                // A held tip: the force the same carried moment presses
+                // (1 mN for 0.8 mm).
+                Channel::Force => 1e-3 / 8e-4,
+                _ => 0.0,
+            };
+            for (v, &t) in values.iter_mut().zip(&t_s) {
+                if let Some(v) = v {
+                    *v += share * tip_m * (-p * t).exp();
+                }
+            }
+        }
+        rec.write(&path).unwrap();
+        carried.push(path.file_name().unwrap().to_string_lossy().into_owned());
+    }
+    let session = Session::read(&dir).unwrap();
+    let fixed = ModelFile::main_m_2006()
+        .spec_for(&session.geometry())
+        .unwrap();
+    let d = diagnose(&session, fixed, &|_| {}).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let v = &d.verdict;
+    eprintln!(
+        "carry: verdict {}, causes {:?}, p {:.4}/s, bench {:#?}",
+        v.verdict, v.causes, d.baseline.spec.params.p_per_s, v.rest.bench
+    );
+    assert_eq!(v.verdict, "none", "{v:#?}");
+    let found = v
+        .rest
+        .bench
+        .iter()
+        .find(|b| b.what == "carry-over")
+        .unwrap_or_else(|| panic!("{:#?}", v.rest.bench));
+    // Every free recording carried is found (the blocked one's force may
+    // be too small against its noise to show).
+    for name in carried.iter().filter(|n| n.contains("free")) {
+        assert!(
+            found.detail.contains(name.as_str()),
+            "{name}: {}",
+            found.detail
+        );
+    }
+    assert!(!found
+        .detail
+        .contains(&format!("{}.csv", common::short_protocol()[0].name)));
+}

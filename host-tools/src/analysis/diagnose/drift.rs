@@ -66,6 +66,23 @@ pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
         .collect()
 }
 
+/// The recordings that open while the strip still moves, if any, as one
+/// finding: the relaxation the recording before left, fitted beside the
+/// model (`fit/drift_set.rs`), not a rest at 0.
+pub fn carry_over(names: &[String]) -> Option<BenchFinding> {
+    (!names.is_empty()).then(|| BenchFinding {
+        what: "carry-over".to_string(),
+        channel: "camera and load cell".to_string(),
+        mains_hz: None,
+        strength: names.len() as f64,
+        detail: format!(
+            "{} of the recordings open while the strip still moves ({}): the relaxation the recording before left, decaying at the model's pole, fitted beside it from each one's opening rest",
+            names.len(),
+            names.join(", ")
+        ),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

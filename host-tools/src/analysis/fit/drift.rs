@@ -189,9 +189,15 @@ impl DriftBasis {
         self.lens.iter().sum()
     }
 
-    /// Removes the free offsets and the polynomial columns built so far
-    /// from `x`, one value per sample of every member end to end.
-    fn remove_columns(&self, x: &mut [f64]) {
+    /// Whether member `m` has a free offset (no sample in its rest).
+    pub fn is_free(&self, m: usize) -> bool {
+        self.free[m]
+    }
+
+    /// Removes the free offsets and the polynomial columns (those built so
+    /// far, while building) from `x`, one value per sample of every member
+    /// end to end.
+    pub fn remove_columns(&self, x: &mut [f64]) {
         let mut at = 0;
         for (&len, &free) in self.lens.iter().zip(&self.free) {
             if free {

@@ -16,12 +16,24 @@ struct Group {
     members: Vec<(usize, usize)>,
     /// The basis over the members' samples.
     basis: DriftBasis,
+    /// Per member, where its recording opens while the strip still moves
+    /// (and the channel is the beam's): its samples' times from the
+    /// recording's first row, s, and how many lie in its opening rest.
+    carry: Vec<Option<(Vec<f64>, usize)>>,
 }
 
-/// The drift terms of one set of recordings.
+/// Standard errors by which a line through an opening rest must stray
+/// from flat for the strip to be moving there: white noise gets that far
+/// about once in 16 000 rests.
+pub const MOVING_REST_Z: f64 = 4.0;
+
+/// The drift terms of one set of recordings, and the carry-over of those
+/// that open while the strip still moves.
 #[derive(Debug, Default)]
 pub struct DriftSet {
     groups: Vec<Group>,
+    /// Positions in the set of the recordings that open moving.
+    moving: Vec<usize>,
 }
 
 impl DriftSet {
@@ -64,6 +76,34 @@ impl DriftSet {
                 .take_while(|&&row| row < rest_rows)
                 .count()
         };
+        // A recording whose rest shows the beam moving (a line through a
+        // camera or load-cell channel's rest samples beyond
+        // MOVING_REST_Z standard errors): the strip still relaxes from
+        // the recording before.
+        let moving: Vec<usize> = recordings
+            .iter()
+            .enumerate()
+            .filter(|&(_, &i)| {
+                let r = &session.recordings[i];
+                targets.recordings[i].targets.iter().any(|t| {
+                    !matches!(t.channel, Channel::Current(_))
+                        && rest_slope_z(t, &r.rec.t_s, r.rest_rows).abs() > MOVING_REST_Z
+                })
+            })
+            .map(|(k, _)| k)
+            .collect();
+        let carry = |(k, j): (usize, usize)| -> Option<(Vec<f64>, usize)> {
+            let i = recordings[k];
+            let r = &session.recordings[i];
+            let t = &targets.recordings[i].targets[j];
+            (moving.contains(&k) && !matches!(t.channel, Channel::Current(_))).then(|| {
+                let t0 = r.rec.t_s[0];
+                (
+                    t.rows.iter().map(|&row| r.rec.t_s[row] - t0).collect(),
+                    rest((k, j)),
+                )
+            })
+        };
         let mut groups = Vec::new();
         for ch in channels {
             let members: Vec<(usize, usize)> = recordings
@@ -85,24 +125,36 @@ impl DriftSet {
                 let rests: Vec<usize> = members.iter().map(|&m| rest(m)).collect();
                 groups.push(Group {
                     basis: DriftBasis::new(&refs, &rests, true),
+                    carry: members.iter().map(|&m| carry(m)).collect(),
                     members,
                 });
             } else {
                 for m in members {
                     groups.push(Group {
                         basis: DriftBasis::new(&[&times(m)], &[rest(m)], false),
+                        carry: vec![carry(m)],
                         members: vec![m],
                     });
                 }
             }
         }
-        DriftSet { groups }
+        DriftSet { groups, moving }
+    }
+
+    /// Positions in the set of the recordings that open while the strip
+    /// still moves.
+    pub fn moving(&self) -> &[usize] {
+        &self.moving
     }
 
     /// Removes the drift from `residuals` (per recording of the set, per
     /// target; `None` for a target left out, whose channel's drift is then
-    /// left alone).
-    pub fn remove(&self, residuals: &mut [Vec<Option<Vec<f64>>>]) {
+    /// left alone), and the carry-over of the recordings that open
+    /// moving: the strip's relaxation left by the recording before,
+    /// decaying as `e^{−p t}` under the model's pole `p_per_s` (the charge
+    /// is gone within tens of milliseconds), an amplitude per channel
+    /// fitted jointly with the drift.
+    pub fn remove(&self, residuals: &mut [Vec<Option<Vec<f64>>>], p_per_s: f64) {
         for g in &self.groups {
             if g.members.iter().any(|&(k, j)| residuals[k][j].is_none()) {
                 continue;
@@ -115,6 +167,9 @@ impl DriftSet {
                 .collect();
             let mut refs: Vec<&mut Vec<f64>> = parts.iter_mut().collect();
             g.basis.remove(&mut refs);
+            if g.carry.iter().any(Option::is_some) {
+                g.remove_carry(&mut parts, p_per_s);
+            }
             for (&(k, j), part) in g.members.iter().zip(parts) {
                 residuals[k][j] = Some(part);
             }
@@ -141,4 +196,93 @@ impl DriftSet {
         }
         out
     }
+}
+
+impl Group {
+    /// Removes from `parts` (their drift already removed) the carry-over
+    /// columns `e^{−p t}` of the members that carry one, each from its
+    /// rest's mean (or its own mean, with a free offset), made orthogonal
+    /// to the drift's columns and to each other.
+    fn remove_carry(&self, parts: &mut [Vec<f64>], p_per_s: f64) {
+        let lens: Vec<usize> = parts.iter().map(Vec::len).collect();
+        let total: usize = lens.iter().sum();
+        let mut columns: Vec<Vec<f64>> = Vec::new();
+        let mut at = 0;
+        for (m, (carry, &len)) in self.carry.iter().zip(&lens).enumerate() {
+            if let Some((tau_s, rest)) = carry {
+                let mut c = vec![0.0; total];
+                let own = &mut c[at..at + len];
+                for (v, &t) in own.iter_mut().zip(tau_s) {
+                    *v = (-p_per_s * t).exp();
+                }
+                let from = if self.basis.is_free(m) {
+                    len
+                } else {
+                    (*rest).min(len)
+                };
+                if from > 0 {
+                    let mean = own[..from].iter().sum::<f64>() / from as f64;
+                    own.iter_mut().for_each(|v| *v -= mean);
+                }
+                // Twice, as the drift's own columns were made.
+                for _ in 0..2 {
+                    self.basis.remove_columns(&mut c);
+                    for q in &columns {
+                        let dot: f64 = q.iter().zip(&c).map(|(a, b)| a * b).sum();
+                        c.iter_mut().zip(q).for_each(|(v, a)| *v -= dot * a);
+                    }
+                }
+                let norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if norm > 1e-9 * (total as f64).sqrt() {
+                    c.iter_mut().for_each(|v| *v /= norm);
+                    columns.push(c);
+                }
+            }
+            at += len;
+        }
+        for q in &columns {
+            let mut dot = 0.0;
+            let mut at = 0;
+            for p in parts.iter() {
+                dot += q[at..at + p.len()]
+                    .iter()
+                    .zip(p)
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+                at += p.len();
+            }
+            let mut at = 0;
+            for p in parts.iter_mut() {
+                let len = p.len();
+                p.iter_mut()
+                    .zip(&q[at..at + len])
+                    .for_each(|(v, a)| *v -= dot * a);
+                at += len;
+            }
+        }
+    }
+}
+
+/// The slope of a line through target `t`'s samples in its recording's
+/// opening rest (rows before `rest_rows`, timed by `t_s`), in standard
+/// errors of its noise; 0 with fewer than three samples there.
+fn rest_slope_z(t: &super::data::Target, t_s: &[f64], rest_rows: usize) -> f64 {
+    let (x, y): (Vec<f64>, Vec<f64>) = t
+        .rows
+        .iter()
+        .zip(&t.values)
+        .take_while(|(&row, _)| row < rest_rows)
+        .map(|(&row, &v)| (t_s[row], v))
+        .unzip();
+    if x.len() < 3 || t.sigma <= 0.0 {
+        return 0.0;
+    }
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxx: f64 = x.iter().map(|x| (x - mx) * (x - mx)).sum();
+    if sxx <= 0.0 {
+        return 0.0;
+    }
+    let sxy: f64 = x.iter().zip(&y).map(|(x, y)| (x - mx) * (y - my)).sum();
+    (sxy / sxx) / (t.sigma / sxx.sqrt())
 }

@@ -219,7 +219,8 @@ impl<'a> Fitter<'a> {
     fn residuals_of(&self, index: usize, spec: &ModelSpec) -> Result<Vec<Vec<f64>>, FitError> {
         let mut res =
             vec![self.weighted(index, &self.traces(index, spec)?, |_| true, &Inflation::ONE)];
-        self.drift_set(&[index]).remove(&mut res);
+        self.drift_set(&[index])
+            .remove(&mut res, spec.params.p_per_s);
         Ok(res.remove(0).into_iter().flatten().collect())
     }
 
@@ -300,7 +301,8 @@ impl<'a> Fitter<'a> {
             })
             .collect();
         let mut parts = parts?;
-        self.drift_set(recordings).remove(&mut parts);
+        self.drift_set(recordings)
+            .remove(&mut parts, spec.params.p_per_s);
         Ok(parts.into_iter().flatten().flatten().flatten().collect())
     }
 
@@ -333,6 +335,20 @@ impl<'a> Fitter<'a> {
             .collect())
     }
 
+    /// The recordings of `recordings` that open while the strip still
+    /// moves (a line through a rest beyond [`MOVING_REST_Z`] standard
+    /// errors), whose carry-over from the recording before every fit
+    /// removes beside the drift.
+    ///
+    /// [`MOVING_REST_Z`]: super::drift_set::MOVING_REST_Z
+    pub fn opening_in_motion(&self, recordings: &[usize]) -> Vec<String> {
+        self.drift_set(recordings)
+            .moving()
+            .iter()
+            .map(|&k| self.session.recordings[recordings[k]].name.clone())
+            .collect()
+    }
+
     /// Every target's weighted residuals on `recordings` under `spec`,
     /// drift not removed, in the pool.
     fn raw_residuals(
@@ -354,7 +370,8 @@ impl<'a> Fitter<'a> {
     fn score_here(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Score, FitError> {
         let raw = self.raw_residuals(recordings, spec)?;
         let mut res = raw.clone();
-        self.drift_set(recordings).remove(&mut res);
+        self.drift_set(recordings)
+            .remove(&mut res, spec.params.p_per_s);
         let mut channels = Vec::new();
         for ((&i, res), raw) in recordings.iter().zip(res).zip(raw) {
             let rec = &self.session.recordings[i];
