@@ -224,12 +224,13 @@ impl<'a> Fitter<'a> {
     }
 
     /// The model's outputs on recording `index` (the camera only where it
-    /// looked).
+    /// looked), driven by what the strip saw (a contact fault from the
+    /// rest left it at rest: `SessionRecording::drive`).
     fn traces(&self, index: usize, spec: &ModelSpec) -> Result<Traces, FitError> {
         let r = &self.session.recordings[index];
         let rt = &self.targets.recordings[index];
         predict(
-            &r.rec,
+            r.drive(),
             &self.as_sampled(spec),
             FIT_ELEMENTS,
             r.dt_s,
@@ -286,7 +287,7 @@ impl<'a> Fitter<'a> {
                     Stage::Circuit => {
                         let r = &self.session.recordings[i];
                         Traces {
-                            currents_a: predict_currents(&r.rec, &self.as_sampled(spec), r.dt_s)
+                            currents_a: predict_currents(r.drive(), &self.as_sampled(spec), r.dt_s)
                                 .map_err(|source| FitError::Model {
                                     recording: r.name.clone(),
                                     source,
@@ -362,7 +363,13 @@ impl<'a> Fitter<'a> {
                 .iter()
                 .zip(res.into_iter().flatten())
             {
-                channels.push(ChannelFit::new(&rec.name, t, &r, &rec.rec.v_v, rec.dt_s));
+                channels.push(ChannelFit::new(
+                    &rec.name,
+                    t,
+                    &r,
+                    &rec.drive().v_v,
+                    rec.dt_s,
+                ));
             }
         }
         Ok(Score::new(channels))
