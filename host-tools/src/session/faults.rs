@@ -19,9 +19,11 @@ use crate::recording::{Channel, Recording, RestReading, REST_BAND_LIMIT_V, REST_
 /// read mid-slew, or a sine's rows, are not.
 pub const HOLD_ROWS: usize = 3;
 
-/// Rows between two held levels that a change may take (a slewed step
-/// read on its way): a slower change is a ramp, which drives its current
-/// gently and is not judged.
+/// Rows between two held levels that a change may take (a step read on
+/// its way) besides a slew's: rows that each move the voltage the
+/// change's way by more than a change's least step (a drive's slew
+/// limiter: 0.2 V a row at 200 V/s and 1 kHz). A slower change is a
+/// ramp, which drives its current gently and is not judged.
 pub const TRANSITION_ROWS: usize = 2;
 
 /// How many of its rest bands the current a change must push at once
@@ -265,12 +267,20 @@ struct Change {
 /// Segment `k`'s level changes in `rec`: between two holds of at least
 /// [`HOLD_ROWS`] rows each (every reading within twice the channel's rest
 /// band of the hold's first: two readings of one level differ by no
-/// more), at most [`TRANSITION_ROWS`] apart, whose levels differ by more
-/// than twice the band and than the format's line between a rest and a
-/// drive ([`REST_BAND_LIMIT_V`]).
+/// more), whose levels differ by more than twice the band and than the
+/// format's line between a rest and a drive ([`REST_BAND_LIMIT_V`]), the
+/// change's least step, and between which the voltage slews (every row
+/// moves it the change's way by more than that step) or takes at most
+/// [`TRANSITION_ROWS`] rows.
 fn level_changes(rec: &Recording, k: usize, rest: &RestReading) -> Vec<Change> {
     let v: Vec<f64> = rec.v_v.rows().map(|r| r[k]).collect();
     let width = 2.0 * rest.band_v();
+    let least = width.max(REST_BAND_LIMIT_V);
+    // Rows `from..to` each move the voltage by more than `least` the way
+    // of `sign` (the new level's first row may end a slew by less).
+    let slews = |from: usize, to: usize, sign: f64| {
+        (from.max(1)..to).all(|r| (v[r] - v[r - 1]) * sign > least)
+    };
     let mut holds: Vec<(Range<usize>, f64)> = Vec::new();
     let mut start = 0;
     while start < v.len() {
@@ -285,8 +295,11 @@ fn level_changes(rec: &Recording, k: usize, rest: &RestReading) -> Vec<Change> {
     }
     holds
         .windows(2)
-        .filter(|w| w[1].0.start - w[0].0.end <= TRANSITION_ROWS)
-        .filter(|w| (w[1].1 - w[0].1).abs() > width.max(REST_BAND_LIMIT_V))
+        .filter(|w| (w[1].1 - w[0].1).abs() > least)
+        .filter(|w| {
+            let (a, b) = (&w[0].0, &w[1].0);
+            b.start - a.end <= TRANSITION_ROWS || slews(a.end, b.start, w[1].1 - w[0].1)
+        })
         .map(|w| Change {
             row: w[0].0.end,
             settled: w[1].0.start,
@@ -657,6 +670,55 @@ mod tests {
         let out = kept_out(&faults, Channel::Current(0), 800);
         assert!(!out[349] && out[350] && out[799]);
         assert!(strip_drive(&rec, &faults).is_none());
+    }
+
+    /// A drive through a slew limiter (200 V/s at 1 kHz: a 2 V step over
+    /// 10 rows) whose contact lifted: judged as a step is.
+    #[test]
+    fn a_slewed_step_without_its_current_is_a_fault() {
+        let v = |r: usize| match r {
+            1500..=1509 => 0.2 * (r - 1499) as f64,
+            1510..=3999 => 2.0,
+            _ => 0.0,
+        };
+        // The contact closes at 2.5 s; good at 4 s (an unslewed return).
+        let i = |r: usize| {
+            let t = r as f64 * 1e-3;
+            let x = current(t, 2.0, 2.5, 4.0, 700.0);
+            Some(if r < 2500 { 0.0 } else { x })
+        };
+        let rec = recording(5000, 1e-3, v, i);
+        let faults = faults_of(&rec, 1500);
+        assert_eq!(faults.len(), 1, "{faults:?}");
+        assert_eq!(faults[0].rows, 1500..2500);
+        // The contact good, the current read a row late (before the row's
+        // voltage is applied): no fault.
+        let late = |r: usize| Some(current((r as f64 - 1.0) * 1e-3, 2.0, 1.5, 4.0, 700.0));
+        assert_eq!(faults_of(&recording(5000, 1e-3, v, late), 1500), []);
+    }
+
+    /// A slow ramp (0.2 V over 2 s) whose current, its capacitor's 10 µA
+    /// and a leak below the band, stays at the rest's: no change of level
+    /// that must push a current at once, so no fault, however the
+    /// session's steps respond.
+    #[test]
+    fn a_slow_ramp_with_a_quiet_current_is_no_fault() {
+        let v = |r: usize| {
+            daq_rest(r)
+                + match r {
+                    150..=349 => 0.2 * (r - 149) as f64 / 200.0,
+                    350..=599 => 0.2,
+                    650..=799 => 3.0,
+                    _ => 0.0,
+                }
+        };
+        // The drop from 0.2 V at 6 s, and a step of 3 V from 6.5 s to 8 s.
+        let i = |r: usize| {
+            let t = r as f64 * 0.01;
+            Some(current(t, 0.2, f64::INFINITY, 6.0, 1e6) + current(t, 3.0, 6.5, 8.0, 700.0))
+        };
+        let rec = recording(900, 0.01, v, i);
+        assert_eq!(faults_of(&rec, 150), []);
     }
 
     #[test]
