@@ -92,7 +92,7 @@ fn outputs(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
             let stem = input
                 .file_stem()
                 .with_context(|| format!("{}: not a file's name", input.display()))?;
-            let path = out.join(Path::new(stem).with_extension("csv"));
+            let path = out.join(csv_name(stem));
             if let Some(other) = by_name.insert(path.clone(), input) {
                 bail!(
                     "{} and {} would both be written to {}: rename one",
@@ -104,10 +104,7 @@ fn outputs(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
         }
         inputs
             .iter()
-            .map(|input| {
-                let stem = input.file_stem().unwrap_or_default();
-                out.join(Path::new(stem).with_extension("csv"))
-            })
+            .map(|input| out.join(csv_name(input.file_stem().unwrap_or_default())))
             .collect()
     };
     for (input, output) in inputs.iter().zip(&outputs) {
@@ -119,6 +116,15 @@ fn outputs(inputs: &[PathBuf], out: &Path) -> anyhow::Result<Vec<PathBuf>> {
         }
     }
     Ok(outputs)
+}
+
+/// `<stem>.csv`: the stem whole, dots and all (`02_step_2.5V` stays
+/// itself; `with_extension` would take `.5V` for an extension and write
+/// `02_step_2.csv`).
+fn csv_name(stem: &std::ffi::OsStr) -> std::ffi::OsString {
+    let mut name = stem.to_os_string();
+    name.push(".csv");
+    name
 }
 
 /// Whether `a` and `b` are one existing file.

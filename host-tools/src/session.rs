@@ -4,8 +4,12 @@
 use std::path::{Path, PathBuf};
 
 use crate::recording::{
-    Geometry, Recording, RecordingError, RestReading, REST_BAND_LIMIT_V, REST_OPENING_S,
+    Channel, Geometry, Recording, RecordingError, RestReading, REST_BAND_LIMIT_V, REST_OPENING_S,
 };
+
+pub mod faults;
+
+pub use faults::{Fault, FaultKind};
 
 /// A recording of a session, with what the fit needs to know of it.
 #[derive(Clone, Debug)]
@@ -24,6 +28,13 @@ pub struct SessionRecording {
     /// Each segment's voltage channel's reading of a rest (its offset,
     /// noise and step), measured on the opening.
     pub rests: Vec<RestReading>,
+    /// The bench's faults in it: contact faults, out-of-range stretches,
+    /// clipped runs ([`faults`]); found when a session is read.
+    pub faults: Vec<Fault>,
+    /// The drive the strip saw where a contact fault says it differs from
+    /// the voltages read ([`faults::strip_drive`]); `None` where it does
+    /// not.
+    pub strip_drive: Option<Recording>,
 }
 
 impl SessionRecording {
@@ -43,6 +54,26 @@ impl SessionRecording {
     /// held voltage as on a rest; exactly equal for an exact drive).
     pub fn reads_as(&self, k: usize, row: usize, level_v: f64) -> bool {
         (self.rec.v_v[row][k] - level_v).abs() <= self.rests[k].band_v()
+    }
+
+    /// What the model is driven by: the recording, its voltages as read,
+    /// except where a contact fault from the rest kept the voltage from
+    /// the strip (the strip stayed at rest: [`faults::strip_drive`]).
+    pub fn drive(&self) -> &Recording {
+        self.strip_drive.as_ref().unwrap_or(&self.rec)
+    }
+
+    /// Per row, whether channel `ch`'s sample there stays out of the fit
+    /// because of a fault ([`faults::kept_out`]).
+    pub fn kept_out(&self, ch: Channel) -> Vec<bool> {
+        faults::kept_out(&self.faults, ch, self.rec.t_s.len())
+    }
+
+    /// `faults` as this recording's, with the drive they imply.
+    fn with_faults(mut self, faults: Vec<Fault>) -> SessionRecording {
+        self.strip_drive = faults::strip_drive(&self.rec, &faults);
+        self.faults = faults;
+        self
     }
 }
 
@@ -128,6 +159,21 @@ impl Session {
                 });
             }
         }
+        // The bench's faults, judged against the session's own currents.
+        let inputs: Vec<faults::Input> = recordings
+            .iter()
+            .map(|r| faults::Input {
+                rec: &r.rec,
+                rest_rows: r.rest_rows,
+                rests: &r.rests,
+            })
+            .collect();
+        let found = faults::find(&inputs);
+        let recordings = recordings
+            .into_iter()
+            .zip(found)
+            .map(|(r, f)| r.with_faults(f))
+            .collect();
         Ok(Session {
             dir: dir.to_path_buf(),
             recordings,
@@ -135,7 +181,9 @@ impl Session {
     }
 
     /// `rec`, read from `path`, as a session holds it: its sample time,
-    /// session start and opening rest found, refused without 1 s of rest.
+    /// session start and opening rest found, refused without 1 s of rest;
+    /// its faults are not looked for (a session's reading finds them,
+    /// judged against all of its recordings).
     /// A rest is what the DAQ reads when nothing is applied: each voltage
     /// channel's offset and noise, measured on its opening
     /// ([`RestReading`]), not exactly 0 V.
@@ -186,6 +234,8 @@ impl Session {
             dt_s,
             rest_rows,
             rests,
+            faults: Vec::new(),
+            strip_drive: None,
         })
     }
 

@@ -524,3 +524,94 @@ fn a_recording_that_opens_still_moving_is_carried_over() {
         .detail
         .contains(&format!("{}.csv", common::short_protocol()[0].name)));
 }
+
+/// A baseline strip on a bench with faults: in `02_free_step_2.5V` the
+/// clamp's contact on segment 1 lifted at the step and closed 1.3 s later
+/// (the strip saw no voltage there while the file reads 2.5 V, and the
+/// current reads its rest), and in `03_free_step_4.0V` segment 2's current
+/// amplifier clips at ±15 mA. Neither is the strip's: `none`, with both
+/// named as the bench's.
+#[test]
+fn a_contact_fault_and_a_clipped_current_are_the_bench_not_the_strip() {
+    let dir = std::env::temp_dir().join(format!("finrs-diag-faults-{}", std::process::id()));
+    let lifted = |name: &str, strip: &mut finrs::recording::Recording| {
+        if name == "02_free_step_2.5V" {
+            let from = strip.v_v.rows().position(|v| v[0] != 0.0).unwrap();
+            for row in from..from + 1300 {
+                strip.v_v[row][0] = 0.0;
+            }
+        }
+    };
+    let clipped = |name: &str, rec: &mut finrs::recording::Recording| {
+        if name == "03_free_step_4.0V" {
+            let (_, i2) = rec
+                .channels
+                .iter_mut()
+                .find(|(c, _)| *c == finrs::recording::Channel::Current(1))
+                .unwrap();
+            for i in i2.iter_mut().flatten() {
+                *i = i.clamp(-0.015, 0.015);
+            }
+        }
+    };
+    common::write_session_edited(
+        &dir,
+        &sample(Extensions::NONE),
+        &common::short_protocol(),
+        21,
+        &lifted,
+        &clipped,
+    );
+    let session = Session::read(&dir).unwrap();
+    let fixed = ModelFile::main_m_2006()
+        .spec_for(&session.geometry())
+        .unwrap();
+    let d = diagnose(&session, fixed, &|_| {}).unwrap();
+    let out = std::env::temp_dir().join(format!("finrs-report-faults-{}", std::process::id()));
+    finrs::analysis::diagnose::report::write(&out, &session, &d).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let v = &d.verdict;
+    let text = v.to_string();
+    eprintln!("faults: {text}");
+    assert_eq!(v.verdict, "none", "{text}");
+    assert!(v.causes.is_empty(), "{text}");
+    let kinds: Vec<(&str, &str, &str)> = v
+        .faults
+        .iter()
+        .map(|f| (f.recording.as_str(), f.kind.as_str(), f.channel.as_str()))
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            ("02_free_step_2.5V.csv", "contact-fault", "v1_V"),
+            ("03_free_step_4.0V.csv", "clipped", "i2_A"),
+        ],
+        "{text}"
+    );
+    // The contact: from the step (1.5 s) to its closing, 1.3 s later.
+    let contact = &v.faults[0];
+    assert!((contact.from_s - 1.5).abs() < 2e-3, "{contact:?}");
+    assert!((contact.to_s - 2.8).abs() < 2e-3, "{contact:?}");
+    // Both spikes, up and down, each some 10 ms beyond ±15 mA.
+    let clip = &v.faults[1];
+    assert_eq!(clip.stretches, 2, "{clip:?}");
+    assert!(clip.total_s > 0.005 && clip.total_s < 0.05, "{clip:?}");
+    assert!(
+        text.contains("bench, not the strip: 02_free_step_2.5V.csv: contact fault on segment 1"),
+        "{text}"
+    );
+    assert!(
+        text.contains("bench, not the strip: 03_free_step_4.0V.csv: i2_A clipped"),
+        "{text}"
+    );
+    let md = std::fs::read_to_string(out.join("REPORT.md")).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    assert!(
+        md.contains("| 02_free_step_2.5V.csv | contact-fault | v1_V | 1.500 | 2.800 | 1 | 1.300 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| 03_free_step_4.0V.csv | clipped | i2_A |"),
+        "{md}"
+    );
+}

@@ -113,6 +113,22 @@ pub fn short_protocol() -> Vec<Run> {
 
 /// Writes the session of `runs` under `spec` into `dir`, 10 s apart.
 pub fn write_session(dir: &Path, spec: &ModelSpec, runs: &[Run], seed: u64) {
+    write_session_edited(dir, spec, runs, seed, &|_, _| {}, &|_, _| {});
+}
+
+/// As [`write_session`] (the same seed, the same noise), with the bench's
+/// faults: `strip(name, drive)` edits the drive the strip itself saw (a
+/// contact that lifted leaves a segment at rest) before the model runs on
+/// it, while the file keeps the drive as commanded; `measured(name,
+/// recording)` edits what the sensors wrote (a clipped amplifier).
+pub fn write_session_edited(
+    dir: &Path,
+    spec: &ModelSpec,
+    runs: &[Run],
+    seed: u64,
+    strip: &dyn Fn(&str, &mut Recording),
+    measured: &dyn Fn(&str, &mut Recording),
+) {
     std::fs::create_dir_all(dir).unwrap();
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let mut t_session = 0.0;
@@ -133,8 +149,11 @@ pub fn write_session(dir: &Path, spec: &ModelSpec, runs: &[Run], seed: u64) {
             rec.meta.medium = finrs::recording::Medium::Water;
         }
         rec.meta.notes = Some(format!("t_session_start_s = {t_session:.3}; {}", run.name));
-        let traces = predict(&rec, spec, 4, 1e-3, t_session, None, &mut |_| {}).unwrap();
+        let mut seen = rec.clone();
+        strip(run.name, &mut seen);
+        let traces = predict(&seen, spec, 4, 1e-3, t_session, None, &mut |_| {}).unwrap();
         measure(&mut rec, &traces, &mut rng);
+        measured(run.name, &mut rec);
         rec.write(&dir.join(format!("{}.csv", run.name))).unwrap();
         t_session += rec.t_s.last().unwrap() + 10.0;
     }

@@ -37,11 +37,15 @@
 //! sensor noise, seen in the opening rests ([`rests`]), and drift, the
 //! strip's own curl or a sensor's wandering zero, fitted beside every
 //! model on each measured channel ([`drift`]), are reported
-//! as bench findings beside the verdict, never as a catalogue name.
+//! as bench findings beside the verdict, never as a catalogue name; so
+//! are the bench's faults found in the data when the session is read
+//! (contact faults, out-of-range stretches, clipped sensors: [`faults`]),
+//! whose samples no fit sees.
 
 pub mod analyses;
 pub mod choose;
 pub mod drift;
+pub mod faults;
 pub mod floors;
 mod gates;
 pub mod identify;
@@ -52,6 +56,7 @@ pub mod structure;
 mod verdict;
 pub mod whiteness;
 
+pub use faults::FaultFinding;
 pub use floors::{sensor_floors, SensorFloor, NOISE_FLOOR_RATIO};
 pub use gates::{DELTA_BIC, FAMILY_ALPHA, HOLDOUT_RSS_GAIN};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};

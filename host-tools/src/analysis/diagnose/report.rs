@@ -185,6 +185,29 @@ fn summary(s: &mut String, session: &Session, v: &Verdict) {
         }
         let _ = writeln!(s);
     }
+    if !v.faults.is_empty() {
+        let _ = writeln!(
+            s,
+            "The bench's faults, recording by recording (found in the data alone, kept out of every fit; no catalogue effect is named for these):\n"
+        );
+        let _ = writeln!(
+            s,
+            "| recording | fault | channel | from, s | to, s | stretches | in all, s |"
+        );
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+        for f in &v.faults {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.3} | {:.3} | {} | {:.3} |",
+                f.recording, f.kind, f.channel, f.from_s, f.to_s, f.stretches, f.total_s
+            );
+        }
+        let _ = writeln!(s);
+        for f in &v.faults {
+            let _ = writeln!(s, "- {}", f.detail);
+        }
+        let _ = writeln!(s);
+    }
 }
 
 /// Where the baseline's misfit lives across the session.
@@ -421,7 +444,7 @@ fn recording_plots(
         let png = format!("{stem}.png");
         let elements = crate::analysis::fit::FIT_ELEMENTS;
         let run = |spec| {
-            simulate(&r.name, &r.rec, spec, elements, &mut |_| {}).map_err(|source| {
+            simulate(&r.name, r.drive(), spec, elements, &mut |_| {}).map_err(|source| {
                 ReportError::Simulate {
                     recording: r.name.clone(),
                     source,

@@ -5,6 +5,7 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::drift;
+use super::faults;
 use super::floors::sensor_floors;
 use super::gates::{each_mode_damping_kept, family_tail, family_z, holdout_gain_passes, DELTA_BIC};
 use super::identify;
@@ -211,6 +212,7 @@ pub fn diagnose(
         sensors,
         untestable,
         rest,
+        faults: faults::findings(session),
         analyses: analyses::analyse(session, &fitter.score(&all, &baseline.spec)?),
         identifiability,
         identifiability_refused,

@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::analyses;
+use super::faults::FaultFinding;
 use super::floors::SensorFloor;
 use super::identify::Identifiability;
 use super::rests::RestStructure;
@@ -109,6 +110,9 @@ pub struct Verdict {
     /// The DAQ's channels during the opening rests: whiteness, and the
     /// bench's hum and coloured noise.
     pub rest: RestStructure,
+    /// The bench's faults, recording by recording: contact faults,
+    /// out-of-range stretches, clipped sensors (kept out of every fit).
+    pub faults: Vec<FaultFinding>,
     /// Where the baseline's misfit lives across the session.
     pub analyses: analyses::Analyses,
     /// Per testable effect the final model lacks: whether this session's
@@ -207,6 +211,9 @@ impl std::fmt::Display for Verdict {
             writeln!(f, "  what the session could show was not assessed: {why}")?;
         }
         for b in &self.rest.bench {
+            writeln!(f, "  bench, not the strip: {}", b.detail)?;
+        }
+        for b in &self.faults {
             writeln!(f, "  bench, not the strip: {}", b.detail)?;
         }
         Ok(())

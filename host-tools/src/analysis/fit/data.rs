@@ -1,5 +1,6 @@
 //! What a fit compares: per recording, each measured channel at the rows
-//! where it was sampled, taken from its opening rest, and its noise level.
+//! where it was sampled and no bench fault keeps it out, taken from its
+//! opening rest, and its noise level.
 
 use crate::analysis::median::median;
 use crate::model::predict::Traces;
@@ -54,7 +55,7 @@ impl Sensor {
 pub struct Target {
     /// The channel.
     pub channel: Channel,
-    /// Rows where it was sampled.
+    /// Rows where it was sampled, less those a bench fault keeps out.
     pub rows: Vec<usize>,
     /// Its values there, minus their mean over the opening rest.
     pub values: Vec<f64>,
@@ -188,7 +189,12 @@ fn targets_of(
         if duplicate {
             continue;
         }
-        let rows: Vec<usize> = (0..rows_total).filter(|&i| values[i].is_some()).collect();
+        // Where it was sampled, less what a bench fault keeps out (a
+        // clipped run, a contact fault's stretch: `session::faults`).
+        let kept_out = r.kept_out(*ch);
+        let rows: Vec<usize> = (0..rows_total)
+            .filter(|&i| values[i].is_some() && !kept_out[i])
+            .collect();
         if rows.is_empty() {
             continue;
         }

@@ -225,12 +225,13 @@ impl<'a> Fitter<'a> {
     }
 
     /// The model's outputs on recording `index` (the camera only where it
-    /// looked).
+    /// looked), driven by what the strip saw (a contact fault from the
+    /// rest left it at rest: `SessionRecording::drive`).
     fn traces(&self, index: usize, spec: &ModelSpec) -> Result<Traces, FitError> {
         let r = &self.session.recordings[index];
         let rt = &self.targets.recordings[index];
         predict(
-            &r.rec,
+            r.drive(),
             &self.as_sampled(spec),
             FIT_ELEMENTS,
             r.dt_s,
@@ -287,7 +288,7 @@ impl<'a> Fitter<'a> {
                     Stage::Circuit => {
                         let r = &self.session.recordings[i];
                         Traces {
-                            currents_a: predict_currents(&r.rec, &self.as_sampled(spec), r.dt_s)
+                            currents_a: predict_currents(r.drive(), &self.as_sampled(spec), r.dt_s)
                                 .map_err(|source| FitError::Model {
                                     recording: r.name.clone(),
                                     source,
@@ -383,7 +384,7 @@ impl<'a> Fitter<'a> {
                     t,
                     &r,
                     &raw,
-                    &rec.rec.v_v,
+                    &rec.drive().v_v,
                     rec.dt_s,
                 ));
             }

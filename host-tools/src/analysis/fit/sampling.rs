@@ -62,7 +62,9 @@ pub fn detect(session: &Session) -> Sampling {
     let (mut s00, mut s01, mut s11, mut t0, mut t1) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let mut changes = 0;
     for r in &session.recordings {
-        let v = &r.rec.v_v;
+        // The drive the strip saw: across a contact fault the current
+        // answers the contact's closing, not the voltage read.
+        let v = &r.drive().v_v;
         for (ch, values) in &r.rec.channels {
             let Channel::Current(seg) = *ch else {
                 continue;
@@ -164,6 +166,8 @@ mod tests {
                     t_start_s: Some(0.0),
                     rest_rows: 1000,
                     rests: vec![Default::default(); 3],
+                    faults: Vec::new(),
+                    strip_drive: None,
                 }
             })
             .collect();
