@@ -31,7 +31,7 @@
 //! | quantised currents and load cell | nothing: the step is part of the channel's noise |
 //! | the voltage read back (offset, noise, ADC step) | nothing: the drive as the DAQ measured it, millivolts off |
 //! | a contact open after a step | no catalogue name; `unexplained` allowed (no candidate has a voltage without a current) |
-//! | carry-over between recordings | no catalogue name (the relaxation carried is the baseline's own); `unexplained` allowed (the opening second cannot show a 7–14 s relaxation's state) |
+//! | carry-over between recordings | no catalogue name (the relaxation carried is the baseline's own); it may report the bench (`bench:carry-over`); `unexplained` allowed (the opening second cannot show a 7–14 s relaxation's state) |
 //! | the moment's ± asymmetry | no catalogue name; `unexplained` allowed. Not `electrochemical-nonlinearity`: current and charge stay linear in voltage (the catalogue's definition), only the moment per charge differs by sign; not `segment-variation`: every segment has the same asymmetry |
 //! | a laser across at one point, 100 rows/s | `large-deflection` cannot be seen (nothing tracks along the strip); `damping` and `beam-stiffness` only where the free strip's first mode rings below a quarter of the row rate (free runs alone give `K/EI`; the ringing gives `EI`) |
 
@@ -67,6 +67,9 @@ pub const BENCH_HUM: &str = "bench:mains-hum";
 pub const BENCH_COLOURED: &str = "bench:coloured-noise";
 /// Drift, as a diagnosis may report it.
 pub const BENCH_DRIFT: &str = "bench:drift";
+/// The bench finding of recordings that open while the strip still moves
+/// (`finrs diagnose`'s `carry-over`).
+pub const BENCH_CARRY: &str = "bench:carry-over";
 
 /// `EI` within this factor of the laminate's need not be named.
 pub const STIFFNESS_TOLERANCE: f64 = 1.2;
@@ -191,6 +194,9 @@ pub fn expected_lab(
                 e.allowed.push(n);
             }
         }
+    }
+    if lab.carry_over && !e.allowed.contains(&BENCH_CARRY) {
+        e.allowed.push(BENCH_CARRY);
     }
     e.unexplained_ok |=
         lab.contact.is_some() || lab.carry_over || lab.asymmetry.is_some_and(|a| a != 0.0);

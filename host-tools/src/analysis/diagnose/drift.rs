@@ -66,17 +66,33 @@ pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
         .collect()
 }
 
-/// The recordings that open while the strip still moves, if any, as one
-/// finding: the relaxation the recording before left, fitted beside the
-/// model (`fit/drift_set.rs`), not a rest at 0.
-pub fn carry_over(names: &[String]) -> Option<BenchFinding> {
+/// The recordings that open while the strip still moves, as one finding:
+/// those where the carry-over a channel takes beyond the drift
+/// ([`crate::analysis::fit::Fitter::carry_overs`]) stands out of the noise
+/// (its sum of squares beyond the 99.9 % point of `χ²` with one degree of
+/// freedom) by at least [`REPORTED_NOISES`]: the relaxation the recording
+/// before left, fitted beside the model from each one's opening rest, not
+/// a rest at 0. A rest that moves with the drift alone is no carry-over.
+pub fn carry_over(carried: &[(String, Channel, f64, f64)]) -> Option<BenchFinding> {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let bar = ChiSquared::new(1.0).map_or(f64::INFINITY, |d| d.inverse_cdf(0.999));
+    let mut names: Vec<&str> = Vec::new();
+    let mut largest: f64 = 0.0;
+    for (name, _, explained, range) in carried {
+        if *explained > bar && *range >= REPORTED_NOISES {
+            if !names.contains(&name.as_str()) {
+                names.push(name);
+            }
+            largest = largest.max(*range);
+        }
+    }
     (!names.is_empty()).then(|| BenchFinding {
         what: "carry-over".to_string(),
         channel: "camera and load cell".to_string(),
         mains_hz: None,
-        strength: names.len() as f64,
+        strength: largest,
         detail: format!(
-            "{} of the recordings open while the strip still moves ({}): the relaxation the recording before left, decaying at the model's pole, fitted beside it from each one's opening rest",
+            "{} of the recordings open while the strip still moves ({}; up to {largest:.1}× a channel's noise): the relaxation the recording before left, decaying at the model's pole, fitted beside it from each one's opening rest",
             names.len(),
             names.join(", ")
         ),

@@ -184,8 +184,9 @@ pub fn diagnose(
     let final_fit = form::spanning(found.fit, each_mode, each_mode_final);
     rest.bench
         .extend(drift::findings(&fitter.drifts(&all, &final_fit.spec)?));
-    rest.bench
-        .extend(drift::carry_over(&fitter.opening_in_motion(&all)));
+    rest.bench.extend(drift::carry_over(
+        &fitter.carry_overs(&all, &final_fit.spec)?,
+    ));
     let score_of = |fit: &FitResult, hold: &Score| ModelScore {
         holdout_nrmse: hold.nrmse,
         holdout_rss_per_residual: per(hold),

@@ -176,6 +176,30 @@ impl DriftSet {
         }
     }
 
+    /// The carry-over each recording that opens moving shows in `raw`
+    /// (per recording of the set, per target: `(ŷ − y)/σ` with nothing
+    /// removed) under the pole `p_per_s`: `(position in the set, target
+    /// index, the sum of squares its column takes beyond the drift, the
+    /// range of what it takes, in units of σ)`.
+    pub fn carried(&self, raw: &[Vec<Vec<f64>>], p_per_s: f64) -> Vec<(usize, usize, f64, f64)> {
+        let mut out = Vec::new();
+        for g in self
+            .groups
+            .iter()
+            .filter(|g| g.carry.iter().any(Option::is_some))
+        {
+            let mut parts: Vec<Vec<f64>> =
+                g.members.iter().map(|&(k, j)| raw[k][j].clone()).collect();
+            let mut refs: Vec<&mut Vec<f64>> = parts.iter_mut().collect();
+            g.basis.remove(&mut refs);
+            for (m, explained, range) in g.remove_carry(&mut parts, p_per_s) {
+                let (k, j) = g.members[m];
+                out.push((k, j, explained, range));
+            }
+        }
+        out
+    }
+
     /// The drift in `raw` (per recording of the set, per target: `(ŷ −
     /// y)/σ` with no drift removed) as each channel of each recording
     /// shows it: `(position in the set, target index, the drift's range
@@ -203,10 +227,12 @@ impl Group {
     /// columns `e^{−p t}` of the members that carry one, each from its
     /// rest's mean (or its own mean, with a free offset), made orthogonal
     /// to the drift's columns and to each other.
-    fn remove_carry(&self, parts: &mut [Vec<f64>], p_per_s: f64) {
+    /// Returns, per carried member, `(member, the sum of squares its
+    /// column took, the range of what it took over the member)`.
+    fn remove_carry(&self, parts: &mut [Vec<f64>], p_per_s: f64) -> Vec<(usize, f64, f64)> {
         let lens: Vec<usize> = parts.iter().map(Vec::len).collect();
         let total: usize = lens.iter().sum();
-        let mut columns: Vec<Vec<f64>> = Vec::new();
+        let mut columns: Vec<(usize, Vec<f64>)> = Vec::new();
         let mut at = 0;
         for (m, (carry, &len)) in self.carry.iter().zip(&lens).enumerate() {
             if let Some((tau_s, rest)) = carry {
@@ -227,7 +253,7 @@ impl Group {
                 // Twice, as the drift's own columns were made.
                 for _ in 0..2 {
                     self.basis.remove_columns(&mut c);
-                    for q in &columns {
+                    for (_, q) in &columns {
                         let dot: f64 = q.iter().zip(&c).map(|(a, b)| a * b).sum();
                         c.iter_mut().zip(q).for_each(|(v, a)| *v -= dot * a);
                     }
@@ -235,12 +261,20 @@ impl Group {
                 let norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
                 if norm > 1e-9 * (total as f64).sqrt() {
                     c.iter_mut().for_each(|v| *v /= norm);
-                    columns.push(c);
+                    columns.push((m, c));
                 }
             }
             at += len;
         }
-        for q in &columns {
+        let starts: Vec<usize> = lens
+            .iter()
+            .scan(0, |at, &len| {
+                *at += len;
+                Some(*at - len)
+            })
+            .collect();
+        let mut taken = Vec::new();
+        for (m, q) in &columns {
             let mut dot = 0.0;
             let mut at = 0;
             for p in parts.iter() {
@@ -259,7 +293,16 @@ impl Group {
                     .for_each(|(v, a)| *v -= dot * a);
                 at += len;
             }
+            let own = &q[starts[*m]..starts[*m] + lens[*m]];
+            let (lo, hi) = own
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    (lo.min(x), hi.max(x))
+                });
+            let range = if hi >= lo { (hi - lo) * dot.abs() } else { 0.0 };
+            taken.push((*m, dot * dot, range));
         }
+        taken
     }
 }
 

@@ -22,6 +22,7 @@ use super::start;
 use super::stats::{self, ChannelFit, Estimate, Score};
 use crate::model::params::{Beam, Electrical, ExtensionsFile, Mesh, ModelFile, Relaxation};
 use crate::model::predict::{predict, predict_currents, ModelSpec, Traces};
+use crate::recording::Channel;
 use crate::session::Session;
 
 /// Elements per segment the fit uses: four, not the seed's one (Appendix
@@ -336,18 +337,42 @@ impl<'a> Fitter<'a> {
             .collect())
     }
 
-    /// The recordings of `recordings` that open while the strip still
-    /// moves (a line through a rest beyond [`MOVING_REST_Z`] standard
-    /// errors), whose carry-over from the recording before every fit
-    /// removes beside the drift.
+    /// The carry-over fitted on each camera and load-cell channel of the
+    /// recordings of `recordings` that open while the strip still moves
+    /// (a line through a rest beyond [`MOVING_REST_Z`] standard errors),
+    /// under `spec`: `(recording, channel, the sum of squares its column
+    /// takes beyond the drift, the range of what it takes in units of the
+    /// channel's noise)`.
     ///
     /// [`MOVING_REST_Z`]: super::drift_set::MOVING_REST_Z
-    pub fn opening_in_motion(&self, recordings: &[usize]) -> Vec<String> {
-        self.drift_set(recordings)
-            .moving()
-            .iter()
-            .map(|&k| self.session.recordings[recordings[k]].name.clone())
-            .collect()
+    pub fn carry_overs(
+        &self,
+        recordings: &[usize],
+        spec: &ModelSpec,
+    ) -> Result<Vec<(String, Channel, f64, f64)>, FitError> {
+        let set = self.drift_set(recordings);
+        if set.moving().is_empty() {
+            return Ok(Vec::new());
+        }
+        let raw = pool().install(|| self.raw_residuals(recordings, spec))?;
+        let raw: Vec<Vec<Vec<f64>>> = raw
+            .into_iter()
+            .map(|r| r.into_iter().flatten().collect())
+            .collect();
+        Ok(set
+            .carried(&raw, spec.params.p_per_s)
+            .into_iter()
+            .map(|(k, j, explained, range)| {
+                let i = recordings[k];
+                let channel = self.targets.recordings[i].targets[j].channel;
+                (
+                    self.session.recordings[i].name.clone(),
+                    channel,
+                    explained,
+                    range,
+                )
+            })
+            .collect())
     }
 
     /// Every target's weighted residuals on `recordings` under `spec`,
