@@ -36,11 +36,13 @@
 //! Drift is fitted jointly with the model by variable projection: the
 //! residuals, and so every Jacobian taken of them, are those left after
 //! the least-squares drift is removed (Golub and Pereyra). The currents
-//! have one too: a shunt amplifier's zero wanders as a camera's does
-//! (each recording's own offset alone was 1.75 times the currents' noise
-//! floor on the rig's lab bench). Their leak, the steady current under a
-//! held voltage that the electrochemistry shows in, is read where the
-//! drive switches, which no drift can follow.
+//! have one too: a shunt amplifier's zero wanders (each recording's own
+//! offset alone left the currents at 1.75 times their noise floor on the
+//! rig's lab bench). Their leak, the steady current under a held voltage
+//! that the electrochemistry shows in, is read where the drive switches,
+//! which no drift can follow: over holds of minutes a drift that bends
+//! once a minute can take part of it (the lab protocol's `sinh` leak
+//! went unnamed, docs/rig.md).
 //!
 //! ```
 //! use finrs::analysis::fit::DriftBasis;
@@ -266,10 +268,11 @@ impl DriftBasis {
     /// out of the noise (the sum of squares it takes beyond the 99.9 %
     /// point of `χ²` with as many degrees of freedom as it has columns:
     /// what white noise alone would give it).
-    pub fn measure(&self, parts: &[&[f64]]) -> (Vec<f64>, bool) {
+    pub fn measure(&self, parts: &[&[f64]]) -> (Vec<f64>, bool, f64) {
         let mut left: Vec<Vec<f64>> = parts.iter().map(|p| p.to_vec()).collect();
         let mut refs: Vec<&mut Vec<f64>> = left.iter_mut().collect();
         let explained = self.remove(&mut refs);
+        let share = share_of_excess(explained, parts.iter().flat_map(|p| p.iter()));
         // A free offset is constant over its member: no part of a range.
         let ranges = parts
             .iter()
@@ -290,8 +293,21 @@ impl DriftBasis {
             })
             .collect();
         let significant = self.degree > 0 && explained > chi2_999(self.degree);
-        (ranges, significant)
+        (ranges, significant, share)
     }
+}
+
+/// The share of what residuals `r` (in units of their noise) hold beyond
+/// the noise (`Σr² − n`) that a drift taking `explained` of their sum of
+/// squares accounts for, at most 1: near 1 where the drift is what the
+/// model leaves, small where a model's misfit leaves slow structure too.
+pub fn share_of_excess<'a>(explained: f64, r: impl Iterator<Item = &'a f64>) -> f64 {
+    let (sum, n) = r.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
+    let excess = sum - n as f64;
+    if excess <= 0.0 {
+        return 0.0;
+    }
+    (explained / excess).min(1.0)
 }
 
 /// The 99.9 % point of `χ²` with `dof` degrees of freedom.
@@ -317,6 +333,10 @@ pub struct Drift {
     /// Whether the channel's drift, over the recordings fitted together,
     /// stands out of the noise ([`DriftBasis::measure`]).
     pub significant: bool,
+    /// The share of what the model leaves beyond the noise on the channel,
+    /// over the recordings fitted together, that the drift takes
+    /// ([`share_of_excess`]).
+    pub share: f64,
 }
 
 #[cfg(test)]
@@ -385,7 +405,8 @@ mod tests {
             ts.iter().map(|&t| -(drift(t) - mean) / sigma).collect()
         };
         let (ra, rb) = (since_rest(&a), since_rest(&b));
-        let (ranges, significant) = basis.measure(&[&ra, &rb]);
+        let (ranges, significant, share) = basis.measure(&[&ra, &rb]);
+        assert!(share > 0.999, "{share}");
         assert!(significant);
         let range = |ts: &[f64]| {
             let d: Vec<f64> = ts.iter().map(|&t| drift(t)).collect();
@@ -444,5 +465,12 @@ mod tests {
         let na: Vec<f64> = (0..6000).map(|_| unit()).collect();
         let nb: Vec<f64> = (0..6000).map(|_| unit()).collect();
         assert!(!basis.measure(&[&na, &nb]).1);
+        // A drift beside a larger misfit that is no drift: a small share.
+        let misfit: Vec<f64> = (0..6000)
+            .map(|i| 20.0 * ((i as f64) * 0.7).sin() + 0.5 * i as f64 / 6000.0)
+            .collect();
+        let zeros = vec![0.0; 6000];
+        let share = basis.measure(&[&misfit, &zeros]).2;
+        assert!(share < 0.01, "{share}");
     }
 }

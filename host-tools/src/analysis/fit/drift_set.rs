@@ -204,8 +204,9 @@ impl DriftSet {
     /// y)/σ` with no drift removed) as each channel of each recording
     /// shows it: `(position in the set, target index, the drift's range
     /// there in units of σ, whether its channel's drift stands out of the
-    /// noise)`.
-    pub fn measure(&self, raw: &[Vec<Vec<f64>>]) -> Vec<(usize, usize, f64, bool)> {
+    /// noise, the share of the channel's residual beyond the noise it
+    /// takes)`.
+    pub fn measure(&self, raw: &[Vec<Vec<f64>>]) -> Vec<(usize, usize, f64, bool, f64)> {
         let mut out = Vec::new();
         for g in &self.groups {
             let parts: Vec<&[f64]> = g
@@ -213,9 +214,9 @@ impl DriftSet {
                 .iter()
                 .map(|&(k, j)| raw[k][j].as_slice())
                 .collect();
-            let (ranges, significant) = g.basis.measure(&parts);
+            let (ranges, significant, share) = g.basis.measure(&parts);
             for (&(k, j), range) in g.members.iter().zip(ranges) {
-                out.push((k, j, range, significant));
+                out.push((k, j, range, significant, share));
             }
         }
         out
