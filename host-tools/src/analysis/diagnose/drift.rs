@@ -5,6 +5,7 @@
 
 use std::collections::BTreeMap;
 
+use super::floors::NOISE_FLOOR_RATIO;
 use super::rests::BenchFinding;
 use crate::analysis::fit::Drift;
 use crate::recording::Channel;
@@ -28,9 +29,12 @@ pub const REPORTED_SHARE: f64 = 0.5;
 
 /// One finding per channel whose drift stands out of the noise
 /// ([`Drift::significant`]), takes most of what the model leaves
-/// ([`REPORTED_SHARE`]) and moves the channel by at least
-/// [`REPORTED_NOISES`] over some recording: its largest range, where,
-/// and in how many recordings.
+/// ([`REPORTED_SHARE`]), leaves the channel at its noise floor
+/// ([`NOISE_FLOOR_RATIO`]: what the model misses beside a drift may be
+/// slow too, and a drift that is not all that is left cannot be told
+/// from it) and moves the channel by at least [`REPORTED_NOISES`] over
+/// some recording: its largest range, where, and in how many
+/// recordings.
 pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
     let mut by_channel: BTreeMap<String, Vec<&Drift>> = BTreeMap::new();
     for d in drifts {
@@ -44,6 +48,7 @@ pub fn findings(drifts: &[Drift]) -> Vec<BenchFinding> {
                 .filter(|d| {
                     d.significant
                         && d.share >= REPORTED_SHARE
+                        && d.left_per_residual < NOISE_FLOOR_RATIO
                         && d.peak_to_peak_in_noise >= REPORTED_NOISES
                 })
                 .collect();
@@ -127,6 +132,7 @@ mod tests {
             span_s: 240.0,
             significant,
             share: 0.9,
+            left_per_residual: 1.1,
         }
     }
 
@@ -144,6 +150,12 @@ mod tests {
             Drift {
                 share: 0.2,
                 ..drift("a.csv", Channel::DotY(2), 5e-3, true)
+            },
+            // Most of it, but the model leaves the channel far above its
+            // noise beside it: no finding.
+            Drift {
+                left_per_residual: 40.0,
+                ..drift("a.csv", Channel::Force, 5e-3, true)
             },
         ]);
         assert_eq!(found.len(), 1);

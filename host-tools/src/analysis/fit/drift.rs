@@ -264,15 +264,20 @@ impl DriftBasis {
 
     /// The drift on the members' residuals `r = (ŷ − y)/σ` before its
     /// removal, in `σ` units of `y − ŷ`: per member, the range of the
-    /// fitted drift over its samples; and whether the polynomial stands
-    /// out of the noise (the sum of squares it takes beyond the 99.9 %
-    /// point of `χ²` with as many degrees of freedom as it has columns:
-    /// what white noise alone would give it).
-    pub fn measure(&self, parts: &[&[f64]]) -> (Vec<f64>, bool, f64) {
+    /// fitted drift over its samples; whether the polynomial stands out of
+    /// the noise (the sum of squares it takes beyond the 99.9 % point of
+    /// `χ²` with as many degrees of freedom as it has columns: what white
+    /// noise alone would give it); its share of what the residuals hold
+    /// beyond the noise; and what is left once it is removed.
+    pub fn measure(&self, parts: &[&[f64]]) -> DriftMeasure {
         let mut left: Vec<Vec<f64>> = parts.iter().map(|p| p.to_vec()).collect();
         let mut refs: Vec<&mut Vec<f64>> = left.iter_mut().collect();
         let explained = self.remove(&mut refs);
         let share = share_of_excess(explained, parts.iter().flat_map(|p| p.iter()));
+        let (left_sum, n) = left
+            .iter()
+            .flatten()
+            .fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
         // A free offset is constant over its member: no part of a range.
         let ranges = parts
             .iter()
@@ -292,9 +297,29 @@ impl DriftBasis {
                 }
             })
             .collect();
-        let significant = self.degree > 0 && explained > chi2_999(self.degree);
-        (ranges, significant, share)
+        DriftMeasure {
+            ranges,
+            significant: self.degree > 0 && explained > chi2_999(self.degree),
+            share,
+            left_per_residual: left_sum / n.max(1) as f64,
+        }
     }
+}
+
+/// What [`DriftBasis::measure`] finds of a drift.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriftMeasure {
+    /// Per member, the range of the fitted drift over its samples, in
+    /// units of the noise.
+    pub ranges: Vec<f64>,
+    /// Whether the polynomial stands out of the noise.
+    pub significant: bool,
+    /// The share of what the residuals hold beyond the noise that it
+    /// takes ([`share_of_excess`]).
+    pub share: f64,
+    /// The residuals' sum of squares per residual once it is removed
+    /// (1: the noise alone is left).
+    pub left_per_residual: f64,
 }
 
 /// The share of what residuals `r` (in units of their noise) hold beyond
@@ -337,6 +362,10 @@ pub struct Drift {
     /// over the recordings fitted together, that the drift takes
     /// ([`share_of_excess`]).
     pub share: f64,
+    /// What the model and the drift leave on the channel, over the
+    /// recordings fitted together: the sum of squares per residual in
+    /// units of its noise (1: the noise alone).
+    pub left_per_residual: f64,
 }
 
 #[cfg(test)]
@@ -405,8 +434,9 @@ mod tests {
             ts.iter().map(|&t| -(drift(t) - mean) / sigma).collect()
         };
         let (ra, rb) = (since_rest(&a), since_rest(&b));
-        let (ranges, significant, share) = basis.measure(&[&ra, &rb]);
-        assert!(share > 0.999, "{share}");
+        let m = basis.measure(&[&ra, &rb]);
+        assert!(m.share > 0.999 && m.left_per_residual < 1e-12, "{m:?}");
+        let (ranges, significant) = (m.ranges, m.significant);
         assert!(significant);
         let range = |ts: &[f64]| {
             let d: Vec<f64> = ts.iter().map(|&t| drift(t)).collect();
@@ -464,13 +494,13 @@ mod tests {
         };
         let na: Vec<f64> = (0..6000).map(|_| unit()).collect();
         let nb: Vec<f64> = (0..6000).map(|_| unit()).collect();
-        assert!(!basis.measure(&[&na, &nb]).1);
+        assert!(!basis.measure(&[&na, &nb]).significant);
         // A drift beside a larger misfit that is no drift: a small share.
         let misfit: Vec<f64> = (0..6000)
             .map(|i| 20.0 * ((i as f64) * 0.7).sin() + 0.5 * i as f64 / 6000.0)
             .collect();
         let zeros = vec![0.0; 6000];
-        let share = basis.measure(&[&misfit, &zeros]).2;
-        assert!(share < 0.01, "{share}");
+        let m = basis.measure(&[&misfit, &zeros]);
+        assert!(m.share < 0.01 && m.left_per_residual > 100.0, "{m:?}");
     }
 }

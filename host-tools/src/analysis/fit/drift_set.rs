@@ -5,7 +5,7 @@
 //! at a time.
 
 use super::data::SessionTargets;
-use super::drift::DriftBasis;
+use super::drift::{DriftBasis, DriftMeasure};
 use crate::recording::Channel;
 use crate::session::Session;
 
@@ -203,10 +203,9 @@ impl DriftSet {
     /// The drift in `raw` (per recording of the set, per target: `(ŷ −
     /// y)/σ` with no drift removed) as each channel of each recording
     /// shows it: `(position in the set, target index, the drift's range
-    /// there in units of σ, whether its channel's drift stands out of the
-    /// noise, the share of the channel's residual beyond the noise it
-    /// takes)`.
-    pub fn measure(&self, raw: &[Vec<Vec<f64>>]) -> Vec<(usize, usize, f64, bool, f64)> {
+    /// there in units of σ, what its channel's drift measures over the
+    /// set)`.
+    pub fn measure(&self, raw: &[Vec<Vec<f64>>]) -> Vec<(usize, usize, f64, DriftMeasure)> {
         let mut out = Vec::new();
         for g in &self.groups {
             let parts: Vec<&[f64]> = g
@@ -214,9 +213,9 @@ impl DriftSet {
                 .iter()
                 .map(|&(k, j)| raw[k][j].as_slice())
                 .collect();
-            let (ranges, significant, share) = g.basis.measure(&parts);
-            for (&(k, j), range) in g.members.iter().zip(ranges) {
-                out.push((k, j, range, significant, share));
+            let m = g.basis.measure(&parts);
+            for (&(k, j), &range) in g.members.iter().zip(&m.ranges) {
+                out.push((k, j, range, m.clone()));
             }
         }
         out

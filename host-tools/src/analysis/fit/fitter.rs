@@ -321,7 +321,7 @@ impl<'a> Fitter<'a> {
             .drift_set(recordings)
             .measure(&raw)
             .into_iter()
-            .map(|(k, j, range, significant, share)| {
+            .map(|(k, j, range, m)| {
                 let r = &self.session.recordings[recordings[k]];
                 let t = &self.targets.recordings[recordings[k]].targets[j];
                 let at = |row: Option<&usize>| row.map_or(0.0, |&row| r.rec.t_s[row]);
@@ -331,8 +331,9 @@ impl<'a> Fitter<'a> {
                     peak_to_peak: range * t.sigma,
                     peak_to_peak_in_noise: range,
                     span_s: at(t.rows.last()) - at(t.rows.first()),
-                    significant,
-                    share,
+                    significant: m.significant,
+                    share: m.share,
+                    left_per_residual: m.left_per_residual,
                 }
             })
             .collect())
