@@ -104,6 +104,17 @@ pub fn convert(
         }
         reports.push(report);
     }
+    // A quote never closed took the rest of a text file for one field.
+    // In a mapped column its cell is refused above; elsewhere the rows
+    // it took would be lost without a word.
+    if let Some((row, col)) = table.unclosed_quote {
+        return Err(ImportError::at(
+            file,
+            table.place(row, col),
+            "a quote opened in this field is never closed: the rest of the file is read as \
+             this one field, its rows lost; close the quote or remove it",
+        ));
+    }
     voltages.sort_by_key(|(k, _)| *k);
     let segments = meta.segments;
     let v_v = Voltages::from_rows(
@@ -668,6 +679,7 @@ mod tests {
                 })
                 .collect(),
             merged: vec![],
+            unclosed_quote: None,
         }
     }
 

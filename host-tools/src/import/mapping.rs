@@ -282,7 +282,15 @@ impl Mapping {
             line: e
                 .span()
                 .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
-            message: e.message().trim_end().to_string(),
+            // The parser says some errors over two lines (`invalid table
+            // header`, then why): one line, as every refusal.
+            message: e
+                .message()
+                .lines()
+                .map(str::trim)
+                .filter(|l| !l.is_empty())
+                .collect::<Vec<_>>()
+                .join(": "),
         })?;
         let err = |key: &str, rule: String| ImportError::mapping(name, key, rule);
         if toml.format != MAPPING_FORMAT {
@@ -605,7 +613,7 @@ fn time(c: &ColumnToml, source: &Source) -> Result<Time, KeyError> {
                     _ => {
                         return Err(key_err(
                             ".zero",
-                            format!("must be a number in the column's units or \"first\", got {v}"),
+                            format!("must be a number in the column's units or \"first\", got {}", shown(v)),
                         ))
                     }
                 },
@@ -675,7 +683,10 @@ fn channel(c: &ColumnToml, source: &Source) -> Result<ChannelMap, KeyError> {
             _ => {
                 return Err(key_err(
                     ".zero",
-                    format!("must be a number in the column's units or \"opening\", got {v}"),
+                    format!(
+                        "must be a number in the column's units or \"opening\", got {}",
+                        shown(v)
+                    ),
                 ))
             }
         },
@@ -705,6 +716,19 @@ fn channel(c: &ColumnToml, source: &Source) -> Result<ChannelMap, KeyError> {
         out_of_range: c.out_of_range.clone().unwrap_or_default(),
         valid,
     })
+}
+
+/// A TOML value as a refusal quotes it, on one line: a string with its
+/// line ends escaped, a number or a boolean as TOML writes it, an array or
+/// a table by its kind (TOML would write a string in it over several
+/// lines, and the parser hands a date over as a table of its own).
+fn shown(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => format!("{s:?}"),
+        toml::Value::Array(_) => "an array".to_string(),
+        toml::Value::Table(_) | toml::Value::Datetime(_) => "a table or a date".to_string(),
+        other => other.to_string(),
+    }
 }
 
 /// A TOML number (float or integer) as `f64`.

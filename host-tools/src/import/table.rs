@@ -80,6 +80,9 @@ pub struct Table {
     pub rows: Vec<Row>,
     /// Merged cells (a workbook's).
     pub merged: Vec<Merged>,
+    /// A text file's quote that is never closed: the row and column of
+    /// the field it opens, which runs to the end of the file.
+    pub unclosed_quote: Option<(usize, usize)>,
 }
 
 const EMPTY: Cell = Cell::Empty;
@@ -146,13 +149,29 @@ impl Table {
 }
 
 /// A sheet's name as a cell reference writes it: quoted when it holds
-/// anything but letters, digits and underscores (`'Run 2'!A1`).
+/// anything but letters, digits and underscores (`'Run 2'!A1`), control
+/// characters shown as escapes (see [`escape_controls`]).
 fn sheet_ref(sheet: &str) -> String {
     if !sheet.is_empty() && sheet.chars().all(|c| c.is_alphanumeric() || c == '_') {
         sheet.to_string()
     } else {
-        format!("'{}'", sheet.replace('\'', "''"))
+        format!("'{}'", escape_controls(&sheet.replace('\'', "''")))
     }
+}
+
+/// `text` with its control characters shown as escapes (`Run\n2`): a
+/// workbook's XML may put a line end in a sheet's name, and a refusal
+/// stays one line.
+fn escape_controls(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// How an export is read, from its extension and the mapping's source.
@@ -218,7 +237,8 @@ pub fn read(path: &Path, file: &str, source: &Source, mapping: &str) -> Result<T
 fn read_workbook(path: &Path, file: &str, sheet: Option<&str>) -> Result<Table, ImportError> {
     let bad = |e: calamine::XlsxError| ImportError::Workbook {
         file: file.to_string(),
-        message: e.to_string(),
+        // The reader quotes the file's own text (a sheet's name) as it is.
+        message: escape_controls(&e.to_string()),
     };
     if let Err(source) = std::fs::metadata(path) {
         return Err(ImportError::Io {
@@ -231,13 +251,15 @@ fn read_workbook(path: &Path, file: &str, sheet: Option<&str>) -> Result<Table, 
     let sheet = match sheet {
         Some(s) if names.iter().any(|n| n == s) => s.to_string(),
         Some(s) => {
+            let has = if names.is_empty() {
+                "no sheet".to_string()
+            } else {
+                quoted_list(&names)
+            };
             return Err(ImportError::export(
                 file,
-                format!(
-                    "no sheet named {s:?} (source.sheet); the workbook has {}",
-                    quoted_list(&names)
-                ),
-            ))
+                format!("no sheet named {s:?} (source.sheet); the workbook has {has}"),
+            ));
         }
         None => match names.first() {
             Some(first) => first.clone(),
@@ -249,9 +271,15 @@ fn read_workbook(path: &Path, file: &str, sheet: Option<&str>) -> Result<Table, 
         Some(regions) => regions
             .map_err(bad)?
             .into_iter()
-            .map(|d| Merged {
-                rows: (d.start.0 as usize + 1, d.end.0 as usize + 1),
-                columns: (d.start.1 as usize, d.end.1 as usize),
+            // First to last, whichever corner the file names first: a
+            // block written backwards (`D5:B2`) covers B2:D5 all the same.
+            .map(|d| {
+                let (r0, r1) = (d.start.0.min(d.end.0), d.start.0.max(d.end.0));
+                let (c0, c1) = (d.start.1.min(d.end.1), d.start.1.max(d.end.1));
+                Merged {
+                    rows: (r0 as usize + 1, r1 as usize + 1),
+                    columns: (c0 as usize, c1 as usize),
+                }
             })
             .collect(),
     };
@@ -289,6 +317,7 @@ fn read_workbook(path: &Path, file: &str, sheet: Option<&str>) -> Result<Table, 
             .map(|(number, cells)| Row { number, cells })
             .collect(),
         merged,
+        unclosed_quote: None,
     })
 }
 
@@ -324,6 +353,9 @@ fn read_text(bytes: &[u8], file: &str, delimiter: u8) -> Result<Table, ImportErr
     let mut rows = Vec::new();
     // The line the record before ended on.
     let mut end_line = 0;
+    // The last record's line, its last field's column, and whether that
+    // field holds a line end.
+    let mut last = None;
     loop {
         match reader.read_byte_record(&mut record) {
             Ok(false) => break,
@@ -359,6 +391,11 @@ fn read_text(bytes: &[u8], file: &str, delimiter: u8) -> Result<Table, ImportErr
             .map(|f| f.iter().filter(|&&b| b == b'\n').count())
             .sum();
         end_line = line + quoted_line_ends;
+        let spans_lines = record
+            .iter()
+            .next_back()
+            .is_some_and(|f| f.iter().any(|b| matches!(b, b'\n' | b'\r')));
+        last = Some((line, record.len().saturating_sub(1), spans_lines));
         let mut cells: Vec<Cell> = record
             .iter()
             .map(|f| Cell::text(&String::from_utf8_lossy(f)))
@@ -371,10 +408,19 @@ fn read_text(bytes: &[u8], file: &str, delimiter: u8) -> Result<Table, ImportErr
             cells,
         });
     }
+    // A quote never closed runs to the end of the file: the reader takes
+    // the rest, rows and all, for the last record's last field. Closed,
+    // such a field ends the file with its quote (line ends at most after).
+    let end = bytes.iter().rposition(|b| !matches!(b, b'\n' | b'\r'));
+    let unclosed_quote = match last {
+        Some((line, col, true)) if end.is_some_and(|i| bytes[i] != b'"') => Some((line, col)),
+        _ => None,
+    };
     Ok(Table {
         sheet: None,
         rows,
         merged: Vec::new(),
+        unclosed_quote,
     })
 }
 
@@ -431,11 +477,26 @@ mod tests {
     }
 
     #[test]
+    fn a_quote_never_closed_is_found() {
+        let quote = |s: &str| {
+            read_text(s.as_bytes(), "t.csv", b',')
+                .unwrap()
+                .unclosed_quote
+        };
+        // Opened on line 3 in field 2, it takes lines 4 and 5 with it.
+        assert_eq!(quote("a,b\n1,2\n3,\"4\n5,6\n7,8\n"), Some((3, 1)));
+        assert_eq!(quote("a,b\n1,\"2\n3\"\n"), None);
+        assert_eq!(quote("a,b\n1,\"x\"\"\"\n\n"), None);
+        assert_eq!(quote("a,b\n1,2\n"), None);
+    }
+
+    #[test]
     fn places_are_named_as_a_person_finds_them() {
         let mut table = Table {
             sheet: Some("Sheet1".into()),
             rows: vec![],
             merged: vec![],
+            unclosed_quote: None,
         };
         assert_eq!(table.place(57, 3), "Sheet1!D57");
         assert_eq!(table.row_place(57), "Sheet1 row 57");
