@@ -2420,13 +2420,7 @@ fn spoiled_mappings_are_refused_by_name_or_import() {
 #[test]
 fn spoiled_workbooks_are_refused_by_name_or_import() {
     let spoils: Vec<&str> = SHARED_SPOILS.iter().chain(&XLSX_SPOILS).copied().collect();
-    let mut sweep = Sweep::new("xlsx");
-    for i in 0..XLSX_CASES {
-        let kind = spoils[i % spoils.len()];
-        let case = export_case(format!("xlsx {i}"), case_seed(2, i), kind, &spoils, true);
-        let _ = sweep.run(case, i % CLI_EVERY == 0);
-    }
-    sweep.finish();
+    sweep_exports("xlsx", XLSX_CASES, 2, &spoils, &spoils, true);
 }
 
 /// Workbooks written by hand, spoiled as rust_xlsxwriter never writes,
@@ -2437,24 +2431,38 @@ fn hand_written_workbooks_are_refused_by_name_or_import() {
         .iter()
         .map(|k| format!("hand-written: {k}"))
         .collect();
-    let spoils: Vec<&str> = SHARED_SPOILS.to_vec();
-    let mut sweep = Sweep::new("raw");
-    for i in 0..RAW_CASES {
-        let kind = &raws[i % raws.len()];
-        let case = export_case(format!("raw {i}"), case_seed(4, i), kind, &spoils, true);
-        let _ = sweep.run(case, i % CLI_EVERY == 0);
-    }
-    sweep.finish();
+    let kinds: Vec<&str> = raws.iter().map(String::as_str).collect();
+    sweep_exports("raw", RAW_CASES, 4, &kinds, &SHARED_SPOILS, true);
 }
 
 /// Spoiled CSV and TSV text, read by the mapping made for it.
 #[test]
 fn spoiled_text_exports_are_refused_by_name_or_import() {
     let spoils: Vec<&str> = SHARED_SPOILS.iter().chain(&TEXT_SPOILS).copied().collect();
-    let mut sweep = Sweep::new("text");
-    for i in 0..TEXT_CASES {
-        let kind = spoils[i % spoils.len()];
-        let case = export_case(format!("text {i}"), case_seed(3, i), kind, &spoils, false);
+    sweep_exports("text", TEXT_CASES, 3, &spoils, &spoils, false);
+}
+
+/// `cases` exports named `name`, each spoiled in the next of `kinds` in
+/// turn (with `spoils` to draw further spoils from) from seed stream
+/// `stream`, every [`CLI_EVERY`]th also through the binary.
+fn sweep_exports(
+    name: &'static str,
+    cases: usize,
+    stream: u64,
+    kinds: &[&str],
+    spoils: &[&str],
+    workbook: bool,
+) {
+    let mut sweep = Sweep::new(name);
+    for i in 0..cases {
+        let kind = kinds[i % kinds.len()];
+        let case = export_case(
+            format!("{name} {i}"),
+            case_seed(stream, i),
+            kind,
+            spoils,
+            workbook,
+        );
         let _ = sweep.run(case, i % CLI_EVERY == 0);
     }
     sweep.finish();
