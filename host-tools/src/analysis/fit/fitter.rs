@@ -312,11 +312,7 @@ impl<'a> Fitter<'a> {
     /// `recordings` under `spec` (`drift.rs`), channel by channel of each
     /// recording.
     pub fn drifts(&self, recordings: &[usize], spec: &ModelSpec) -> Result<Vec<Drift>, FitError> {
-        let raw = pool().install(|| self.raw_residuals(recordings, spec))?;
-        let raw: Vec<Vec<Vec<f64>>> = raw
-            .into_iter()
-            .map(|r| r.into_iter().flatten().collect())
-            .collect();
+        let raw = self.raw_weighted(recordings, spec)?;
         Ok(self
             .drift_set(recordings)
             .measure(&raw)
@@ -356,11 +352,7 @@ impl<'a> Fitter<'a> {
         if set.moving().is_empty() {
             return Ok(Vec::new());
         }
-        let raw = pool().install(|| self.raw_residuals(recordings, spec))?;
-        let raw: Vec<Vec<Vec<f64>>> = raw
-            .into_iter()
-            .map(|r| r.into_iter().flatten().collect())
-            .collect();
+        let raw = self.raw_weighted(recordings, spec)?;
         Ok(set
             .carried(&raw, spec.params.p_per_s)
             .into_iter()
@@ -374,6 +366,21 @@ impl<'a> Fitter<'a> {
                     range,
                 )
             })
+            .collect())
+    }
+
+    /// The weighted residuals, drift not removed, of every target of
+    /// `recordings` that has some under `spec`, computed in the pool: what
+    /// [`DriftSet`](super::drift_set::DriftSet) measures.
+    fn raw_weighted(
+        &self,
+        recordings: &[usize],
+        spec: &ModelSpec,
+    ) -> Result<Vec<Vec<Vec<f64>>>, FitError> {
+        let raw = pool().install(|| self.raw_residuals(recordings, spec))?;
+        Ok(raw
+            .into_iter()
+            .map(|r| r.into_iter().flatten().collect())
             .collect())
     }
 
