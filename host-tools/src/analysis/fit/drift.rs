@@ -196,6 +196,56 @@ impl DriftBasis {
         self.free[m]
     }
 
+    /// Samples per member.
+    pub(super) fn lens(&self) -> &[usize] {
+        &self.lens
+    }
+
+    /// Where member `m`'s samples start among every member's.
+    fn start(&self, m: usize) -> usize {
+        self.lens[..m].iter().sum()
+    }
+
+    /// The polynomial columns, each over every member's samples.
+    fn polynomial_columns(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.q.chunks_exact(self.total().max(1))
+    }
+
+    /// `Qᵀ x` for `x` nonzero on member `m`'s samples only (given there):
+    /// its coordinates on the polynomial columns.
+    pub(super) fn coordinates(&self, m: usize, x: &[f64]) -> Vec<f64> {
+        let at = self.start(m);
+        self.polynomial_columns()
+            .map(|q| q[at..at + x.len()].iter().zip(x).map(|(a, b)| a * b).sum())
+            .collect()
+    }
+
+    /// `Q c` on member `m`'s samples.
+    pub(super) fn member_part(&self, m: usize, coeffs: &[f64]) -> Vec<f64> {
+        let (at, len) = (self.start(m), self.lens[m]);
+        let mut out = vec![0.0; len];
+        for (q, &c) in self.polynomial_columns().zip(coeffs) {
+            out.iter_mut()
+                .zip(&q[at..at + len])
+                .for_each(|(v, a)| *v += c * a);
+        }
+        out
+    }
+
+    /// `r ← r + Q c` over the members' `parts`.
+    pub(super) fn add_columns(&self, parts: &mut [Vec<f64>], coeffs: &[f64]) {
+        for (q, &c) in self.polynomial_columns().zip(coeffs) {
+            let mut at = 0;
+            for p in parts.iter_mut() {
+                let len = p.len();
+                p.iter_mut()
+                    .zip(&q[at..at + len])
+                    .for_each(|(v, a)| *v += c * a);
+                at += len;
+            }
+        }
+    }
+
     /// Removes the free offsets and the polynomial columns (those built so
     /// far, while building) from `x`, one value per sample of every member
     /// end to end.

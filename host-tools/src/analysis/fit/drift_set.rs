@@ -4,6 +4,7 @@
 //! its place on it and two or more have the channel, else one recording
 //! at a time.
 
+use super::carry::CarryColumns;
 use super::data::SessionTargets;
 use super::drift::{DriftBasis, DriftMeasure};
 use crate::recording::Channel;
@@ -167,8 +168,9 @@ impl DriftSet {
                 .collect();
             let mut refs: Vec<&mut Vec<f64>> = parts.iter_mut().collect();
             g.basis.remove(&mut refs);
-            if g.carry.iter().any(Option::is_some) {
-                g.remove_carry(&mut parts, p_per_s);
+            let columns = CarryColumns::new(&g.basis, &g.carry, p_per_s);
+            if !columns.is_empty() {
+                columns.remove(&g.basis, &mut parts);
             }
             for (&(k, j), part) in g.members.iter().zip(parts) {
                 residuals[k][j] = Some(part);
@@ -192,7 +194,8 @@ impl DriftSet {
                 g.members.iter().map(|&(k, j)| raw[k][j].clone()).collect();
             let mut refs: Vec<&mut Vec<f64>> = parts.iter_mut().collect();
             g.basis.remove(&mut refs);
-            for (m, explained, range) in g.remove_carry(&mut parts, p_per_s) {
+            let columns = CarryColumns::new(&g.basis, &g.carry, p_per_s);
+            for (m, explained, range) in columns.remove(&g.basis, &mut parts) {
                 let (k, j) = g.members[m];
                 out.push((k, j, explained, range));
             }
@@ -219,90 +222,6 @@ impl DriftSet {
             }
         }
         out
-    }
-}
-
-impl Group {
-    /// Removes from `parts` (their drift already removed) the carry-over
-    /// columns `e^{−p t}` of the members that carry one, each from its
-    /// rest's mean (or its own mean, with a free offset), made orthogonal
-    /// to the drift's columns and to each other.
-    /// Returns, per carried member, `(member, the sum of squares its
-    /// column took, the range of what it took over the member)`.
-    fn remove_carry(&self, parts: &mut [Vec<f64>], p_per_s: f64) -> Vec<(usize, f64, f64)> {
-        let lens: Vec<usize> = parts.iter().map(Vec::len).collect();
-        let total: usize = lens.iter().sum();
-        let mut columns: Vec<(usize, Vec<f64>)> = Vec::new();
-        let mut at = 0;
-        for (m, (carry, &len)) in self.carry.iter().zip(&lens).enumerate() {
-            if let Some((tau_s, rest)) = carry {
-                let mut c = vec![0.0; total];
-                let own = &mut c[at..at + len];
-                for (v, &t) in own.iter_mut().zip(tau_s) {
-                    *v = (-p_per_s * t).exp();
-                }
-                let from = if self.basis.is_free(m) {
-                    len
-                } else {
-                    (*rest).min(len)
-                };
-                if from > 0 {
-                    let mean = own[..from].iter().sum::<f64>() / from as f64;
-                    own.iter_mut().for_each(|v| *v -= mean);
-                }
-                // Twice, as the drift's own columns were made.
-                for _ in 0..2 {
-                    self.basis.remove_columns(&mut c);
-                    for (_, q) in &columns {
-                        let dot: f64 = q.iter().zip(&c).map(|(a, b)| a * b).sum();
-                        c.iter_mut().zip(q).for_each(|(v, a)| *v -= dot * a);
-                    }
-                }
-                let norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
-                if norm > 1e-9 * (total as f64).sqrt() {
-                    c.iter_mut().for_each(|v| *v /= norm);
-                    columns.push((m, c));
-                }
-            }
-            at += len;
-        }
-        let starts: Vec<usize> = lens
-            .iter()
-            .scan(0, |at, &len| {
-                *at += len;
-                Some(*at - len)
-            })
-            .collect();
-        let mut taken = Vec::new();
-        for (m, q) in &columns {
-            let mut dot = 0.0;
-            let mut at = 0;
-            for p in parts.iter() {
-                dot += q[at..at + p.len()]
-                    .iter()
-                    .zip(p)
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
-                at += p.len();
-            }
-            let mut at = 0;
-            for p in parts.iter_mut() {
-                let len = p.len();
-                p.iter_mut()
-                    .zip(&q[at..at + len])
-                    .for_each(|(v, a)| *v -= dot * a);
-                at += len;
-            }
-            let own = &q[starts[*m]..starts[*m] + lens[*m]];
-            let (lo, hi) = own
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-                    (lo.min(x), hi.max(x))
-                });
-            let range = if hi >= lo { (hi - lo) * dot.abs() } else { 0.0 };
-            taken.push((*m, dot * dot, range));
-        }
-        taken
     }
 }
 

@@ -13,6 +13,7 @@
 //! shows (`inflation.rs`), so that one sensor's misfit does not steer the
 //! knobs another one determines.
 
+mod carry;
 mod covariance;
 mod data;
 pub mod drift;
