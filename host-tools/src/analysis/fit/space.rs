@@ -331,6 +331,13 @@ impl Space {
         self.effects.contains(&e)
     }
 
+    /// Whether knob `j`'s model is even in its `θ` (`θ` and `−θ` give one
+    /// model), its bound at `θ = 0`: `a` (`|θ|`) and `b/p` (`θ²`) of a
+    /// model without back-relaxation.
+    pub fn even(&self, j: usize) -> bool {
+        matches!(self.knobs[j], Knob::A | Knob::B) && !self.has(Effect::BackRelaxation)
+    }
+
     /// Parameters the information criteria count: the knobs, plus one for
     /// back-relaxation, which frees `b`'s sign rather than adding a knob.
     pub fn counted_parameters(&self) -> usize {
