@@ -178,6 +178,41 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 mod tests {
     use super::*;
 
+    /// The drift's polynomial columns over every sample.
+    fn whole_polynomials(basis: &DriftBasis) -> Vec<Vec<f64>> {
+        let members = basis.lens().len();
+        (0..basis.degree())
+            .map(|j| {
+                let mut e = vec![0.0; basis.degree()];
+                e[j] = 1.0;
+                (0..members)
+                    .flat_map(|m| basis.member_part(m, &e))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Member `m`'s raw carry-over column over every sample (its own
+    /// start at `at`), taken from its rest's mean or its own.
+    fn whole_carry(
+        basis: &DriftBasis,
+        m: usize,
+        at: usize,
+        carry: &(Vec<f64>, usize),
+        p: f64,
+    ) -> Vec<f64> {
+        let (tau, rest) = carry;
+        let (len, total) = (basis.lens()[m], basis.lens().iter().sum::<usize>());
+        let mut c = vec![0.0; total];
+        for (v, t) in c[at..at + len].iter_mut().zip(tau) {
+            *v = (-p * t).exp();
+        }
+        let from = if basis.is_free(m) { len } else { *rest };
+        let mean = c[at..at + from].iter().sum::<f64>() / from as f64;
+        c[at..at + len].iter_mut().for_each(|v| *v -= mean);
+        c
+    }
+
     /// The projection onto the drift and the carry-over columns by a dense
     /// least-squares solve over every sample: what `remove` must match.
     fn dense(
@@ -189,16 +224,7 @@ mod tests {
         use nalgebra::{DMatrix, DVector};
         let lens = basis.lens().to_vec();
         let total: usize = lens.iter().sum();
-        let mut cols: Vec<Vec<f64>> = Vec::new();
-        for j in 0..basis.degree() {
-            let mut e = vec![0.0; basis.degree()];
-            e[j] = 1.0;
-            let mut col = Vec::new();
-            for m in 0..lens.len() {
-                col.extend(basis.member_part(m, &e));
-            }
-            cols.push(col);
-        }
+        let mut cols = whole_polynomials(basis);
         let mut at = 0;
         for (m, (cm, &len)) in carry.iter().zip(&lens).enumerate() {
             if basis.is_free(m) {
@@ -206,15 +232,8 @@ mod tests {
                 col[at..at + len].iter_mut().for_each(|v| *v = 1.0);
                 cols.push(col);
             }
-            if let Some((tau, rest)) = cm {
-                let mut col = vec![0.0; total];
-                for (v, t) in col[at..at + len].iter_mut().zip(tau) {
-                    *v = (-p * t).exp();
-                }
-                let from = if basis.is_free(m) { len } else { *rest };
-                let mean = col[at..at + from].iter().sum::<f64>() / from as f64;
-                col[at..at + len].iter_mut().for_each(|v| *v -= mean);
-                cols.push(col);
+            if let Some(cm) = cm {
+                cols.push(whole_carry(basis, m, at, cm, p));
             }
             at += len;
         }
@@ -234,16 +253,7 @@ mod tests {
         r: &[f64],
     ) -> Vec<(usize, f64, f64)> {
         let lens = basis.lens().to_vec();
-        let total: usize = lens.iter().sum();
-        let poly: Vec<Vec<f64>> = (0..basis.degree())
-            .map(|j| {
-                let mut e = vec![0.0; basis.degree()];
-                e[j] = 1.0;
-                (0..lens.len())
-                    .flat_map(|m| basis.member_part(m, &e))
-                    .collect()
-            })
-            .collect();
+        let poly = whole_polynomials(basis);
         let project_out = |x: &mut Vec<f64>, q: &[f64]| {
             let d = dot(q, x);
             x.iter_mut().zip(q).for_each(|(v, a)| *v -= d * a);
@@ -262,14 +272,8 @@ mod tests {
         let mut out = Vec::new();
         let mut at = 0;
         for (m, (cm, &len)) in carry.iter().zip(&lens).enumerate() {
-            if let Some((tau, rest)) = cm {
-                let mut c = vec![0.0; total];
-                for (v, t) in c[at..at + len].iter_mut().zip(tau) {
-                    *v = (-p * t).exp();
-                }
-                let from = if basis.is_free(m) { len } else { *rest };
-                let mean = c[at..at + from].iter().sum::<f64>() / from as f64;
-                c[at..at + len].iter_mut().for_each(|v| *v -= mean);
+            if let Some(cm) = cm {
+                let mut c = whole_carry(basis, m, at, cm, p);
                 for _ in 0..2 {
                     poly.iter()
                         .chain(&done)

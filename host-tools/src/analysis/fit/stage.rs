@@ -102,10 +102,28 @@ pub struct Problem<'b> {
     m: usize,
     /// The start's lane when two starts race (`race.rs`).
     lane: Option<&'b Lane<'b>>,
+    /// The signs of the knobs even in `θ` at the accepted points.
+    flips: Mutex<Flips>,
+}
+
+/// What [`Problem`] has seen of its knobs' signs.
+#[derive(Debug, Default)]
+struct Flips {
     /// Per free knob, the sign of its `θ` at the last accepted point and
-    /// how many accepted points in a row flipped it; and the free knob
-    /// found flipping ([`FLIPS_TO_HOLD`]), where the descent stopped.
-    flips: Mutex<(Vec<(f64, usize)>, Option<usize>)>,
+    /// how many accepted points in a row flipped it.
+    signs: Vec<(f64, usize)>,
+    /// The free knob found flipping ([`FLIPS_TO_HOLD`]), where the
+    /// descent stopped.
+    flipping: Option<usize>,
+}
+
+impl Flips {
+    fn new(free: usize) -> Mutex<Flips> {
+        Mutex::new(Flips {
+            signs: vec![(0.0, 0); free],
+            flipping: None,
+        })
+    }
 }
 
 impl<'b> Problem<'b> {
@@ -126,7 +144,7 @@ impl<'b> Problem<'b> {
             residuals: None,
             m,
             lane: None,
-            flips: Mutex::new((vec![(0.0, 0); free.len()], None)),
+            flips: Flips::new(free.len()),
         }
     }
 
@@ -143,7 +161,7 @@ impl<'b> Problem<'b> {
             self.theta[j] = here;
             self.set_params(&x);
         }
-        self.flips = Mutex::new((vec![(0.0, 0); self.free.len()], None));
+        self.flips = Flips::new(self.free.len());
         self
     }
 
@@ -159,7 +177,10 @@ impl<'b> Problem<'b> {
     /// flipped at [`FLIPS_TO_HOLD`] accepted points in a row, if the
     /// descent stopped for one.
     fn flipping(&self) -> Option<usize> {
-        self.flips.lock().unwrap_or_else(|e| e.into_inner()).1
+        self.flips
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .flipping
     }
 
     /// Notes the signs of the knobs even in `θ` at an accepted point;
@@ -177,15 +198,15 @@ impl<'b> Problem<'b> {
             } else {
                 0.0
             };
-            let (last, row) = flips.0[k];
+            let (last, row) = flips.signs[k];
             let row = if sign != 0.0 && last == -sign {
                 row + 1
             } else {
                 0
             };
-            flips.0[k] = (sign, row);
+            flips.signs[k] = (sign, row);
             if row >= FLIPS_TO_HOLD {
-                flips.1 = Some(k);
+                flips.flipping = Some(k);
                 return true;
             }
         }
