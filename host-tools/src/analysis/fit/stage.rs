@@ -154,12 +154,14 @@ impl<'b> Problem<'b> {
     fn holding(mut self, k: usize) -> Self {
         let j = self.free.remove(k);
         let (here, cost_here) = (self.theta[j], self.cost());
+        // Kept, so that going back costs no second simulation.
+        let residuals_here = self.residuals.clone();
         self.theta[j] = 0.0;
         let x = self.params();
         self.set_params(&x);
         if self.cost() > cost_here {
             self.theta[j] = here;
-            self.set_params(&x);
+            self.residuals = residuals_here;
         }
         self.flips = Flips::new(self.free.len());
         self
