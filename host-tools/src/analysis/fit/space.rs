@@ -223,6 +223,16 @@ pub const P_MIN: f64 = 1.0 / super::drift::DRIFT_SCALE_S;
 /// Least `p − P_MIN` a fit starts from, 1/s: at the logarithm's floor
 /// (1e-9) `p`'s gradient vanishes and a fit started there stays.
 const P_START_MIN: f64 = 1e-3;
+/// Highest `p` a fit starts from, 1/s. A pole far above every rate the
+/// session shows (a camera's frames, the charging `1/(R1·C)`, 60/s for
+/// the seed's strip) makes the lead network a gain `b/p`, and `p`'s
+/// gradient falls as `1/p`: a fit started there stays. A baseline that
+/// cannot bend back (a back-relaxing strip) runs off so (rig seed 107:
+/// `p` 2.8e6/s), and every candidate started from it stayed, the
+/// back-relaxation's too, were the currents' zero read at the rests.
+/// Lowered to here, with the DC gain `b/p` kept, the model is the same
+/// below 100/s.
+const P_START_MAX: f64 = 100.0;
 /// Lowest instant gain `a` a back-relaxed fit starts from, in units of
 /// the fixed model's DC moment per charge: there `a` is a logarithm, and a
 /// gain near zero moves the moment by next to nothing per step. A board
@@ -428,12 +438,17 @@ impl Space {
     }
 
     /// `θ` to start a fit from `spec`: [`Space::theta`], with a collapsed
-    /// relaxation lifted to [`P_START_MIN`] and, back-relaxed,
+    /// relaxation lifted to [`P_START_MIN`], one run off to a gain brought
+    /// down to [`P_START_MAX`] (its `b/p` kept) and, back-relaxed,
     /// [`A_START_MIN`] (the lag's `z` kept).
     pub fn start_theta(&self, spec: &ModelSpec) -> Vec<f64> {
         let mut lifted = *spec;
         let p = &mut lifted.params;
         p.p_per_s = p.p_per_s.max(P_MIN + P_START_MIN);
+        if p.p_per_s > P_START_MAX {
+            p.b_nm_per_c_s *= P_START_MAX / p.p_per_s;
+            p.p_per_s = P_START_MAX;
+        }
         if self.has(Effect::BackRelaxation) {
             let a = p.a_nm_per_c.max(A_START_MIN * self.instant_unit());
             if p.a_nm_per_c > 0.0 {
@@ -517,5 +532,35 @@ impl Space {
             Knob::FreeMode(k) => spec.ext.modal_damping.free[k],
             Knob::BlockedMode(k) => spec.ext.modal_damping.blocked[k],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use model_core::Params;
+
+    #[test]
+    fn a_start_run_off_to_a_gain_comes_down_with_its_gain_kept() {
+        let fixed = ModelSpec::baseline(Params::main_m_2006());
+        let mut run_off = fixed;
+        run_off.params.p_per_s = 2.8e6;
+        run_off.params.b_nm_per_c_s = 6.9 * 2.8e6;
+        for effects in [&[][..], &[Effect::BackRelaxation][..]] {
+            let space = Space::new(effects, 3, fixed);
+            let start = space.spec(&space.start_theta(&run_off));
+            let p = &start.params;
+            assert!(
+                (p.p_per_s - P_START_MAX).abs() < 1e-9,
+                "{effects:?}: {}",
+                p.p_per_s
+            );
+            let gain = p.b_nm_per_c_s / p.p_per_s;
+            assert!((gain - 6.9).abs() < 1e-9 * 6.9, "{effects:?}: {gain}");
+        }
+        // Below the cap, the start is the model.
+        let space = Space::new(&[], 3, fixed);
+        let start = space.spec(&space.start_theta(&fixed));
+        assert!((start.params.p_per_s - fixed.params.p_per_s).abs() < 1e-12);
     }
 }
