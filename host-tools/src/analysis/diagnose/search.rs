@@ -13,7 +13,7 @@ use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
-use crate::analysis::fit::{below_zero_at, excludes_at};
+use crate::analysis::fit::{above_zero_at, below_zero_at, excludes_at, Estimate};
 use crate::analysis::fit::{
     form, profile_cost, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score,
 };
@@ -587,9 +587,13 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried
         Effect::Damping => either_or_both(&[(Knob::Zeta, 0.0), (Knob::Beta, 0.0)]),
         // Added mass is what water adds; its drag alone is damping.
         Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
-        Effect::ElectrochemicalNonlinearity => {
-            either_or_both(&[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)])
-        }
+        Effect::ElectrochemicalNonlinearity => match electrochemistry_alone(&fit.estimates, z) {
+            Some(shows) => shows,
+            None => fit.jointly_excludes(
+                &[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)],
+                family_tail(tried),
+            ),
+        },
         // b = K z below zero is what makes the bending relax past the
         // start; any z > 0 (a creep too) is the baseline's.
         Effect::BackRelaxation => fit
@@ -608,6 +612,30 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried
             let z = family_z(tried * knobs.clone().count());
             knobs.clone().any(|est| excludes_at(est, 0.0, z))
         }
+    }
+}
+
+/// Whether the electrochemical terms alone show
+/// `electrochemical-nonlinearity` at `z`: yes where the leak grows faster
+/// than the voltage or the charge departs from linear, each beyond its
+/// interval; no where the leak bends below linear; `None` where the joint
+/// test of the two decides. Electrolysis adds a current that grows faster
+/// than the voltage (Butler–Volmer's `sinh`; docs/FORMAT.md's note on the
+/// catalogue): a leak bending the other way is some other slow current (a
+/// current zero wandering between rests: lab rig seed 20024, a
+/// back-relaxing strip, was named so at 1.05 % held out). The charge may
+/// bend either way.
+fn electrochemistry_alone(estimates: &[Estimate], z: f64) -> Option<bool> {
+    let find = |knob: Knob| estimates.iter().find(|est| est.knob == knob);
+    let leak = find(Knob::LeakCubic);
+    if leak.is_some_and(|est| above_zero_at(est, z))
+        || find(Knob::ChargeCubic).is_some_and(|est| excludes_at(est, 0.0, z))
+    {
+        Some(true)
+    } else if leak.is_some_and(|est| est.value < 0.0) {
+        Some(false)
+    } else {
+        None
     }
 }
 
@@ -634,6 +662,40 @@ mod tests {
         idx.iter()
             .map(|&i| session.recordings[i].name.clone())
             .collect()
+    }
+
+    #[test]
+    fn only_a_leak_growing_faster_than_the_voltage_is_electrolysis() {
+        let est = |knob, value: f64, half: f64| Estimate {
+            knob,
+            value,
+            low: value - half,
+            high: value + half,
+        };
+        let z = family_z(8);
+        // A leak bending up beyond its interval; one bending down as far.
+        let up = [
+            est(Knob::ChargeCubic, 0.0, 1e-3),
+            est(Knob::LeakCubic, 2e-2, 1e-3),
+        ];
+        let down = [
+            est(Knob::ChargeCubic, 0.0, 1e-3),
+            est(Knob::LeakCubic, -2e-2, 1e-3),
+        ];
+        assert_eq!(electrochemistry_alone(&up, z), Some(true));
+        assert_eq!(electrochemistry_alone(&down, z), Some(false));
+        // A charge off linear shows it whichever way the leak bends.
+        let charge = [
+            est(Knob::ChargeCubic, -2e-2, 1e-3),
+            est(Knob::LeakCubic, -2e-2, 1e-3),
+        ];
+        assert_eq!(electrochemistry_alone(&charge, z), Some(true));
+        // Within their intervals, the joint test decides.
+        let unsure = [
+            est(Knob::ChargeCubic, 1e-4, 1e-3),
+            est(Knob::LeakCubic, 1e-4, 1e-3),
+        ];
+        assert_eq!(electrochemistry_alone(&unsure, z), None);
     }
 
     #[test]

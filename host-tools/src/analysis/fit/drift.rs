@@ -12,7 +12,8 @@
 //! its own opening rest (a camera's rest shape, which a brush can leave
 //! off, a load cell's tare, a shunt amplifier's zero: `data.rs`), so a
 //! drift is what moved since that rest. Over the recordings fitted
-//! together, each measured channel gets one polynomial in session time
+//! together, each camera and load-cell channel gets one polynomial in
+//! session time
 //! they share, at least a line, which can bend once per
 //! [`DRIFT_SCALE_S`] (degree `1 + ⌊span/60 s⌋` over a span of the
 //! session, at most [`DRIFT_MAX_DEGREE`]), each recording's part of it
@@ -35,14 +36,14 @@
 //!
 //! Drift is fitted jointly with the model by variable projection: the
 //! residuals, and so every Jacobian taken of them, are those left after
-//! the least-squares drift is removed (Golub and Pereyra). The currents
-//! have one too: a shunt amplifier's zero wanders (each recording's own
-//! offset alone left the currents at 1.75 times their noise floor on the
-//! rig's lab bench). Their leak, the steady current under a held voltage
-//! that the electrochemistry shows in, is read where the drive switches,
-//! which no drift can follow: over holds of minutes a drift that bends
-//! once a minute can take part of it (the lab protocol's `sinh` leak
-//! went unnamed, docs/rig.md).
+//! the least-squares drift is removed (Golub and Pereyra). A current's
+//! zero wanders too (each recording's own offset alone left the currents
+//! at 1.75 times their noise floor on the rig's lab bench), but is read
+//! where no current flows, at rest, and joined straight between rests,
+//! never fitted over a drive (`zero_drift.rs`): over holds of minutes a
+//! polynomial that bends once a minute took the leak, the steady current
+//! under a held voltage that the electrochemistry shows in (the lab
+//! protocol's `sinh` leak went unnamed, docs/rig.md).
 //!
 //! ```
 //! use finrs::analysis::fit::DriftBasis;

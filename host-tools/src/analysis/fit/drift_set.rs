@@ -7,8 +7,9 @@
 use super::carry::CarryColumns;
 use super::data::SessionTargets;
 use super::drift::{DriftBasis, DriftMeasure};
+use super::zero_drift::{ZeroDrift, QUIET_SETTLE_S};
 use crate::recording::Channel;
-use crate::session::Session;
+use crate::session::{Session, SessionRecording};
 
 /// One channel's drift over a set of recordings.
 #[derive(Debug)]
@@ -33,6 +34,9 @@ pub const MOVING_REST_Z: f64 = 4.0;
 #[derive(Debug, Default)]
 pub struct DriftSet {
     groups: Vec<Group>,
+    /// Each current's zero, `((position in the set, target index), its
+    /// zero)`.
+    zeros: Vec<((usize, usize), ZeroDrift)>,
     /// Positions in the set of the recordings that open moving.
     moving: Vec<usize>,
 }
@@ -106,6 +110,7 @@ impl DriftSet {
             })
         };
         let mut groups = Vec::new();
+        let mut zeros = Vec::new();
         for ch in channels {
             let members: Vec<(usize, usize)> = recordings
                 .iter()
@@ -118,6 +123,17 @@ impl DriftSet {
                     Some((k, j))
                 })
                 .collect();
+            if matches!(ch, Channel::Current(_)) {
+                // A current's zero is read where none flows.
+                for (k, j) in members {
+                    let i = recordings[k];
+                    let t = &targets.recordings[i].targets[j];
+                    let r = &session.recordings[i];
+                    let t_s: Vec<f64> = t.rows.iter().map(|&row| r.rec.t_s[row]).collect();
+                    zeros.push(((k, j), ZeroDrift::new(&t_s, &quiet_stretches(r, &t.rows))));
+                }
+                continue;
+            }
             // Shared only by two or more: a slope of one recording alone
             // is free to take its slow response.
             if on_session_clock && members.len() > 1 {
@@ -139,7 +155,11 @@ impl DriftSet {
                 }
             }
         }
-        DriftSet { groups, moving }
+        DriftSet {
+            groups,
+            zeros,
+            moving,
+        }
     }
 
     /// Positions in the set of the recordings that open while the strip
@@ -156,6 +176,11 @@ impl DriftSet {
     /// is gone within tens of milliseconds), an amplitude per channel
     /// fitted jointly with the drift.
     pub fn remove(&self, residuals: &mut [Vec<Option<Vec<f64>>>], p_per_s: f64) {
+        for ((k, j), zero) in &self.zeros {
+            if let Some(r) = residuals[*k][*j].as_mut() {
+                zero.remove(r);
+            }
+        }
         for g in &self.groups {
             if g.members.iter().any(|&(k, j)| residuals[k][j].is_none()) {
                 continue;
@@ -209,7 +234,14 @@ impl DriftSet {
     /// there in units of σ, what its channel's drift measures over the
     /// set)`.
     pub fn measure(&self, raw: &[Vec<Vec<f64>>]) -> Vec<(usize, usize, f64, DriftMeasure)> {
-        let mut out = Vec::new();
+        let mut out: Vec<(usize, usize, f64, DriftMeasure)> = self
+            .zeros
+            .iter()
+            .map(|((k, j), zero)| {
+                let m = zero.measure(&raw[*k][*j]);
+                (*k, *j, m.ranges[0], m)
+            })
+            .collect();
         for g in &self.groups {
             let parts: Vec<&[f64]> = g
                 .members
@@ -247,4 +279,51 @@ fn rest_slope_z(t: &super::data::Target, t_s: &[f64], rest_rows: usize) -> f64 {
     }
     let sxy: f64 = x.iter().zip(&y).map(|(x, y)| (x - mx) * (y - my)).sum();
     (sxy / sxx) / (t.sigma / sxx.sqrt())
+}
+
+/// The stretches of `rows` (a current's samples in recording `r`) where
+/// no current flows: every segment reads its rest, and has since the
+/// opening or for [`QUIET_SETTLE_S`]; as sample index ranges, each of at
+/// least three samples.
+fn quiet_stretches(r: &SessionRecording, rows: &[usize]) -> Vec<(usize, usize)> {
+    let n = r.rec.meta.segments;
+    // Each row's time since the last row that was not a rest (none yet:
+    // quiet since the opening).
+    let mut since_s = Vec::with_capacity(r.rec.t_s.len());
+    let mut last_driven: Option<f64> = None;
+    for (row, &t) in r.rec.t_s.iter().enumerate() {
+        let at_rest = (0..n).all(|k| r.rests[k].at_rest(r.rec.v_v[row][k]));
+        if !at_rest {
+            last_driven = Some(t);
+        }
+        since_s.push(match (at_rest, last_driven) {
+            (false, _) => None,
+            (true, None) => Some(f64::INFINITY),
+            (true, Some(t0)) => Some(t - t0),
+        });
+    }
+    let quiet = |row: usize| since_s[row].is_some_and(|s| s >= QUIET_SETTLE_S);
+    let mut out = Vec::new();
+    let mut from = None;
+    for (s, &row) in rows.iter().enumerate() {
+        // Consecutive samples on consecutive rows: a gap ends a stretch.
+        let joined = s > 0 && rows[s - 1] + 1 == row;
+        match (quiet(row), from) {
+            (true, None) => from = Some(s),
+            (true, Some(_)) if !joined => {
+                out.push((from.unwrap_or(s), s));
+                from = Some(s);
+            }
+            (false, Some(f)) => {
+                out.push((f, s));
+                from = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(f) = from {
+        out.push((f, rows.len()));
+    }
+    out.retain(|(f, t)| t - f >= 3);
+    out
 }

@@ -33,6 +33,7 @@ mod space;
 mod stage;
 mod start;
 mod stats;
+pub mod zero_drift;
 
 pub use data::{Sensor, SessionTargets, Target};
 pub use drift::{Drift, DriftBasis, DRIFT_MAX_DEGREE, DRIFT_SCALE_S};
@@ -41,4 +42,6 @@ pub use error::FitError;
 pub use fitter::{FitResult, Fitter, FormCheck, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
 pub use space::{difference_step, Knob, Space};
-pub use stats::{below_zero_at, excludes_at, nrmse, wilson_hilferty, ChannelFit, Estimate, Score};
+pub use stats::{
+    above_zero_at, below_zero_at, excludes_at, nrmse, wilson_hilferty, ChannelFit, Estimate, Score,
+};

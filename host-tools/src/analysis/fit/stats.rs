@@ -394,6 +394,11 @@ pub fn below_zero_at(est: &Estimate, z: f64) -> bool {
     est.high.is_finite() && est.value + z / Z95 * (est.high - est.value) < 0.0
 }
 
+/// Whether `est`'s lower end, widened as [`excludes_at`] does, is above 0.
+pub fn above_zero_at(est: &Estimate, z: f64) -> bool {
+    est.low.is_finite() && est.value - z / Z95 * (est.value - est.low) > 0.0
+}
+
 /// The 95 % interval of `value` with standard error `se`: unbounded for an
 /// infinite `se`, log-symmetric for a positive knob, else symmetric.
 fn interval(positive: bool, value: f64, se: f64) -> (f64, f64) {
