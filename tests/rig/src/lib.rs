@@ -52,6 +52,7 @@ pub mod sample;
 pub mod session;
 pub mod strip;
 pub mod sweep;
+pub mod trivial;
 
 pub use beam::Tip;
 pub use bench::{Bench, IMPERFECTIONS};

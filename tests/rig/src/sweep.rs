@@ -20,6 +20,7 @@ use crate::lab::{first_mode_hz, LabBench, LabProtocol, DRIFT, LAB_ARTEFACTS, LAB
 use crate::lab_session::{write_lab, Layout};
 use crate::sample::{Hidden, Sample, CATALOGUE, OFF_CLASS_DEPARTURES, SEGMENT_VARIATION};
 use crate::session::{board_protocol, short_protocol, write, Run, Sensors};
+use crate::trivial::{Trivial, TRIVIAL};
 
 /// Which lab-like session a scenario is ([`crate::lab`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -330,6 +331,9 @@ pub struct Outcome {
     pub score: Score,
     /// Wall time of the diagnosis, s.
     pub seconds: f64,
+    /// Each trivial diagnoser's verdict on the same session, scored
+    /// ([`crate::trivial`]).
+    pub trivial: Vec<(Trivial, Score)>,
 }
 
 /// The columns of the matrix: the catalogue (the ideal rig's names and
@@ -469,6 +473,8 @@ pub fn markdown(outcomes: &[Outcome]) -> String {
         pct(totals.2, totals.0),
         pct(totals.3, totals.0)
     );
+    let _ = writeln!(out, "\n{}", right_apart(outcomes));
+    let _ = writeln!(out, "\n{}", trivial_scores(outcomes));
     let _ = writeln!(
         out,
         "\nCells: percent of the row's sessions whose verdict gives the column. \
@@ -479,13 +485,92 @@ pub fn markdown(outcomes: &[Outcome]) -> String {
     out
 }
 
+/// The right verdicts split by their word: those that name every cause
+/// and say the model now explains the data (`none` or `explained`), and
+/// those right only because `unexplained` was allowed there (#49).
+pub fn right_apart(outcomes: &[Outcome]) -> String {
+    let n = outcomes.len();
+    let right = |word: bool| {
+        outcomes
+            .iter()
+            .filter(|o| o.score.is_right() && (o.verdict == "unexplained") == word)
+            .count()
+    };
+    let (named, unexplained) = (right(false), right(true));
+    format!(
+        "Right with `none` or `explained`: {named} of {n} ({}); right as an allowed `unexplained`: {unexplained} of {n} ({}).",
+        wilson_text(named, n),
+        wilson_text(unexplained, n)
+    )
+}
+
+/// Each trivial diagnoser's right count on the same sessions.
+pub fn trivial_scores(outcomes: &[Outcome]) -> String {
+    let n = outcomes.len();
+    let parts: Vec<String> = TRIVIAL
+        .iter()
+        .map(|&t| {
+            let scored = outcomes
+                .iter()
+                .filter(|o| o.trivial.iter().any(|(x, _)| *x == t))
+                .count();
+            let right = outcomes
+                .iter()
+                .filter(|o| o.trivial.iter().any(|(x, s)| *x == t && s.is_right()))
+                .count();
+            if scored == n {
+                format!(
+                    "`{}` right in {right} ({})",
+                    t.name(),
+                    wilson_text(right, n)
+                )
+            } else {
+                format!("`{}` scored on {scored} of {n} only", t.name())
+            }
+        })
+        .collect();
+    format!(
+        "Trivial diagnosers on the same {n} sessions (src/trivial.rs: no fit, the rests' bench findings): {}.",
+        parts.join(", ")
+    )
+}
+
+/// `k` of `n` as a percentage with Wilson's 95 % interval.
+fn wilson_text(k: usize, n: usize) -> String {
+    if n == 0 {
+        return "no sessions".to_string();
+    }
+    let (lo, hi) = wilson(k, n);
+    format!(
+        "{:.0} %, {:.0}–{:.0} %",
+        100.0 * k as f64 / n as f64,
+        100.0 * lo,
+        100.0 * hi
+    )
+}
+
+/// Wilson's 95 % score interval for `k` successes in `n` trials.
+pub fn wilson(k: usize, n: usize) -> (f64, f64) {
+    let z = 1.959_963_984_540_054_f64;
+    let (k, n) = (k as f64, n as f64);
+    let p = k / n;
+    let d = 1.0 + z * z / n;
+    let c = (p + z * z / (2.0 * n)) / d;
+    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / d;
+    ((c - h).max(0.0), (c + h).min(1.0))
+}
+
 /// One CSV line per session.
 pub fn csv(outcomes: &[Outcome]) -> String {
     let mut out = String::from(
-        "seed,row,board,verdict,causes,required,allowed,missed,wrong,right,gain_percent,seconds\n",
+        "seed,row,board,verdict,causes,required,allowed,missed,wrong,right,gain_percent,seconds",
     );
+    for t in TRIVIAL {
+        let _ = write!(out, ",trivial_{}_right", t.name().replace('-', "_"));
+    }
+    out.push('\n');
     for o in outcomes {
-        let _ = writeln!(
+        let _ = write!(
             out,
             "{},{},{},{},{},{},{},{},{},{},{:.2},{:.1}",
             o.scenario.seed,
@@ -501,6 +586,15 @@ pub fn csv(outcomes: &[Outcome]) -> String {
             o.gain_percent,
             o.seconds
         );
+        for t in TRIVIAL {
+            let right = o.trivial.iter().find(|(x, _)| *x == t);
+            let _ = write!(
+                out,
+                ",{}",
+                right.map_or(String::new(), |(_, s)| s.is_right().to_string())
+            );
+        }
+        out.push('\n');
     }
     out
 }
@@ -523,6 +617,7 @@ mod tests {
         };
         let causes: Vec<String> = causes.iter().map(|s| s.to_string()).collect();
         let score = score(&expected, verdict, &causes);
+        let null = crate::expect::score(&expected, "none", &[]);
         Outcome {
             scenario,
             expected,
@@ -531,6 +626,7 @@ mod tests {
             gain_percent: 10.0,
             score,
             seconds: 1.0,
+            trivial: vec![(Trivial::Nothing, null)],
         }
     }
 
@@ -595,7 +691,36 @@ mod tests {
         let md = markdown(&o);
         assert!(md.contains("| base | 3 |"), "{md}");
         assert!(md.contains("right 33 %"), "{md}");
-        assert_eq!(csv(&o).lines().count(), 4);
+        // The null guess misses damping in all three; the others were
+        // never scored by it.
+        assert!(md.contains("`none` right in 0 (0 %, 0–56 %)"), "{md}");
+        assert!(md.contains("`damped-soft` scored on 0 of 3 only"), "{md}");
+        assert!(md.contains("`explained`: 1 of 3"), "{md}");
+        let text = csv(&o);
+        assert_eq!(text.lines().count(), 4);
+        assert!(text
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with("trivial_damped_soft_unexplained_right"));
+        assert!(text.lines().nth(1).unwrap().ends_with(",false,,"), "{text}");
+    }
+
+    #[test]
+    fn wilsons_interval_matches_its_textbook_values() {
+        // 0 of 3: upper end 1 - 1/(1 + z²/3) = 0.5615; 10 of 10: 0.7225.
+        let (lo, hi) = wilson(0, 3);
+        assert!(lo.abs() < 1e-12 && (hi - 0.5615).abs() < 1e-3, "{lo} {hi}");
+        let (lo, hi) = wilson(10, 10);
+        assert!(
+            (lo - 0.7225).abs() < 1e-3 && (hi - 1.0).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        let (lo, hi) = wilson(116, 120);
+        assert!(
+            (lo - 0.917).abs() < 2e-3 && (hi - 0.987).abs() < 2e-3,
+            "{lo} {hi}"
+        );
     }
 
     #[test]

@@ -7,11 +7,13 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
+use finrs::session::Session;
 use finrs_rig::expect::{names_given, score, Expected};
 use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::sweep::{
     csv, expected_of, markdown, plan, plan_lab, write_scenario, Outcome, Scenario,
 };
+use finrs_rig::trivial::TRIVIAL;
 
 /// Writes and diagnoses off-class rig sessions, one seed each, and counts
 /// what the diagnosis names against what each session holds.
@@ -55,7 +57,13 @@ struct Said {
     causes: Vec<String>,
     gain_percent: f64,
     seconds: f64,
+    /// Each trivial diagnoser's verdict word and names, in [`TRIVIAL`]'s
+    /// order (`None` in a result kept before they were scored).
+    trivial: Option<Vec<Guess>>,
 }
+
+/// A trivial diagnoser's verdict word and names.
+type Guess = (String, Vec<String>);
 
 fn result_path(cli: &Cli, s: &Scenario) -> PathBuf {
     cli.out
@@ -80,11 +88,21 @@ fn kept(cli: &Cli, s: &Scenario) -> anyhow::Result<Option<Said>> {
     let (verdict, causes, gain_percent) =
         verdict_of(&v).with_context(|| format!("{}: not a kept result", path.display()))?;
     let seconds = v["seconds"].as_f64().unwrap_or(f64::NAN);
+    let trivial = v["trivial"].as_array().and_then(|a| {
+        let guesses: Vec<Guess> = a
+            .iter()
+            .filter_map(|g| verdict_of(g).ok().map(|(v, c, _)| (v, c)))
+            .collect();
+        let names = a.iter().map(|g| g["name"].as_str());
+        let same = names.eq(TRIVIAL.iter().map(|t| Some(t.name())));
+        (same && guesses.len() == TRIVIAL.len()).then_some(guesses)
+    });
     Ok(Some(Said {
         verdict,
         causes,
         gain_percent,
         seconds,
+        trivial,
     }))
 }
 
@@ -100,6 +118,15 @@ fn keep_result(cli: &Cli, s: &Scenario, said: &Said) -> anyhow::Result<()> {
         "causes": said.causes,
         "gain_percent": if said.gain_percent.is_finite() { Some(said.gain_percent) } else { None },
         "seconds": said.seconds,
+        "trivial": said.trivial.as_ref().map(|g| {
+            TRIVIAL
+                .iter()
+                .zip(g)
+                .map(|(t, (verdict, causes))| {
+                    serde_json::json!({ "name": t.name(), "verdict": verdict, "causes": causes })
+                })
+                .collect::<Vec<_>>()
+        }),
     });
     std::fs::write(&tmp, serde_json::to_string_pretty(&v)?)
         .with_context(|| format!("writing {}", tmp.display()))?;
@@ -132,13 +159,41 @@ fn verdict_of(v: &serde_json::Value) -> anyhow::Result<(String, Vec<String>, f64
     Ok((verdict, causes, gain))
 }
 
-/// The scenario's outcome: its kept result, or a diagnosis run now.
+/// Each trivial diagnoser's verdict on the session in `dir`; where the
+/// session cannot be read (nor diagnosed), `failed`.
+fn guesses(dir: &Path) -> Vec<Guess> {
+    match Session::read(dir) {
+        Ok(session) => TRIVIAL.iter().map(|t| t.diagnose(&session)).collect(),
+        Err(e) => TRIVIAL
+            .iter()
+            .map(|_| (format!("failed: {e}"), Vec::new()))
+            .collect(),
+    }
+}
+
+/// The scenario's outcome: its kept result, or a diagnosis run now. A
+/// result kept before the trivial diagnosers were scored gets them now
+/// (the session written again: the same seed writes the same session).
 fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
-    let (expected, said) = match kept(cli, s)? {
+    let (expected, mut said) = match kept(cli, s)? {
         Some(said) => (expected_of(s)?, said),
         None => diagnose_one(cli, s)?,
     };
+    if said.trivial.is_none() {
+        let dir = cli.out.join(format!("session-{}", s.seed));
+        write_scenario(s, &dir)?;
+        said.trivial = Some(guesses(&dir));
+        if !cli.keep {
+            std::fs::remove_dir_all(&dir).ok();
+        }
+        keep_result(cli, s, &said)?;
+    }
     let score = score(&expected, &said.verdict, &said.causes);
+    let trivial = TRIVIAL
+        .iter()
+        .zip(said.trivial.iter().flatten())
+        .map(|(&t, (verdict, causes))| (t, finrs_rig::expect::score(&expected, verdict, causes)))
+        .collect();
     Ok(Outcome {
         scenario: s.clone(),
         expected,
@@ -147,6 +202,7 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         gain_percent: said.gain_percent,
         score,
         seconds: said.seconds,
+        trivial,
     })
 }
 
@@ -155,6 +211,7 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
 fn diagnose_one(cli: &Cli, s: &Scenario) -> anyhow::Result<(Expected, Said)> {
     let dir = cli.out.join(format!("session-{}", s.seed));
     let expected = write_scenario(s, &dir)?;
+    let trivial = Some(guesses(&dir));
     let json = dir.join("verdict.json");
     let start = Instant::now();
     let run = Command::new(&cli.run.finrs)
@@ -191,6 +248,7 @@ fn diagnose_one(cli: &Cli, s: &Scenario) -> anyhow::Result<(Expected, Said)> {
         causes,
         gain_percent,
         seconds,
+        trivial,
     };
     keep_result(cli, s, &said)?;
     Ok((expected, said))
