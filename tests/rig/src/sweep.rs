@@ -54,6 +54,9 @@ pub struct Scenario {
     /// Lab artefacts left out (e.g. `readback`, for a reader that refuses
     /// a DAQ's rests); the others are drawn as they would be with it.
     pub lab_without: Vec<String>,
+    /// The baseline's own strip with nothing hidden on a perfect bench
+    /// ([`plan_null`]): a right diagnosis is `none`.
+    pub null: bool,
 }
 
 impl Scenario {
@@ -64,7 +67,9 @@ impl Scenario {
     pub fn row(&self) -> String {
         let mut parts: Vec<&str> = self.hidden.clone();
         parts.extend(self.bench.iter().copied());
-        let what = if parts.is_empty() {
+        let what = if self.null {
+            "null".to_string()
+        } else if parts.is_empty() {
             "base".to_string()
         } else {
             parts.join("+")
@@ -132,6 +137,21 @@ pub fn plan(first: u64, count: usize) -> Vec<Scenario> {
         .collect()
 }
 
+/// The null sweep's scenarios for seeds `first..first + count` (#49): the
+/// baseline's own strip (its class, drawn per seed) with nothing hidden,
+/// on a perfect bench and the sweep's short protocol. Every catalogue
+/// name given is a false one: the share of sessions with one is the
+/// search's family-wise false-name rate.
+pub fn plan_null(first: u64, count: usize) -> Vec<Scenario> {
+    (0..count)
+        .map(|i| Scenario {
+            seed: first + i as u64,
+            null: true,
+            ..Scenario::default()
+        })
+        .collect()
+}
+
 /// The seeds of the lab sweep ([`plan_lab`]) start here: above the
 /// off-class sweep's.
 pub const LAB_FIRST_SEED: u64 = 20_000;
@@ -185,7 +205,7 @@ struct Draws {
 
 fn draw(s: &Scenario) -> anyhow::Result<Draws> {
     let mut rng = rand::rngs::StdRng::seed_from_u64(s.seed);
-    let ideal = s.lab == Some(LabKind::DriftOnly);
+    let ideal = s.null || s.lab == Some(LabKind::DriftOnly);
     let mut sample = if ideal {
         Sample::draw(&mut rng)
     } else {
@@ -194,7 +214,7 @@ fn draw(s: &Scenario) -> anyhow::Result<Draws> {
     let hidden = if ideal {
         anyhow::ensure!(
             s.hidden.is_empty() && s.bench.is_empty(),
-            "the drift-only session hides nothing but drift"
+            "the drift-only and null sessions hide nothing (but drift)"
         );
         Hidden::draw(&[], &mut rng)
     } else {
@@ -669,6 +689,23 @@ mod tests {
         s.lab_without = vec!["readback".to_string()];
         assert!(!s.lab_artefacts().contains(&"readback"));
         assert_eq!(s.lab_artefacts().len(), LAB_ARTEFACTS.len() - 1);
+    }
+
+    #[test]
+    fn a_null_session_is_the_baselines_own_strip_and_wants_none() {
+        let p = plan_null(40_000, 3);
+        assert!(p.iter().all(|s| s.null && s.row() == "null"));
+        let e = expected_of(&p[0]).unwrap();
+        assert_eq!(e, Expected::default());
+        // Its strip is the ideal class's: what the drift-only lab session
+        // draws from the same seed.
+        let drift = Scenario {
+            seed: 40_000,
+            lab: Some(LabKind::DriftOnly),
+            ..Scenario::default()
+        };
+        let debug = |s: &Scenario| format!("{:?}", strip_of(s).unwrap());
+        assert_eq!(debug(&p[0]), debug(&drift));
     }
 
     #[test]

@@ -11,7 +11,7 @@ use finrs::session::Session;
 use finrs_rig::expect::{names_given, score, Expected};
 use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::sweep::{
-    csv, expected_of, markdown, plan, plan_lab, write_scenario, Outcome, Scenario,
+    csv, expected_of, markdown, plan, plan_lab, plan_null, write_scenario, Outcome, Scenario,
 };
 use finrs_rig::trivial::TRIVIAL;
 
@@ -48,6 +48,11 @@ struct Cli {
     /// `readback`, for a reader that refuses a DAQ's rests).
     #[arg(long, value_delimiter = ',', requires = "lab")]
     lab_without: Vec<String>,
+    /// The null sweep (`sweep::plan_null`): the baseline's own strip with
+    /// nothing hidden, on a perfect bench: the share of sessions given a
+    /// catalogue name is the search's family-wise false-name rate.
+    #[arg(long, conflicts_with = "lab")]
+    null: bool,
 }
 
 /// What `finrs diagnose` said of one session, as kept in OUT/results so
@@ -268,7 +273,9 @@ fn main() -> anyhow::Result<()> {
             finrs_rig::LAB_ARTEFACTS
         );
     }
-    let mut scenarios = if cli.lab {
+    let mut scenarios = if cli.null {
+        plan_null(cli.run.first_seed, cli.run.sessions)
+    } else if cli.lab {
         let mut p = plan_lab(cli.run.first_seed, cli.run.sessions);
         for s in &mut p {
             s.lab_without = cli.lab_without.clone();
