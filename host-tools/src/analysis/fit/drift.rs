@@ -387,7 +387,7 @@ pub fn share_of_excess<'a>(explained: f64, r: impl Iterator<Item = &'a f64>) -> 
 }
 
 /// The 99.9 % point of `χ²` with `dof` degrees of freedom.
-fn chi2_999(dof: usize) -> f64 {
+pub(super) fn chi2_999(dof: usize) -> f64 {
     use statrs::distribution::{ChiSquared, ContinuousCDF};
     ChiSquared::new(dof as f64).map_or(f64::INFINITY, |d| d.inverse_cdf(0.999))
 }

@@ -310,8 +310,8 @@ fn quiet_stretches(r: &SessionRecording, rows: &[usize]) -> Vec<(usize, usize)> 
         let joined = s > 0 && rows[s - 1] + 1 == row;
         match (quiet(row), from) {
             (true, None) => from = Some(s),
-            (true, Some(_)) if !joined => {
-                out.push((from.unwrap_or(s), s));
+            (true, Some(f)) if !joined => {
+                out.push((f, s));
                 from = Some(s);
             }
             (false, Some(f)) => {

@@ -22,7 +22,7 @@
 //! assert!((r[20] - 5.0).abs() < 0.2 && r[35].abs() < 0.2);
 //! ```
 
-use super::drift::{share_of_excess, DriftMeasure};
+use super::drift::{chi2_999, share_of_excess, DriftMeasure};
 
 /// Time after the last driven row before a current at rest reads its
 /// zero, s: fifty charging time constants `R1·C` of the seed's strip
@@ -52,17 +52,21 @@ impl ZeroDrift {
         }
     }
 
-    /// The zero in `r` at every sample: each stretch's mean, joined by
-    /// straight lines, held before the first and after the last.
-    pub fn zero(&self, r: &[f64]) -> Vec<f64> {
-        let levels: Vec<(f64, f64)> = self
-            .stretches
+    /// Each stretch's centre, s, and the mean of `r` over it.
+    fn levels(&self, r: &[f64]) -> Vec<(f64, f64)> {
+        self.stretches
             .iter()
             .map(|&(from, to, centre)| {
                 (centre, r[from..to].iter().sum::<f64>() / (to - from) as f64)
             })
-            .collect();
-        let Some(&(first_t, first)) = levels.first() else {
+            .collect()
+    }
+
+    /// The zero in `r` at every sample: each stretch's mean, joined by
+    /// straight lines, held before the first and after the last.
+    pub fn zero(&self, r: &[f64]) -> Vec<f64> {
+        let levels = self.levels(r);
+        let Some(&(_, first)) = levels.first() else {
             return vec![0.0; r.len()];
         };
         let mut next = 0;
@@ -72,8 +76,9 @@ impl ZeroDrift {
                 while next < levels.len() && levels[next].0 <= t {
                     next += 1;
                 }
+                // `next` counts the stretches centred at or before `t`.
                 match next {
-                    0 if t <= first_t => first,
+                    0 => first,
                     n if n >= levels.len() => levels[levels.len() - 1].1,
                     n => {
                         let ((t0, a), (t1, b)) = (levels[n - 1], levels[n]);
@@ -107,26 +112,17 @@ impl ZeroDrift {
             });
         let range = if hi >= lo { hi - lo } else { 0.0 };
         // Only the wander: each stretch's level from the first's.
-        let first = self
-            .stretches
-            .first()
-            .map(|&(from, to, _)| r[from..to].iter().sum::<f64>() / (to - from) as f64)
-            .unwrap_or(0.0);
+        let levels = self.levels(r);
+        let first = levels.first().map_or(0.0, |&(_, level)| level);
         let explained: f64 = self
             .stretches
             .iter()
+            .zip(&levels)
             .skip(1)
-            .map(|&(from, to, _)| {
-                let n = (to - from) as f64;
-                let level = r[from..to].iter().sum::<f64>() / n;
-                n * (level - first).powi(2)
-            })
+            .map(|(&(from, to, _), &(_, level))| (to - from) as f64 * (level - first).powi(2))
             .sum();
-        let dof = self.stretches.len().saturating_sub(1);
-        let significant = dof > 0 && {
-            use statrs::distribution::{ChiSquared, ContinuousCDF};
-            ChiSquared::new(dof as f64).is_ok_and(|d| explained > d.inverse_cdf(0.999))
-        };
+        let dof = levels.len().saturating_sub(1);
+        let significant = dof > 0 && explained > chi2_999(dof);
         // What the zero takes out of every sample, against what the
         // model leaves beyond the noise.
         let taken: f64 = zero.iter().map(|z| z * z).sum();

@@ -70,6 +70,11 @@ struct Said {
 /// A trivial diagnoser's verdict word and names.
 type Guess = (String, Vec<String>);
 
+/// Where the scenario's session is written (and kept with --keep).
+fn session_dir(cli: &Cli, s: &Scenario) -> PathBuf {
+    cli.out.join(format!("session-{}", s.seed))
+}
+
 fn result_path(cli: &Cli, s: &Scenario) -> PathBuf {
     cli.out
         .join("results")
@@ -185,7 +190,7 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         None => diagnose_one(cli, s)?,
     };
     if said.trivial.is_none() {
-        let dir = cli.out.join(format!("session-{}", s.seed));
+        let dir = session_dir(cli, s);
         write_scenario(s, &dir)?;
         said.trivial = Some(guesses(&dir));
         if !cli.keep {
@@ -193,12 +198,12 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
         }
         keep_result(cli, s, &said)?;
     }
-    let score = score(&expected, &said.verdict, &said.causes);
     let trivial = TRIVIAL
         .iter()
         .zip(said.trivial.iter().flatten())
-        .map(|(&t, (verdict, causes))| (t, finrs_rig::expect::score(&expected, verdict, causes)))
+        .map(|(&t, (verdict, causes))| (t, score(&expected, verdict, causes)))
         .collect();
+    let score = score(&expected, &said.verdict, &said.causes);
     Ok(Outcome {
         scenario: s.clone(),
         expected,
@@ -214,7 +219,7 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Outcome> {
 /// Writes the scenario's session, diagnoses it with the `finrs` binary
 /// and keeps the result.
 fn diagnose_one(cli: &Cli, s: &Scenario) -> anyhow::Result<(Expected, Said)> {
-    let dir = cli.out.join(format!("session-{}", s.seed));
+    let dir = session_dir(cli, s);
     let expected = write_scenario(s, &dir)?;
     let trivial = Some(guesses(&dir));
     let json = dir.join("verdict.json");
