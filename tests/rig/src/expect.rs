@@ -175,6 +175,69 @@ pub fn expected(hidden: &Hidden, bench: &Bench, protocol: Protocol) -> Expected 
     e
 }
 
+/// What a right diagnosis says of a literature strip's session
+/// ([`crate::literature`]): as [`expected`], with the spectrum's damping,
+/// the reaction and the drying in place of the rig's own forms; each
+/// departure required only at or above the diagnosis's plausible strength
+/// ([`crate::literature::plausible`]) and allowed below it;
+/// `beam-stiffness` judged on the stiffness the metadata's geometry
+/// predicts against the relaxed and the instantaneous true ones (both
+/// beyond the tolerance: required). `unexplained` is right beside the
+/// required names: the electrode line and the spectrum are in no
+/// catalogue form.
+pub fn expected_literature(hidden: &Hidden, bench: &Bench, protocol: Protocol) -> Expected {
+    use crate::literature::{plausible, strengths};
+    let Some(lit) = &hidden.literature else {
+        return expected(hidden, bench, protocol);
+    };
+    let mut e = expected(hidden, bench, protocol);
+    let moves = protocol.free || protocol.blocked;
+    let mut name = |present: bool, visible: bool, name: &'static str| {
+        e.required.retain(|n| *n != name);
+        e.allowed.retain(|n| *n != name);
+        if present && visible {
+            e.required.push(name);
+        } else if present {
+            e.allowed.push(name);
+        }
+    };
+    name(lit.relaxing() > 0.0, moves && protocol.ringing, "damping");
+    let strong = |n: &str| {
+        strengths(hidden)
+            .iter()
+            .any(|(s, x)| *s == n && *x >= plausible(n))
+    };
+    name(
+        lit.reaction.is_some(),
+        strong("electrochemical-nonlinearity"),
+        "electrochemical-nonlinearity",
+    );
+    name(
+        lit.drying.is_some(),
+        protocol.session_start && strong("dehydration"),
+        "dehydration",
+    );
+    // The fit's laminate stiffness from the metadata over the true
+    // laminate's: EI goes as the width and the cube of the thickness.
+    let [_, width, thickness] = lit.measured;
+    let f = hidden.ei_factor.unwrap_or(1.0) / (width * thickness.powi(3));
+    let far = |x: f64| !(1.0 / STIFFNESS_TOLERANCE..=STIFFNESS_TOLERANCE).contains(&x);
+    let pinned = protocol.free && (protocol.blocked || protocol.ringing);
+    name(
+        true,
+        pinned && far(f) && far(f * (1.0 - lit.relaxing())),
+        "beam-stiffness",
+    );
+    for (n, x) in strengths(hidden) {
+        if x < plausible(n) && e.required.contains(&n) {
+            e.required.retain(|r| *r != n);
+            e.allowed.push(n);
+        }
+    }
+    e.unexplained_ok = true;
+    e
+}
+
 /// What a right diagnosis says of a session of `hidden` on `bench` and the
 /// lab bench `lab`, recorded with `protocol` (the table at the top): as
 /// [`expected`], with drift reported as the bench if at all, and
@@ -295,6 +358,47 @@ mod tests {
         assert!(!score(&e, "unexplained", &[]).is_right());
         let s = score(&e, "explained", &names(&["damping"]));
         assert_eq!(s.wrong, ["damping"]);
+    }
+
+    #[test]
+    fn a_literature_strips_departures_are_required_from_their_plausible_strength() {
+        use crate::literature::Literature;
+        let mut rng = rand::rngs::StdRng::seed_from_u64(4);
+        let sample = crate::sample::Sample::draw_off_class(&mut rng);
+        let mut h = Literature::draw(
+            &["electrochemical-nonlinearity", "segment-crosstalk"],
+            &sample,
+            150.0,
+            &mut rng,
+        )
+        .unwrap();
+        h.crosstalk = Some(0.2);
+        let lit = h.literature.as_mut().unwrap();
+        lit.reaction = Some(Literature::reaction_for(&sample, 0.5, 1.23, 0.06));
+        let e = expected_literature(&h, &Bench::default(), FULL);
+        for n in [
+            "damping",
+            "electrochemical-nonlinearity",
+            "segment-crosstalk",
+        ] {
+            assert!(e.required.contains(&n), "{n} in {e:?}");
+        }
+        // The electrode line and the spectrum are in no catalogue form.
+        assert!(e.unexplained_ok);
+        // Below the plausible strengths: allowed, not required.
+        h.crosstalk = Some(0.02);
+        let lit = h.literature.as_mut().unwrap();
+        lit.reaction = Some(Literature::reaction_for(&sample, 0.05, 1.23, 0.06));
+        let e = expected_literature(&h, &Bench::default(), FULL);
+        for n in ["electrochemical-nonlinearity", "segment-crosstalk"] {
+            assert!(
+                !e.required.contains(&n) && e.allowed.contains(&n),
+                "{n} in {e:?}"
+            );
+        }
+        // Nothing but the base: dehydration is a false name.
+        let s = score(&e, "unexplained", &names(&["damping", "dehydration"]));
+        assert_eq!(s.wrong, ["dehydration"]);
     }
 
     #[test]

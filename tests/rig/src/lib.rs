@@ -27,6 +27,12 @@
 //! one's state over, a moment that differs by sign; and the lab's own
 //! protocol (one segment, steps held for minutes, 100 rows/s, a laser).
 //!
+//! The *literature* strip ([`literature`]) is the one the fit does not
+//! share: electrodes as resistive lines, electrolysis above its onset, a
+//! viscoelastic relaxation spectrum, drying by water content, metadata
+//! measured a few percent off; with a protocol drawn per session
+//! ([`protocols`]) and each departure over a range of strengths.
+//!
 //! ```no_run
 //! use rand::SeedableRng;
 //! let mut rng = rand::rngs::StdRng::seed_from_u64(7);
@@ -47,6 +53,8 @@ pub mod expect;
 pub mod heatmap;
 pub mod lab;
 pub mod lab_session;
+pub mod literature;
+pub mod protocols;
 pub mod runner;
 pub mod sample;
 pub mod session;

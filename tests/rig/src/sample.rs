@@ -141,6 +141,9 @@ pub struct Hidden {
     /// on the DAQ's analogue channels (currents, load cell), with this
     /// amplitude in units of each channel's noise.
     pub mains_pickup: Option<f64>,
+    /// The literature strip ([`crate::literature`]): its electrodes,
+    /// damping, reaction and drying in place of the rig's own forms.
+    pub literature: Option<crate::literature::Literature>,
 }
 
 /// One segment's departures from the strip's own `R1`, `C` and `K`.

@@ -217,15 +217,18 @@ pub fn write(
         };
         let mut rec = drive_recording(&wave, &drive)?;
         rec.meta.sample = Some(label.to_string());
-        rec.meta.thickness_m = sample.thickness_m();
-        rec.meta.length_m = sample.length_m;
-        rec.meta.width_m = sample.width_m;
+        // A ruler's and a micrometer's readings on the literature strip.
+        let [length, width, thickness] =
+            hidden.literature.as_ref().map_or([1.0; 3], |l| l.measured);
+        rec.meta.thickness_m = sample.thickness_m() * thickness;
+        rec.meta.length_m = sample.length_m * length;
+        rec.meta.width_m = sample.width_m * width;
         rec.meta.medium = if hidden.water.is_some() {
             Medium::Water
         } else {
             Medium::Air
         };
-        rec.meta.dots_s_m = Some(DOTS_S_M.to_vec());
+        rec.meta.dots_s_m = Some(DOTS_S_M.iter().map(|s| s * length).collect());
         rec.meta.notes = Some(format!(
             "t_session_start_s = {t_session:.3}; run {} of {}; {} ({} s rest, {} s drive, {} s off); finrs-rig",
             index + 1,

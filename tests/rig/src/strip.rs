@@ -6,12 +6,16 @@
 //! statically. [`run`] starts every recording with the strip at rest;
 //! [`run_lab`] adds what a lab bench has ([`Lab`]): a recording that
 //! starts from the state the last one left, the strip's own curl, an open
-//! contact, a moment that differs by sign.
+//! contact, a moment that differs by sign. The literature strip
+//! ([`crate::literature`]) runs through the same loop with its own
+//! electrics (each segment a line of patches, each patch its own moment)
+//! and its modes stepped with their relaxation spectrum.
 
 use finrs::recording::Voltages;
 use nalgebra::{DVector, Matrix4};
 
 use crate::beam::{Beam, Tip};
+use crate::literature::{Lines, ViscoStep};
 use crate::sample::{Hidden, Sample, WATER_KG_M3};
 
 /// Sub-steps per DAQ row.
@@ -172,7 +176,7 @@ impl Electrics<'_> {
     }
 
     /// Moments on every segment, N·m, before the drying gain.
-    fn moments(&self, x: &[Elec], out: &mut [f64]) {
+    fn segment_moments(&self, x: &[Elec], out: &mut [f64]) {
         let kappa = self.h.crosstalk.unwrap_or(0.0);
         let k = self.s.k_nm_per_c;
         // What a neighbour passes on: its charge now, or through the lag.
@@ -254,6 +258,101 @@ impl Electrics<'_> {
     }
 }
 
+/// What drives the beam: the segments' electrics and the moments they
+/// make, in the rig's own form ([`Electrics`]) or as the literature
+/// strip's electrode lines ([`crate::literature`]).
+pub(crate) trait Electrical {
+    /// The electrical state.
+    type X: Clone;
+    /// Equal patches along each segment, each with a moment of its own.
+    fn patches(&self) -> usize;
+    /// The state at rest of a strip of `segments` segments.
+    fn rest(&self, segments: usize) -> Self::X;
+    /// Moments on every patch, N·m, at session time `t_s` (the rig's own
+    /// drying gain is applied after).
+    fn moments(&self, x: &Self::X, t_s: f64, out: &mut [f64]);
+    /// Current into each segment, A, with the row's voltages `volts` just
+    /// applied (`open[i]`: segment `i`'s contact is open).
+    fn currents(
+        &self,
+        x: &Self::X,
+        volts: &[f64],
+        open: Option<&[bool]>,
+        t_s: f64,
+        out: &mut [f64],
+    );
+    /// One sub-step of `h` seconds from session time `t_s`.
+    fn step(&self, x: &mut Self::X, volts: &[f64], open: Option<&[bool]>, t_s: f64, h: f64);
+}
+
+impl Electrical for Electrics<'_> {
+    type X = Vec<Elec>;
+
+    fn patches(&self) -> usize {
+        1
+    }
+
+    fn rest(&self, segments: usize) -> Vec<Elec> {
+        vec![Elec::default(); segments]
+    }
+
+    fn moments(&self, x: &Vec<Elec>, _t_s: f64, out: &mut [f64]) {
+        self.segment_moments(x, out);
+    }
+
+    fn currents(
+        &self,
+        x: &Vec<Elec>,
+        volts: &[f64],
+        open: Option<&[bool]>,
+        _t_s: f64,
+        out: &mut [f64],
+    ) {
+        for (i, c) in out.iter_mut().enumerate() {
+            *c = if open.is_some_and(|o| o[i]) {
+                // An open contact: nothing flows, the leak neither.
+                0.0
+            } else {
+                self.leak_a(volts[i]) + (volts[i] - x[i].v) / self.r1_ohm(i)
+            };
+        }
+    }
+
+    fn step(&self, x: &mut Vec<Elec>, volts: &[f64], open: Option<&[bool]>, _t_s: f64, h: f64) {
+        self.rk4(x, volts, open, h);
+    }
+}
+
+/// A mode's exact sub-step: constant modal damping ([`ModeStep`]), or the
+/// literature strip's viscoelastic spectrum ([`ViscoStep`]), whose
+/// internal terms follow `η`.
+enum Stepper {
+    Modal(ModeStep),
+    Visco(ViscoStep),
+}
+
+impl Stepper {
+    /// The coordinate the stiffness sees, from `[η, η̇/ω, s..]`.
+    fn elastic(&self, x: &[f64]) -> f64 {
+        match self {
+            Stepper::Modal(_) => x[0],
+            Stepper::Visco(v) => v.elastic(x),
+        }
+    }
+
+    fn advance(&self, x: &mut [f64], f0: f64, slope: f64) {
+        match self {
+            Stepper::Modal(s) => {
+                let m = &s.m;
+                let (e, z) = (x[0], x[1]);
+                x[0] = m[0][0] * e + m[0][1] * z + m[0][2] * f0 + m[0][3] * slope;
+                x[1] = m[1][0] * e + m[1][1] * z + m[1][2] * f0 + m[1][3] * slope;
+            }
+            Stepper::Visco(v) => v.advance(x, f0, slope),
+        }
+    }
+}
+
 /// One mode's exact sub-step: `[η, η̇/ω]` from itself, the modal force at
 /// the start and its slope across the step.
 struct ModeStep {
@@ -297,7 +396,8 @@ pub fn section(sample: &Sample, hidden: &Hidden) -> (f64, f64) {
         w.added_mass_factor * WATER_KG_M3 * std::f64::consts::PI * width * width / 4.0
     });
     let ei = sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0);
-    (ei, sample.mass_kg_per_m() + added)
+    let mass = sample.mass_kg_per_m() * hidden.literature.as_ref().map_or(1.0, |l| l.mass_factor);
+    (ei, mass + added)
 }
 
 /// Runs the strip through the voltages `volts[row][segment]` held for
@@ -351,10 +451,99 @@ pub fn run_lab(
     points_s_m: &[f64],
     lab: &Lab,
 ) -> (Truth, State) {
+    let at = At {
+        mesh,
+        tip,
+        volts,
+        dt_s,
+        t_session_s,
+        camera,
+        points_s_m,
+    };
+    match &hidden.literature {
+        Some(lit) => {
+            // The literature strip is not run on the lab bench: its state
+            // is not carried over, nor its curl or contacts.
+            assert!(
+                lab.start.is_none() && lab.curl_nm.is_none() && lab.open.is_none(),
+                "the literature strip runs on the sweep's bench alone"
+            );
+            let lines = Lines {
+                s: sample,
+                h: hidden,
+                lit,
+            };
+            let (truth, _) = run_with(&lines, sample, hidden, &at, lab, None);
+            (truth, State::default())
+        }
+        None => {
+            let elec = Electrics {
+                s: sample,
+                h: hidden,
+                asym: lab.asymmetry,
+            };
+            let start = lab
+                .start
+                .filter(|state| !state.elec.is_empty())
+                .map(|state| {
+                    assert_eq!(
+                        state.elec.len(),
+                        volts.segments(),
+                        "a carried state of another strip"
+                    );
+                    state.elec.clone()
+                });
+            let (truth, elec) = run_with(&elec, sample, hidden, &at, lab, start);
+            (truth, State { elec })
+        }
+    }
+}
+
+/// Where and how a run goes: [`run_lab`]'s arguments but the strip and
+/// the bench.
+#[derive(Clone, Copy)]
+struct At<'a> {
+    mesh: Mesh,
+    tip: Tip,
+    volts: &'a Voltages,
+    dt_s: f64,
+    t_session_s: f64,
+    camera: &'a [bool],
+    points_s_m: &'a [f64],
+}
+
+/// [`run_lab`] for any [`Electrical`] strip, from `start` (`None`: at
+/// rest).
+fn run_with<E: Electrical>(
+    elec: &E,
+    sample: &Sample,
+    hidden: &Hidden,
+    at: &At,
+    lab: &Lab,
+    start: Option<E::X>,
+) -> (Truth, E::X) {
+    let At {
+        mesh,
+        tip,
+        volts,
+        dt_s,
+        t_session_s,
+        camera,
+        points_s_m,
+    } = *at;
     let n = volts.segments();
+    let patches = elec.patches();
+    assert_eq!(mesh.per_segment % patches, 0, "whole elements per patch");
     let width = sample.width_m;
     let (ei, mass) = section(sample, hidden);
-    let beam = Beam::new(sample.length_m, n, mesh.per_segment, ei, mass, tip);
+    let beam = Beam::new(
+        sample.length_m,
+        n * patches,
+        mesh.per_segment / patches,
+        ei,
+        mass,
+        tip,
+    );
     let (blocked, held) = (tip == Tip::Pinned, tip.is_held());
     let h = dt_s / SUBSTEPS as f64;
     let zeta = |k: usize| hidden.damping_of_mode(k);
@@ -362,9 +551,19 @@ pub fn run_lab(
     let dynamic: Vec<usize> = (0..modes)
         .filter(|&k| beam.omega[k] < 2.0 * std::f64::consts::PI * mesh.dynamic_limit_hz)
         .collect();
-    let steps: Vec<ModeStep> = dynamic
+    let spectrum = hidden
+        .literature
+        .as_ref()
+        .map_or(&[][..], |l| &l.spectrum[..]);
+    let steps: Vec<Stepper> = dynamic
         .iter()
-        .map(|&k| ModeStep::new(beam.omega[k], zeta(k), h))
+        .map(|&k| {
+            if spectrum.is_empty() {
+                Stepper::Modal(ModeStep::new(beam.omega[k], zeta(k), h))
+            } else {
+                Stepper::Visco(ViscoStep::new(beam.omega[k], spectrum, h))
+            }
+        })
         .collect();
     // Dynamic modes that feel the drag (a leading run: modes are sorted).
     let dragged = dynamic
@@ -379,22 +578,14 @@ pub fn run_lab(
             .map(|j| c * if j + 1 == beam.elements { 0.5 } else { 1.0 } * beam.le_m)
             .collect::<Vec<f64>>()
     });
-    let elec = Electrics {
-        s: sample,
-        h: hidden,
-        asym: lab.asymmetry,
-    };
-    let mut x = match lab.start {
-        Some(state) if !state.elec.is_empty() => {
-            assert_eq!(state.elec.len(), n, "a carried state of another strip");
-            state.elec.clone()
-        }
-        _ => vec![Elec::default(); n],
-    };
-    let mut eta = vec![0.0; dynamic.len()];
-    let mut y2 = vec![0.0; dynamic.len()];
-    let mut u0 = vec![0.0; n];
-    let mut u1 = vec![0.0; n];
+    let carried = start.is_some();
+    let mut x = start.unwrap_or_else(|| elec.rest(n));
+    // Each dynamic mode's `[η, η̇/ω]` and its spectrum's terms.
+    let mut xs = vec![vec![0.0; 2 + spectrum.len()]; dynamic.len()];
+    let loads = n * patches;
+    let mut u0 = vec![0.0; loads];
+    let mut u1 = vec![0.0; loads];
+    let mut amps = vec![0.0; n];
     let rows = volts.len();
     let mut truth = Truth {
         currents_a: vec![Vec::with_capacity(rows); n],
@@ -406,23 +597,23 @@ pub fn run_lab(
         force_n: Vec::with_capacity(if held { rows } else { 0 }),
     };
     let modal_force =
-        |u: &[f64], k: usize| -> f64 { (0..n).map(|i| beam.forcing[(k, i)] * u[i]).sum() };
+        |u: &[f64], k: usize| -> f64 { (0..loads).map(|i| beam.forcing[(k, i)] * u[i]).sum() };
     let mut drag_modal = vec![0.0; dynamic.len()];
     // The curl's modal force per unit moment on every segment.
     let curl_forcing: Vec<f64> = dynamic
         .iter()
-        .map(|&k| (0..n).map(|i| beam.forcing[(k, i)]).sum())
+        .map(|&k| (0..loads).map(|i| beam.forcing[(k, i)]).sum())
         .collect();
     let curl_at = |t: f64| lab.curl_nm.map_or(0.0, |c| c(t));
     let gain_at = |t: f64| hidden.drying_s.map_or(1.0, |tau| 1.0 / (1.0 + t / tau));
-    if lab.start.is_some() || lab.curl_nm.is_some() {
+    if carried || lab.curl_nm.is_some() {
         // Standing still under the opening moment: each mode at its static
         // deflection.
-        elec.moments(&x, &mut u0);
+        elec.moments(&x, t_session_s, &mut u0);
         let (gain, curl) = (gain_at(t_session_s), curl_at(t_session_s));
         u0.iter_mut().for_each(|u| *u = *u * gain + curl);
         for (j, &k) in dynamic.iter().enumerate() {
-            eta[j] = modal_force(&u0, k) / (beam.omega[k] * beam.omega[k]);
+            xs[j][0] = modal_force(&u0, k) / (beam.omega[k] * beam.omega[k]);
         }
     }
     let mut open_row = vec![false; n];
@@ -436,17 +627,13 @@ pub fn run_lab(
             &open_row[..]
         });
         // Outputs at the row's instant, with the row's voltage just applied.
-        for (i, c) in truth.currents_a.iter_mut().enumerate() {
-            if open.is_some_and(|o| o[i]) {
-                // An open contact: nothing flows, the leak neither.
-                c.push(0.0);
-                continue;
-            }
-            c.push(elec.leak_a(v_row[i]) + (v_row[i] - x[i].v) / elec.r1_ohm(i));
+        elec.currents(&x, v_row, open, t_s, &mut amps);
+        for (c, a) in truth.currents_a.iter_mut().zip(&amps) {
+            c.push(*a);
         }
         let want_shape = held || camera.get(row).copied().unwrap_or(false);
         if want_shape {
-            elec.moments(&x, &mut u0);
+            elec.moments(&x, t_s, &mut u0);
             u0.iter_mut().for_each(|u| *u *= gain);
             if lab.curl_nm.is_some() {
                 let curl = curl_at(t_s);
@@ -457,18 +644,22 @@ pub fn run_lab(
                 full[k] = modal_force(&u0, k) / (beam.omega[k] * beam.omega[k]);
             }
             for (j, &k) in dynamic.iter().enumerate() {
-                full[k] = eta[j];
+                full[k] = xs[j][0];
             }
             if blocked {
                 // Accelerations of the modes in time; the static ones have none.
                 let mut acc = DVector::<f64>::zeros(modes);
+                // What the stiffness sees: the deflection itself, or on a
+                // viscoelastic strip its relaxed part and the spectrum's.
+                let mut elastic = full.clone();
                 for (j, &k) in dynamic.iter().enumerate() {
                     let w = beam.omega[k];
+                    elastic[k] = steps[j].elastic(&xs[j]);
                     acc[k] = modal_force(&u0, k) + drag_modal[j]
-                        - w * w * eta[j]
-                        - 2.0 * zeta(k) * w * w * y2[j];
+                        - w * w * elastic[k]
+                        - 2.0 * zeta(k) * w * w * xs[j][1];
                 }
-                truth.force_n.push(beam.reaction_n(&full, &acc, &u0));
+                truth.force_n.push(beam.reaction_n(&elastic, &acc, &u0));
             } else if let Some(k_s) = beam.spring_n_per_m {
                 // The load cell that gives reads its own extension.
                 truth.force_n.push(k_s * beam.tip_m(&beam.nodal(&full)));
@@ -480,9 +671,10 @@ pub fn run_lab(
             }
         }
         for sub in 0..SUBSTEPS {
-            elec.moments(&x, &mut u0);
-            elec.rk4(&mut x, v_row, open, h);
-            elec.moments(&x, &mut u1);
+            let t0 = t_s + sub as f64 * h;
+            elec.moments(&x, t0, &mut u0);
+            elec.step(&mut x, v_row, open, t0, h);
+            elec.moments(&x, t0 + h, &mut u1);
             if let Some(d) = &drag {
                 // Node velocities from the dynamic modes; drag held over the sub-step.
                 let vel = &shapes_drag
@@ -491,7 +683,7 @@ pub fn run_lab(
                         dynamic[..dragged]
                             .iter()
                             .enumerate()
-                            .map(|(j, &k)| y2[j] * beam.omega[k]),
+                            .map(|(j, &k)| xs[j][1] * beam.omega[k]),
                     );
                 let mut f = DVector::<f64>::zeros(vel.len());
                 for (j, c) in d.iter().enumerate() {
@@ -507,10 +699,7 @@ pub fn run_lab(
             }
             // The curl at the sub-step's ends, linear between them as the
             // electrics' moment is.
-            let curl = lab.curl_nm.map(|_| {
-                let t0 = t_s + sub as f64 * h;
-                (curl_at(t0), curl_at(t0 + h))
-            });
+            let curl = lab.curl_nm.map(|_| (curl_at(t0), curl_at(t0 + h)));
             for (j, &k) in dynamic.iter().enumerate() {
                 let mut f0 = gain * modal_force(&u0, k) + drag_modal[j];
                 let mut f1 = gain * modal_force(&u1, k) + drag_modal[j];
@@ -518,15 +707,11 @@ pub fn run_lab(
                     f0 += c0 * curl_forcing[j];
                     f1 += c1 * curl_forcing[j];
                 }
-                let slope = f1 - f0;
-                let m = &steps[j].m;
-                let (e, z) = (eta[j], y2[j]);
-                eta[j] = m[0][0] * e + m[0][1] * z + m[0][2] * f0 + m[0][3] * slope;
-                y2[j] = m[1][0] * e + m[1][1] * z + m[1][2] * f0 + m[1][3] * slope;
+                steps[j].advance(&mut xs[j], f0, f1 - f0);
             }
         }
     }
-    (truth, State { elec: x })
+    (truth, x)
 }
 
 /// The strip at 0 V for `seconds` from `state` (a pause between

@@ -15,7 +15,10 @@ use std::path::Path;
 use rand::SeedableRng;
 
 use crate::bench::{Bench, IMPERFECTIONS};
-use crate::expect::{expected, expected_lab, Expected, Protocol, Score, BENCH_COLOURED, BENCH_HUM};
+use crate::expect::{
+    expected, expected_lab, expected_literature, Expected, Protocol, Score, BENCH_COLOURED,
+    BENCH_HUM,
+};
 use crate::lab::{first_mode_hz, LabBench, LabProtocol, DRIFT, LAB_ARTEFACTS, LAB_RATE_HZ};
 use crate::lab_session::{write_lab, Layout};
 use crate::sample::{Hidden, Sample, CATALOGUE, OFF_CLASS_DEPARTURES, SEGMENT_VARIATION};
@@ -57,6 +60,8 @@ pub struct Scenario {
     /// The baseline's own strip with nothing hidden on a perfect bench
     /// ([`plan_null`]): a right diagnosis is `none`.
     pub null: bool,
+    /// The literature strip ([`crate::literature`], [`plan_literature`]).
+    pub literature: bool,
 }
 
 impl Scenario {
@@ -74,6 +79,10 @@ impl Scenario {
         } else {
             parts.join("+")
         };
+        if self.literature {
+            let board = if self.board { "board:" } else { "" };
+            return format!("lit:{board}{what}");
+        }
         match self.lab {
             Some(LabKind::DriftOnly) => return "lab:ideal-drift".to_string(),
             Some(LabKind::Bench) => return format!("lab:{what}"),
@@ -152,6 +161,86 @@ pub fn plan_null(first: u64, count: usize) -> Vec<Scenario> {
         .collect()
 }
 
+/// The literature sweep's scenarios for seeds `first..first + count`
+/// (#49): the literature strip ([`crate::literature`]) alone, with each
+/// departure alone, with pairs, and on the board's protocol, in turn; the
+/// strip in water or not drawn apart from the rest (three sessions in
+/// ten, from the seed's own stream), so that the metadata's `medium` says
+/// nothing of what else is hidden.
+pub fn plan_literature(first: u64, count: usize) -> Vec<Scenario> {
+    let departures: Vec<&'static str> = OFF_CLASS_DEPARTURES
+        .iter()
+        .copied()
+        .filter(|d| *d != "hydrodynamic-loading")
+        .collect();
+    let mut turns: Vec<(Vec<&'static str>, bool)> = vec![(vec![], false)];
+    turns.extend(departures.iter().map(|&d| (vec![d], false)));
+    turns.push((vec!["dehydration", "electrochemical-nonlinearity"], false));
+    turns.push((vec!["back-relaxation", SEGMENT_VARIATION], false));
+    turns.push((vec!["segment-crosstalk", "large-deflection"], false));
+    turns.push((vec![], true));
+    turns.push((vec!["electrochemical-nonlinearity"], true));
+    (0..count)
+        .map(|i| {
+            let seed = first + i as u64;
+            let (mut hidden, board) = turns[i % turns.len()].clone();
+            if in_water(seed) {
+                hidden.push("hydrodynamic-loading");
+            }
+            Scenario {
+                seed,
+                hidden,
+                board,
+                literature: true,
+                ..Scenario::default()
+            }
+        })
+        .collect()
+}
+
+/// The literature null sweep's scenarios (#49): the literature strip's
+/// base (its electrode lines, spectrum and measured geometry) in air with
+/// no departure, on a perfect bench and a drawn protocol. Its damping and
+/// stiffness are the base's; any other catalogue name is a false one.
+pub fn plan_literature_null(first: u64, count: usize) -> Vec<Scenario> {
+    (0..count)
+        .map(|i| Scenario {
+            seed: first + i as u64,
+            null: true,
+            literature: true,
+            ..Scenario::default()
+        })
+        .collect()
+}
+
+/// Whether the literature sweep's session `seed` is in water: three in
+/// ten, from a stream of the seed's own apart from its draws.
+fn in_water(seed: u64) -> bool {
+    use rand::Rng;
+    rand::rngs::StdRng::seed_from_u64(seed ^ 0x5741_5445_525f_6d65).gen_bool(0.3)
+}
+
+/// Session time a protocol of `runs` spans, s: its recordings and the
+/// pauses between them.
+pub fn span_s(runs: &[Run]) -> f64 {
+    let data: f64 = runs.iter().map(|r| r.rest_s + r.hold_s + r.off_s).sum();
+    data + crate::session::PAUSE_S * runs.len().saturating_sub(1) as f64
+}
+
+/// The runs of the scenario's session when it is not on the lab's
+/// protocol: the literature sweep's drawn per session from a stream of
+/// the seed's own ([`crate::protocols`]).
+pub fn runs_of(s: &Scenario) -> Vec<Run> {
+    if s.literature {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(s.seed ^ 0x5052_4f54_4f43_4f4c);
+        crate::protocols::draw(s.board, &mut rng)
+    } else if s.board {
+        board_protocol(HOLD_SCALE)
+    } else {
+        short_protocol(HOLD_SCALE)
+    }
+}
+
 /// The seeds of the lab sweep ([`plan_lab`]) start here: above the
 /// off-class sweep's.
 pub const LAB_FIRST_SEED: u64 = 20_000;
@@ -205,13 +294,15 @@ struct Draws {
 
 fn draw(s: &Scenario) -> anyhow::Result<Draws> {
     let mut rng = rand::rngs::StdRng::seed_from_u64(s.seed);
-    let ideal = s.null || s.lab == Some(LabKind::DriftOnly);
+    let ideal = !s.literature && (s.null || s.lab == Some(LabKind::DriftOnly));
     let mut sample = if ideal {
         Sample::draw(&mut rng)
     } else {
         Sample::draw_off_class(&mut rng)
     };
-    let hidden = if ideal {
+    let hidden = if s.literature {
+        crate::literature::Literature::draw(&s.hidden, &sample, span_s(&runs_of(s)), &mut rng)
+    } else if ideal {
         anyhow::ensure!(
             s.hidden.is_empty() && s.bench.is_empty(),
             "the drift-only and null sessions hide nothing (but drift)"
@@ -267,7 +358,9 @@ fn protocol(s: &Scenario, d: &Draws) -> Protocol {
 }
 
 fn expected_draws(s: &Scenario, d: &Draws) -> Expected {
-    if s.lab.is_some() {
+    if s.literature {
+        expected_literature(&d.hidden, &d.bench, protocol(s, d))
+    } else if s.lab.is_some() {
         expected_lab(&d.hidden, &d.bench, &d.lab, protocol(s, d))
     } else {
         expected(&d.hidden, &d.bench, protocol(s, d))
@@ -299,6 +392,13 @@ pub fn structure_of(s: &Scenario) -> anyhow::Result<Vec<&'static str>> {
         .collect())
 }
 
+/// The strengths of what the scenario's strip hides
+/// ([`crate::literature::strengths`]).
+pub fn strengths_of(s: &Scenario) -> anyhow::Result<crate::literature::Strengths> {
+    let d = draw(s)?;
+    Ok(crate::literature::strengths(&d.hidden))
+}
+
 /// The scenario's strip as its session draws it (its sample and what it
 /// hides), for runs beyond the session (`rig-motion`).
 pub fn strip_of(s: &Scenario) -> anyhow::Result<(Sample, Hidden)> {
@@ -312,8 +412,7 @@ pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
     let mut d = draw(s)?;
     let runs: Vec<Run> = match &d.lab_protocol {
         Some(p) => p.runs.clone(),
-        None if s.board => board_protocol(HOLD_SCALE),
-        None => short_protocol(HOLD_SCALE),
+        None => runs_of(s),
     };
     let label = format!("SWEEP-{}", s.seed);
     if s.lab.is_none() {
@@ -495,6 +594,9 @@ pub fn markdown(outcomes: &[Outcome]) -> String {
     );
     let _ = writeln!(out, "\n{}", right_apart(outcomes));
     let _ = writeln!(out, "\n{}", trivial_scores(outcomes));
+    if outcomes.iter().any(|o| o.scenario.literature) {
+        let _ = writeln!(out, "\n{}", power(outcomes));
+    }
     let _ = writeln!(
         out,
         "\nCells: percent of the row's sessions whose verdict gives the column. \
@@ -522,6 +624,97 @@ pub fn right_apart(outcomes: &[Outcome]) -> String {
         wilson_text(named, n),
         wilson_text(unexplained, n)
     )
+}
+
+/// Detection against strength (#49): for each departure with a strength
+/// ([`crate::literature::strengths`]), the share of the sessions holding
+/// it whose verdict names it, by strength over the diagnosis's plausible
+/// one ([`crate::literature::plausible`]), with Wilson's interval; then
+/// the effects without a strength; then each name's false-name rate: the
+/// share of the sessions that do not hold it (neither required nor
+/// allowed) whose verdict gives it.
+pub fn power(outcomes: &[Outcome]) -> String {
+    use crate::literature::plausible;
+    const BINS: [(f64, f64); 4] = [(0.0, 0.5), (0.5, 1.0), (1.0, 2.0), (2.0, f64::INFINITY)];
+    let named = |o: &Outcome, n: &str| o.causes.iter().any(|c| c == n);
+    let mut out = String::from(
+        "Detection against strength (strength over the plausible one; named / sessions, Wilson 95 %):\n\n\
+         | effect | plausible | < 0.5 | 0.5-1 | 1-2 | >= 2 |\n|---|---|---|---|---|---|\n",
+    );
+    let strengths: Vec<crate::literature::Strengths> = outcomes
+        .iter()
+        .map(|o| strengths_of(&o.scenario).unwrap_or_default())
+        .collect();
+    let names = [
+        "electrochemical-nonlinearity",
+        "dehydration",
+        "back-relaxation",
+        "segment-crosstalk",
+        SEGMENT_VARIATION,
+    ];
+    for n in names {
+        let mut cells = Vec::new();
+        for (lo, hi) in BINS {
+            let mut k = 0;
+            let mut m = 0;
+            for (o, st) in outcomes.iter().zip(&strengths) {
+                if let Some((_, x)) = st.iter().find(|(e, _)| *e == n) {
+                    let r = x / plausible(n);
+                    if (lo..hi).contains(&r) {
+                        m += 1;
+                        k += usize::from(named(o, n));
+                    }
+                }
+            }
+            cells.push(if m == 0 {
+                "-".to_string()
+            } else {
+                let (a, b) = wilson(k, m);
+                format!("{k}/{m} ({:.0}-{:.0} %)", 100.0 * a, 100.0 * b)
+            });
+        }
+        let _ = writeln!(out, "| {n} | {} | {} |", plausible(n), cells.join(" | "));
+    }
+    let _ = writeln!(
+        out,
+        "\nWithout a strength: named / sessions that require it:"
+    );
+    for n in [
+        "damping",
+        "hydrodynamic-loading",
+        "large-deflection",
+        "beam-stiffness",
+    ] {
+        let holding: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| o.expected.required.contains(&n))
+            .collect();
+        let k = holding.iter().filter(|o| named(o, n)).count();
+        let _ = writeln!(
+            out,
+            "- `{n}`: {k} of {} ({})",
+            holding.len(),
+            wilson_text(k, holding.len())
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nFalse names: sessions naming the effect / sessions without it:"
+    );
+    for n in CATALOGUE.iter().copied().chain([SEGMENT_VARIATION]) {
+        let without: Vec<&Outcome> = outcomes
+            .iter()
+            .filter(|o| !o.expected.required.contains(&n) && !o.expected.allowed.contains(&n))
+            .collect();
+        let k = without.iter().filter(|o| named(o, n)).count();
+        let _ = writeln!(
+            out,
+            "- `{n}`: {k} of {} ({})",
+            without.len(),
+            wilson_text(k, without.len())
+        );
+    }
+    out
 }
 
 /// Each trivial diagnoser's right count on the same sessions.
@@ -588,7 +781,7 @@ pub fn csv(outcomes: &[Outcome]) -> String {
     for t in TRIVIAL {
         let _ = write!(out, ",trivial_{}_right", t.name().replace('-', "_"));
     }
-    out.push('\n');
+    out.push_str(",strengths\n");
     for o in outcomes {
         let _ = write!(
             out,
@@ -614,7 +807,13 @@ pub fn csv(outcomes: &[Outcome]) -> String {
                 right.map_or(String::new(), |(_, s)| s.is_right().to_string())
             );
         }
-        out.push('\n');
+        // Each departure's strength in the diagnosis's probe unit.
+        let strengths: Vec<String> = strengths_of(&o.scenario)
+            .unwrap_or_default()
+            .iter()
+            .map(|(n, x)| format!("{n}={x:.4}"))
+            .collect();
+        let _ = writeln!(out, ",{}", strengths.join(";"));
     }
     out
 }
@@ -709,6 +908,48 @@ mod tests {
     }
 
     #[test]
+    fn the_literature_plan_draws_water_apart_and_power_bins_by_strength() {
+        let p = plan_literature(50_000, 140);
+        assert!(p
+            .iter()
+            .all(|s| s.literature && s.row().starts_with("lit:")));
+        // Water in about three sessions of ten, whatever else is hidden.
+        let wet: Vec<&Scenario> = p
+            .iter()
+            .filter(|s| s.hidden.contains(&"hydrodynamic-loading"))
+            .collect();
+        assert!((25..=60).contains(&wet.len()), "{}", wet.len());
+        assert!(wet.iter().any(|s| s.hidden.len() == 1));
+        assert!(wet.iter().any(|s| s.hidden.len() > 1));
+        // Each session its own protocol.
+        assert_ne!(
+            format!("{:?}", runs_of(&p[0])),
+            format!("{:?}", runs_of(&p[14]))
+        );
+        // Detection lands in the bin of the session's own strength.
+        let echem = |s: &Scenario| {
+            strengths_of(s)
+                .unwrap()
+                .into_iter()
+                .find(|(n, _)| *n == "electrochemical-nonlinearity")
+                .map(|(_, x)| x)
+        };
+        let s = p
+            .iter()
+            .find(|s| echem(s).is_some_and(|x| x >= 0.2))
+            .unwrap()
+            .clone();
+        let mut o = outcome(vec![], "unexplained", &["electrochemical-nonlinearity"]);
+        o.scenario = s;
+        let md = power(&[o]);
+        let row = md
+            .lines()
+            .find(|l| l.starts_with("| electrochemical-nonlinearity |"))
+            .unwrap();
+        assert!(row.ends_with("| - | - | - | 1/1 (21-100 %) |"), "{row}");
+    }
+
+    #[test]
     fn the_matrix_counts_names_and_rates_per_row() {
         let o = [
             outcome(vec![], "explained", &["damping"]),
@@ -739,8 +980,12 @@ mod tests {
             .lines()
             .next()
             .unwrap()
-            .ends_with("trivial_damped_soft_unexplained_right"));
-        assert!(text.lines().nth(1).unwrap().ends_with(",false,,"), "{text}");
+            .ends_with("trivial_damped_soft_unexplained_right,strengths"));
+        // The base hides no departure: no strength.
+        assert!(
+            text.lines().nth(1).unwrap().ends_with(",false,,,"),
+            "{text}"
+        );
     }
 
     #[test]

@@ -11,7 +11,8 @@ use finrs::session::Session;
 use finrs_rig::expect::{names_given, score, Expected};
 use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::sweep::{
-    csv, expected_of, markdown, plan, plan_lab, plan_null, write_scenario, Outcome, Scenario,
+    csv, expected_of, markdown, plan, plan_lab, plan_literature, plan_literature_null, plan_null,
+    write_scenario, Outcome, Scenario,
 };
 use finrs_rig::trivial::TRIVIAL;
 
@@ -53,6 +54,15 @@ struct Cli {
     /// catalogue name is the search's family-wise false-name rate.
     #[arg(long, conflicts_with = "lab")]
     null: bool,
+    /// The literature sweep (`sweep::plan_literature`, docs/rig.md "A
+    /// strip from the literature"): electrodes as resistive lines,
+    /// electrolysis, a viscoelastic spectrum, drying by water content,
+    /// geometry measured a few percent off; each departure from below the
+    /// diagnosis's detectable strength to above its plausible one.
+    /// With `--null`: the literature strip's base alone, in air, on a
+    /// perfect bench (`sweep::plan_literature_null`).
+    #[arg(long, conflicts_with = "lab")]
+    literature: bool,
 }
 
 /// What `finrs diagnose` said of one session, as kept in OUT/results so
@@ -278,8 +288,12 @@ fn main() -> anyhow::Result<()> {
             finrs_rig::LAB_ARTEFACTS
         );
     }
-    let mut scenarios = if cli.null {
+    let mut scenarios = if cli.null && cli.literature {
+        plan_literature_null(cli.run.first_seed, cli.run.sessions)
+    } else if cli.null {
         plan_null(cli.run.first_seed, cli.run.sessions)
+    } else if cli.literature {
+        plan_literature(cli.run.first_seed, cli.run.sessions)
     } else if cli.lab {
         let mut p = plan_lab(cli.run.first_seed, cli.run.sessions);
         for s in &mut p {
