@@ -287,14 +287,16 @@ fn candidates(s: &mut String, v: &Verdict) {
         s,
         "An effect is accepted when ΔBIC < {} on the training recordings and the \
          held-out weighted RSS falls by more than {:.0} % and its own term stands \
-         out from \"off\" by more than its bar (in standard errors: 1.96 for one \
-         test, raised by Bonferroni for every candidate tried so far, so that all \
-         of a search's candidates together pass on noise alone less than {:.0} % \
-         of the time). After the search, each \
-         accepted effect is checked (`check`) as if it joined the model of the \
-         others last; one that would not pass leaves.\n",
+         out from \"off\" by more than its bar, in standard errors: the first round \
+         spends half of {:.0} %, each later round half of what the rounds before it \
+         left, shared evenly among the round's candidates and among the tests of an \
+         effect that any of several may show, so that all of a search's candidates together pass on noise alone less \
+         than {:.0} % of the time. After the search, each accepted effect is \
+         checked (`check`) as if it joined the model of the others last, at the \
+         bar it joined at; one that would not pass leaves.\n",
         super::DELTA_BIC,
         100.0 * super::HOLDOUT_RSS_GAIN,
+        100.0 * super::FAMILY_ALPHA,
         100.0 * super::FAMILY_ALPHA
     );
     let _ = writeln!(s, "| round | effect | ΔBIC | held-out NRMSE gain % | held-out RSS gain % | bar (σ) | passed | fitted terms |");

@@ -7,7 +7,7 @@ use super::choose::{choose, Passed};
 use super::drift;
 use super::faults;
 use super::floors::sensor_floors;
-use super::gates::{each_mode_damping_kept, family_tail, family_z, holdout_gain_passes, DELTA_BIC};
+use super::gates::{each_mode_damping_kept, holdout_gain_passes, Bar, DELTA_BIC};
 use super::identify;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
@@ -228,14 +228,12 @@ pub fn diagnose(
 }
 
 impl Found {
-    /// The candidates the search has tried (not its checks).
-    fn tried(&self) -> usize {
-        self.candidates.iter().filter(|c| !c.backward).count()
-    }
-
     /// Effects accepted, in the order they joined.
     fn accepted(&self) -> Vec<Effect> {
-        self.joined.concat()
+        self.joined
+            .iter()
+            .flat_map(|j| j.effects.iter().copied())
+            .collect()
     }
 }
 
@@ -265,10 +263,18 @@ struct Found {
     fit: FitResult,
     /// Its score on the held-out part.
     hold: Score,
-    /// The moves that joined (an effect, or [`MODE_PAIR`]), in order.
-    joined: Vec<Vec<Effect>>,
+    /// The moves that joined, in order.
+    joined: Vec<Joined>,
     /// Every candidate tried.
     candidates: Vec<Candidate>,
+}
+
+/// A move that joined the model.
+struct Joined {
+    /// An effect, or [`MODE_PAIR`].
+    effects: Vec<Effect>,
+    /// The bar its signature tests cleared: its round's.
+    bar: Bar,
 }
 
 impl Search<'_> {
@@ -309,9 +315,8 @@ impl Search<'_> {
                 break;
             }
             progress(&format!("round {}: {} candidates", round + 1, moves.len()));
-            // The search's family: every candidate tried so far and this
-            // round's.
-            let tried = found.tried() + moves.len();
+            // The round's share of α, split among its candidates.
+            let bar = Bar::of_round(round, moves.len());
             let mut passed: Vec<Passed<Vec<Effect>>> = Vec::new();
             // The pair comes after the single effects.
             for (m, fit, score) in self.fit_round(&moves, &found.fit)? {
@@ -321,7 +326,7 @@ impl Search<'_> {
                     (&fit, &score),
                     (&found.fit, &found.hold),
                     Signatures::Every,
-                    tried,
+                    bar,
                 );
                 // The pair must pay, on held-out data, for its second
                 // effect over a member that passed alone, as that effect
@@ -340,7 +345,7 @@ impl Search<'_> {
             else {
                 break;
             };
-            found.joined.push(m);
+            found.joined.push(Joined { effects: m, bar });
             found.fit = fit;
             found.hold = score;
             // The model that joined, fitted again from the data's own
@@ -371,9 +376,10 @@ impl Search<'_> {
     /// before the pair that fits it joined, and stayed (seeds 10003 and
     /// 10035). Each is judged as a candidate joining the model of all the
     /// others last, the others refitted without it from the final values,
-    /// by the search's tests, save that one term of the pair need be
-    /// significant: beside a later term that shares its work, a member's
-    /// interval can take in "off" while the pair still carries the fit
+    /// by the search's tests at the bar the move cleared when it joined,
+    /// save that one term of the pair need be significant: beside a later
+    /// term that shares its work, a member's interval can take in "off"
+    /// while the pair still carries the fit
     /// (in water, the damping's ratio beside the fluid's drag, with 99 % of
     /// the held-out RSS on the pair; rig seed 10002). Of those that fail, the one of
     /// least held-out gain leaves, and the rest are judged again. A move
@@ -389,7 +395,9 @@ impl Search<'_> {
             progress(&format!("checking {} causes", found.joined.len()));
             let without = |k: usize| -> Vec<Effect> {
                 let others = found.joined.iter().enumerate().filter(|&(j, _)| j != k);
-                others.flat_map(|(_, m)| m.iter().copied()).collect()
+                others
+                    .flat_map(|(_, m)| m.effects.iter().copied())
+                    .collect()
             };
             let trials: Vec<Result<(usize, FitResult, Score), FitError>> = (0..found.joined.len())
                 .into_par_iter()
@@ -407,14 +415,20 @@ impl Search<'_> {
             let mut weakest: Option<(usize, f64, FitResult, Score)> = None;
             for trial in trials {
                 let (k, fit, hold) = trial?;
-                let m = &found.joined[k];
+                let Joined { effects: m, bar } = &found.joined[k];
+                // At the bar the move joined at. The check only ever takes
+                // a name away, so it spends none of α: the search's
+                // family-wise sum stays its rounds'. A later round's
+                // smaller share would ask an early move to stay for more
+                // than it had to show to join, and drop a real effect for
+                // the rounds that came after it.
                 let mut check = self.judge(
                     m,
                     round,
                     (&found.fit, &found.hold),
                     (&fit, &hold),
                     Signatures::Any,
-                    found.tried(),
+                    *bar,
                 );
                 check.backward = true;
                 check.passed |= m.iter().any(|&e| self.expected(e));
@@ -478,7 +492,8 @@ impl Search<'_> {
     /// The candidate move `m` of round `round`, the model with it (`with`:
     /// its training fit and held-out score) against the model without it:
     /// it passes when BIC and the held-out error say so and the effects'
-    /// own terms are significant, each of them or (`Signatures::Any`) one.
+    /// own terms are significant at `bar`, each of them or
+    /// (`Signatures::Any`) one.
     fn judge(
         &self,
         m: &[Effect],
@@ -486,19 +501,24 @@ impl Search<'_> {
         with: (&FitResult, &Score),
         without: (&FitResult, &Score),
         signatures: Signatures,
-        tried: usize,
+        bar: Bar,
     ) -> Candidate {
         let ((fit, score), (base_fit, base_hold)) = (with, without);
         let delta_bic = fit.bic - base_fit.bic;
         let rss_gain = 1.0 - score.rss / base_hold.rss;
-        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed, tried);
+        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed, bar);
+        // The highest any of its effects' tests had to clear.
+        let signature_z = m
+            .iter()
+            .map(|&e| bar.split(signature_tests(e, fit)).z())
+            .fold(0.0, f64::max);
         Candidate {
             name: m.iter().map(|e| e.name()).collect::<Vec<_>>().join("+"),
             round,
             delta_bic,
             holdout_gain_percent: gain_percent(base_hold.nrmse, score.nrmse),
             holdout_rss_gain_percent: 100.0 * rss_gain,
-            signature_z: family_z(tried),
+            signature_z,
             passed: delta_bic < DELTA_BIC
                 && holdout_gain_passes(rss_gain)
                 && match signatures {
@@ -560,14 +580,15 @@ pub fn tested_channels<'a>(
 
 /// Whether the term that makes `e` what it is differs from "off" beyond
 /// its interval, at the level that keeps the whole search's chance of a
-/// term standing out by the noise at
-/// [`FAMILY_ALPHA`](super::gates::FAMILY_ALPHA): `tried` candidates
-/// tried so far ([`family_z`]; an effect of several knobs any one of which
-/// may show it, `segment-variation`'s, counts each). Without this, an
-/// effect that contains another (linear drag is mass-proportional damping)
-/// could be named for the other's work.
-fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried: usize) -> bool {
-    let z = family_z(tried);
+/// term standing out by the noise within
+/// [`FAMILY_ALPHA`](super::gates::FAMILY_ALPHA): `bar`, the candidate's
+/// share of its round's, split among the effect's tests
+/// ([`signature_tests`]). Without this, an effect that contains another
+/// (linear drag is mass-proportional damping) could be named for the
+/// other's work.
+fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, bar: Bar) -> bool {
+    let bar = bar.split(signature_tests(e, fit));
+    let (z, tail) = (bar.z(), bar.tail());
     let excludes = |knob: Knob, off: f64| {
         fit.estimates
             .iter()
@@ -576,7 +597,7 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried
     // The joint test alone would lose a term that stands out on its own
     // beside one that does nothing (its two degrees of freedom ask more).
     let either_or_both = |off: &[(Knob, f64)]| {
-        off.iter().any(|&(k, o)| excludes(k, o)) || fit.jointly_excludes(off, family_tail(tried))
+        off.iter().any(|&(k, o)| excludes(k, o)) || fit.jointly_excludes(off, tail)
     };
     match e {
         Effect::LargeDeflection => true,
@@ -589,10 +610,7 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried
         Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
         Effect::ElectrochemicalNonlinearity => match electrochemistry_alone(&fit.estimates, z) {
             Some(shows) => shows,
-            None => fit.jointly_excludes(
-                &[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)],
-                family_tail(tried),
-            ),
+            None => fit.jointly_excludes(&[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)], tail),
         },
         // b = K z below zero is what makes the bending relax past the
         // start; any z > 0 (a creep too) is the baseline's.
@@ -603,15 +621,27 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, tried
         Effect::Dehydration => excludes(Knob::Dehydration, 0.0),
         Effect::SegmentCrosstalk => excludes(Knob::Crosstalk, 0.0),
         // Some segment differs from the reference in some value.
-        Effect::SegmentVariation => {
-            // Any of its knobs: each is a test of the family.
-            let knobs = fit
-                .estimates
-                .iter()
-                .filter(|est| est.knob.is_segment_deviation());
-            let z = family_z(tried * knobs.clone().count());
-            knobs.clone().any(|est| excludes_at(est, 0.0, z))
-        }
+        Effect::SegmentVariation => fit
+            .estimates
+            .iter()
+            .any(|est| est.knob.is_segment_deviation() && excludes_at(est, 0.0, z)),
+    }
+}
+
+/// How many tests may show `e`'s signature, any one of them passing it:
+/// each is a chance for the noise, and they share the candidate's level
+/// ([`Bar::split`]). The damping's `ζ₀`, its `β`, or the two jointly; the
+/// electrochemistry's leak, its charge, or the two jointly; each knob of a
+/// `segment-variation`. Every other effect's is one term.
+fn signature_tests(e: Effect, fit: &FitResult) -> usize {
+    match e {
+        Effect::Damping | Effect::ElectrochemicalNonlinearity => 3,
+        Effect::SegmentVariation => fit
+            .estimates
+            .iter()
+            .filter(|est| est.knob.is_segment_deviation())
+            .count(),
+        _ => 1,
     }
 }
 
@@ -672,7 +702,7 @@ mod tests {
             low: value - half,
             high: value + half,
         };
-        let z = family_z(8);
+        let z = Bar::of_round(0, 8).z();
         // A leak bending up beyond its interval; one bending down as far.
         let up = [
             est(Knob::ChargeCubic, 0.0, 1e-3),

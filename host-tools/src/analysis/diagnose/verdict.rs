@@ -38,8 +38,9 @@ pub struct Candidate {
     pub holdout_gain_percent: f64,
     /// Reduction of held-out weighted RSS, percent.
     pub holdout_rss_gain_percent: f64,
-    /// The standard errors its own term had to clear (1.96 for a lone
-    /// test, raised for every candidate the search had tried).
+    /// The standard errors its own term had to clear: its round's share of
+    /// the family-wise level, split among the round's candidates and an
+    /// effect's several tests (the highest of a pair's two effects').
     pub signature_z: f64,
     /// Whether it passed both tests.
     pub passed: bool,
