@@ -202,21 +202,9 @@ pub fn expected_literature(hidden: &Hidden, bench: &Bench, protocol: Protocol) -
         }
     };
     name(lit.relaxing() > 0.0, moves && protocol.ringing, "damping");
-    let strong = |n: &str| {
-        strengths(hidden)
-            .iter()
-            .any(|(s, x)| *s == n && *x >= plausible(n))
-    };
-    name(
-        lit.reaction.is_some(),
-        strong("electrochemical-nonlinearity"),
-        "electrochemical-nonlinearity",
-    );
-    name(
-        lit.drying.is_some(),
-        protocol.session_start && strong("dehydration"),
-        "dehydration",
-    );
+    // Their strengths are weighed with the others' below.
+    name(lit.reaction.is_some(), true, "electrochemical-nonlinearity");
+    name(lit.drying.is_some(), protocol.session_start, "dehydration");
     // The fit's laminate stiffness from the metadata over the true
     // laminate's: EI goes as the width and the cube of the thickness.
     let [_, width, thickness] = lit.measured;
@@ -228,6 +216,7 @@ pub fn expected_literature(hidden: &Hidden, bench: &Bench, protocol: Protocol) -
         pinned && far(f) && far(f * (1.0 - lit.relaxing())),
         "beam-stiffness",
     );
+    // Below its plausible strength a departure may be named, need not be.
     for (n, x) in strengths(hidden) {
         if x < plausible(n) && e.required.contains(&n) {
             e.required.retain(|r| *r != n);

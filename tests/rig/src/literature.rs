@@ -111,6 +111,12 @@ pub struct Drying {
 }
 
 impl Drying {
+    /// The loss of moment per volt over the session, `1 − (1 − loss)²`:
+    /// `C` and the moment per charge both follow the water.
+    pub fn moment_loss(&self) -> f64 {
+        1.0 - (1.0 - self.loss).powi(2)
+    }
+
     /// Water content at session time `t_s` (1: as wet as at the start).
     pub fn water(&self, t_s: f64) -> f64 {
         let shape = |t: f64| 1.0 - (-t / self.tau_s).exp();
@@ -203,8 +209,8 @@ impl Literature {
             lit.reaction = Some(Literature::reaction_for(sample, extra, onset, tafel));
         }
         if names.contains(&"dehydration") {
-            // The moment per volt goes as w² (C and K both follow w): its
-            // loss s over the session is 1 − (1 − loss)².
+            // Drawn as the moment's loss s ([`Drying::moment_loss`]), the
+            // water's follows.
             let s: f64 = log_uniform(rng, 0.01, 0.5);
             lit.drying = Some(Drying {
                 loss: 1.0 - (1.0 - s).sqrt(),
@@ -242,7 +248,7 @@ pub fn strengths(hidden: &Hidden) -> Strengths {
             out.push(("electrochemical-nonlinearity", r.extra_current));
         }
         if let Some(d) = lit.drying {
-            out.push(("dehydration", 1.0 - (1.0 - d.loss).powi(2)));
+            out.push(("dehydration", d.moment_loss()));
         }
     }
     if let Some((beta, _)) = hidden.back_branch {
@@ -286,33 +292,48 @@ pub(crate) struct Lines<'a> {
 /// segment after its cells: the lagged charge its neighbours feel.
 pub(crate) const PER_SEGMENT: usize = 3 * CELLS + 1;
 
+/// One segment's cells at a water content.
+struct Cell {
+    /// Each cell's double-layer capacitance, F.
+    c_f: f64,
+    /// Each cell's ionic resistance, Ω.
+    ionic_ohm: f64,
+    /// Each cell's linear leak, Ω.
+    leak_ohm: f64,
+    /// The contact, Ω.
+    contact_ohm: f64,
+    /// The sheet between neighbouring cells, Ω.
+    gap_ohm: f64,
+}
+
 impl Lines<'_> {
     fn water(&self, t_s: f64) -> f64 {
         self.lit.drying.map_or(1.0, |d| d.water(t_s))
     }
 
-    /// Segment `i`'s cell capacitance, F, ionic resistance per cell, Ω,
-    /// leak resistance per cell, Ω, and contact and gap resistances, Ω, at
-    /// water content `w`.
-    fn cell(&self, i: usize, w: f64) -> (f64, f64, f64, f64, f64) {
+    /// Segment `i`'s cells at water content `w`.
+    fn cell(&self, i: usize, w: f64) -> Cell {
         let f = self.h.segment(i);
         let n = CELLS as f64;
         let r1 = self.s.r1_ohm * f.r1;
-        (
-            self.s.c_f * f.c * w / n,
-            (1.0 - self.lit.contact_share) * r1 * n / w.powf(1.5),
-            self.s.r2_ohm * n / w,
-            self.lit.contact_share * r1,
-            self.lit.sheet_over_r1 * self.s.r1_ohm / n,
-        )
+        Cell {
+            c_f: self.s.c_f * f.c * w / n,
+            ionic_ohm: (1.0 - self.lit.contact_share) * r1 * n / w.powf(1.5),
+            leak_ohm: self.s.r2_ohm * n / w,
+            contact_ohm: self.lit.contact_share * r1,
+            gap_ohm: self.lit.sheet_over_r1 * self.s.r1_ohm / n,
+        }
     }
 
     /// The line's node potentials, V, for cell voltages `v`: a tridiagonal
     /// system (Thomas's algorithm); `drive` is `None` when the contact is
     /// open.
-    fn nodes(&self, i: usize, w: f64, v: &[f64; CELLS], drive: Option<f64>) -> [f64; CELLS] {
-        let (_, r_ion, _, r_c, r_s) = self.cell(i, w);
-        let (g_ion, g_s, g_c) = (1.0 / r_ion, 1.0 / r_s, 1.0 / r_c);
+    fn nodes(cell: &Cell, v: &[f64; CELLS], drive: Option<f64>) -> [f64; CELLS] {
+        let (g_ion, g_s, g_c) = (
+            1.0 / cell.ionic_ohm,
+            1.0 / cell.gap_ohm,
+            1.0 / cell.contact_ohm,
+        );
         let mut diag = [0.0; CELLS];
         let mut rhs = [0.0; CELLS];
         for j in 0..CELLS {
@@ -339,9 +360,9 @@ impl Lines<'_> {
         phi
     }
 
-    fn voltages(&self, i: usize, w: f64, x: &[f64]) -> [f64; CELLS] {
-        let c = self.cell(i, w).0;
-        std::array::from_fn(|j| x[3 * j] / c)
+    /// Each cell's double-layer voltage, V, from segment state `x`.
+    fn voltages(cell: &Cell, x: &[f64]) -> [f64; CELLS] {
+        std::array::from_fn(|j| x[3 * j] / cell.c_f)
     }
 
     fn derivative(
@@ -359,10 +380,11 @@ impl Lines<'_> {
             .zip(dx.chunks_mut(PER_SEGMENT))
             .enumerate()
         {
-            let (_, r_ion, r2, _, _) = self.cell(i, w);
-            let v = self.voltages(i, w, seg);
+            let cell = self.cell(i, w);
+            let (r_ion, r2) = (cell.ionic_ohm, cell.leak_ohm);
+            let v = Lines::voltages(&cell, seg);
             let drive = (!open.is_some_and(|o| o[i])).then(|| volts[i]);
-            let phi = self.nodes(i, w, &v, drive);
+            let phi = Lines::nodes(&cell, &v, drive);
             let mut total = 0.0;
             for j in 0..CELLS {
                 let (q, r, b) = (seg[3 * j], seg[3 * j + 1], seg[3 * j + 2]);
@@ -398,7 +420,6 @@ impl crate::strip::Electrical for Lines<'_> {
         let s = self.s;
         let w = self.water(t_s);
         let kappa = self.h.crosstalk.unwrap_or(0.0);
-        let segs: Vec<&[f64]> = x.chunks(PER_SEGMENT).collect();
         // A neighbour passes on its whole charge, through the lag if any.
         let felt = |seg: &[f64]| {
             if self.h.crosstalk_lag_s.is_some() {
@@ -407,10 +428,11 @@ impl crate::strip::Electrical for Lines<'_> {
                 (0..CELLS).map(|j| seg[3 * j]).sum()
             }
         };
-        for (i, seg) in segs.iter().enumerate() {
+        let segment = |i: usize| x.get(i * PER_SEGMENT..(i + 1) * PER_SEGMENT);
+        for (i, seg) in x.chunks(PER_SEGMENT).enumerate() {
             let k = s.k_nm_per_c * self.h.segment(i).k * w;
-            let before = if i > 0 { felt(segs[i - 1]) } else { 0.0 };
-            let after = segs.get(i + 1).map_or(0.0, |n| felt(n));
+            let before = i.checked_sub(1).and_then(segment).map_or(0.0, felt);
+            let after = segment(i + 1).map_or(0.0, felt);
             let cross = kappa * s.k_nm_per_c * w * (before + after);
             for j in 0..CELLS {
                 let (q, r, b) = (seg[3 * j], seg[3 * j + 1], seg[3 * j + 2]);
@@ -441,9 +463,9 @@ impl crate::strip::Electrical for Lines<'_> {
                 out[i] = 0.0;
                 continue;
             }
-            let v = self.voltages(i, w, seg);
-            let phi = self.nodes(i, w, &v, Some(volts[i]));
-            out[i] = (volts[i] - phi[0]) / self.cell(i, w).3;
+            let cell = self.cell(i, w);
+            let phi = Lines::nodes(&cell, &Lines::voltages(&cell, seg), Some(volts[i]));
+            out[i] = (volts[i] - phi[0]) / cell.contact_ohm;
         }
     }
 
@@ -481,6 +503,7 @@ pub(crate) struct ViscoStep {
 impl ViscoStep {
     pub(crate) fn new(omega: f64, spectrum: &[(f64, f64)], h: f64) -> ViscoStep {
         let k = spectrum.len();
+        assert!(k <= SPECTRUM, "at most {SPECTRUM} terms, got {k}");
         let n = 2 + k + 2;
         let relaxed = 1.0 - spectrum.iter().map(|(g, _)| g).sum::<f64>();
         let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
@@ -509,9 +532,15 @@ impl ViscoStep {
     /// `slope` across it.
     pub(crate) fn advance(&self, state: &mut [f64], f0: f64, slope: f64) {
         let k = state.len();
-        let old = state.to_vec();
+        // On the stack: this runs for every mode on every sub-step.
+        let mut old = [0.0; 2 + SPECTRUM];
+        old[..k].copy_from_slice(state);
         for (r, row) in self.m.iter().enumerate() {
-            state[r] = row[..k].iter().zip(&old).map(|(a, x)| a * x).sum::<f64>()
+            state[r] = row[..k]
+                .iter()
+                .zip(&old[..k])
+                .map(|(a, x)| a * x)
+                .sum::<f64>()
                 + row[k] * f0
                 + row[k + 1] * slope;
         }

@@ -649,17 +649,17 @@ fn run_with<E: Electrical>(
             if blocked {
                 // Accelerations of the modes in time; the static ones have none.
                 let mut acc = DVector::<f64>::zeros(modes);
-                // What the stiffness sees: the deflection itself, or on a
-                // viscoelastic strip its relaxed part and the spectrum's.
-                let mut elastic = full.clone();
+                // The pinned tip has no position to report: `full` becomes
+                // what the stiffness sees, the deflection itself or, on a
+                // viscoelastic strip, its relaxed part and the spectrum's.
                 for (j, &k) in dynamic.iter().enumerate() {
                     let w = beam.omega[k];
-                    elastic[k] = steps[j].elastic(&xs[j]);
+                    full[k] = steps[j].elastic(&xs[j]);
                     acc[k] = modal_force(&u0, k) + drag_modal[j]
-                        - w * w * elastic[k]
+                        - w * w * full[k]
                         - 2.0 * zeta(k) * w * w * xs[j][1];
                 }
-                truth.force_n.push(beam.reaction_n(&elastic, &acc, &u0));
+                truth.force_n.push(beam.reaction_n(&full, &acc, &u0));
             } else if let Some(k_s) = beam.spring_n_per_m {
                 // The load cell that gives reads its own extension.
                 truth.force_n.push(k_s * beam.tip_m(&beam.nodal(&full)));
