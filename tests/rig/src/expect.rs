@@ -37,7 +37,7 @@
 
 use crate::bench::Bench;
 use crate::lab::LabBench;
-use crate::sample::{Hidden, SEGMENT_VARIATION};
+use crate::sample::{Hidden, Sample, SEGMENT_VARIATION};
 
 /// What the protocol of a session lets a diagnosis see.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -179,13 +179,20 @@ pub fn expected(hidden: &Hidden, bench: &Bench, protocol: Protocol) -> Expected 
 /// ([`crate::literature`]): as [`expected`], with the spectrum's damping,
 /// the reaction and the drying in place of the rig's own forms; each
 /// departure required only at or above the diagnosis's plausible strength
-/// ([`crate::literature::plausible`]) and allowed below it;
+/// ([`crate::literature::plausible`]) and allowed below it, the damping
+/// among them (the spectrum's first-mode ratio against the damping
+/// probe's 0.05: a strip that barely rings need not be called damped);
 /// `beam-stiffness` judged on the stiffness the metadata's geometry
 /// predicts against the relaxed and the instantaneous true ones (both
 /// beyond the tolerance: required). `unexplained` is right beside the
 /// required names: the electrode line and the spectrum are in no
 /// catalogue form.
-pub fn expected_literature(hidden: &Hidden, bench: &Bench, protocol: Protocol) -> Expected {
+pub fn expected_literature(
+    sample: &Sample,
+    hidden: &Hidden,
+    bench: &Bench,
+    protocol: Protocol,
+) -> Expected {
     use crate::literature::{plausible, strengths};
     let Some(lit) = &hidden.literature else {
         return expected(hidden, bench, protocol);
@@ -217,7 +224,7 @@ pub fn expected_literature(hidden: &Hidden, bench: &Bench, protocol: Protocol) -
         "beam-stiffness",
     );
     // Below its plausible strength a departure may be named, need not be.
-    for (n, x) in strengths(hidden) {
+    for (n, x) in strengths(sample, hidden) {
         if x < plausible(n) && e.required.contains(&n) {
             e.required.retain(|r| *r != n);
             e.allowed.push(n);
@@ -362,9 +369,17 @@ mod tests {
         )
         .unwrap();
         h.crosstalk = Some(0.2);
+        // A spectrum that damps the free first mode by about 12 %: one
+        // term of 0.4 whose time is the mode's.
+        let (ei, mass) = crate::strip::section(&sample, &h);
+        let omega = 1.8751f64.powi(2) * (ei / (mass * sample.length_m.powi(4))).sqrt();
         let lit = h.literature.as_mut().unwrap();
+        lit.spectrum = vec![(0.4, 1.0 / omega)];
         lit.reaction = Some(Literature::reaction_for(&sample, 0.5, 1.23, 0.06));
-        let e = expected_literature(&h, &Bench::default(), FULL);
+        let lit = h.literature.as_ref().unwrap();
+        let zeta = lit.first_mode_damping(&sample, &h);
+        assert!(zeta > 0.1, "{zeta}");
+        let e = expected_literature(&sample, &h, &Bench::default(), FULL);
         for n in [
             "damping",
             "electrochemical-nonlinearity",
@@ -377,9 +392,14 @@ mod tests {
         // Below the plausible strengths: allowed, not required.
         h.crosstalk = Some(0.02);
         let lit = h.literature.as_mut().unwrap();
+        lit.spectrum = vec![(0.02, 1.0 / omega)];
         lit.reaction = Some(Literature::reaction_for(&sample, 0.05, 1.23, 0.06));
-        let e = expected_literature(&h, &Bench::default(), FULL);
-        for n in ["electrochemical-nonlinearity", "segment-crosstalk"] {
+        let e = expected_literature(&sample, &h, &Bench::default(), FULL);
+        for n in [
+            "damping",
+            "electrochemical-nonlinearity",
+            "segment-crosstalk",
+        ] {
             assert!(
                 !e.required.contains(&n) && e.allowed.contains(&n),
                 "{n} in {e:?}"

@@ -359,7 +359,7 @@ fn protocol(s: &Scenario, d: &Draws) -> Protocol {
 
 fn expected_draws(s: &Scenario, d: &Draws) -> Expected {
     if s.literature {
-        expected_literature(&d.hidden, &d.bench, protocol(s, d))
+        expected_literature(&d.sample, &d.hidden, &d.bench, protocol(s, d))
     } else if s.lab.is_some() {
         expected_lab(&d.hidden, &d.bench, &d.lab, protocol(s, d))
     } else {
@@ -396,7 +396,7 @@ pub fn structure_of(s: &Scenario) -> anyhow::Result<Vec<&'static str>> {
 /// ([`crate::literature::strengths`]).
 pub fn strengths_of(s: &Scenario) -> anyhow::Result<crate::literature::Strengths> {
     let d = draw(s)?;
-    Ok(crate::literature::strengths(&d.hidden))
+    Ok(crate::literature::strengths(&d.sample, &d.hidden))
 }
 
 /// The scenario's strip as its session draws it (its sample and what it
@@ -646,6 +646,7 @@ pub fn power(outcomes: &[Outcome]) -> String {
         .map(|o| strengths_of(&o.scenario).unwrap_or_default())
         .collect();
     let names = [
+        "damping",
         "electrochemical-nonlinearity",
         "dehydration",
         "back-relaxation",
