@@ -43,5 +43,6 @@ pub use fitter::{FitResult, Fitter, FormCheck, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
 pub use space::{difference_step, Knob, Space};
 pub use stats::{
-    above_zero_at, below_zero_at, excludes_at, nrmse, wilson_hilferty, ChannelFit, Estimate, Score,
+    above_zero_at, below_zero_at, beyond_at, excludes_at, nrmse, wilson_hilferty, ChannelFit,
+    Estimate, Score,
 };

@@ -389,6 +389,15 @@ pub fn excludes_at(est: &Estimate, off: f64, z: f64) -> bool {
     }
 }
 
+/// Whether `est`'s interval, widened as [`excludes_at`] does, lies
+/// wholly beyond `±margin`: the value departs from 0 by more than
+/// `margin`, not merely from 0. On the symmetric scale (a deviation).
+pub fn beyond_at(est: &Estimate, margin: f64, z: f64) -> bool {
+    est.low.is_finite()
+        && est.high.is_finite()
+        && est.value.abs() - margin > z / Z95 * 0.5 * (est.high - est.low)
+}
+
 /// Whether `est`'s upper end, widened as [`excludes_at`] does, is below 0.
 pub fn below_zero_at(est: &Estimate, z: f64) -> bool {
     est.high.is_finite() && est.value + z / Z95 * (est.high - est.value) < 0.0
@@ -477,6 +486,26 @@ mod tests {
         }
         // Wilson–Hilferty's (the whiteness tests') within 0.2 % of it.
         assert!((wilson_hilferty(9, 1.644_853_6) / chi2_quantile(9, 0.95) - 1.0).abs() < 2e-3);
+    }
+
+    #[test]
+    fn beyond_a_margin_asks_the_whole_interval_past_it() {
+        let est = |value: f64, half: f64| Estimate {
+            knob: Knob::SegmentK(1),
+            value,
+            low: value - half,
+            high: value + half,
+        };
+        // A 2 % deviation known to ±0.2 %: not 0, but within a 5 % margin.
+        assert!(excludes_at(&est(0.02, 0.002), 0.0, 3.0));
+        assert!(!beyond_at(&est(0.02, 0.002), 0.05, 3.0));
+        // 10 % ± 2 % (95 %): 3 σ reach 6.9 %, beyond 5 %; either sign.
+        assert!(beyond_at(&est(0.10, 0.02), 0.05, 3.0));
+        assert!(beyond_at(&est(-0.10, 0.02), 0.05, 3.0));
+        // ± 4 % at 95 %: 3 σ reach 3.9 %, inside.
+        assert!(!beyond_at(&est(0.10, 0.04), 0.05, 3.0));
+        // No interval, no claim.
+        assert!(!beyond_at(&est(0.5, f64::INFINITY), 0.05, 3.0));
     }
 
     #[test]
