@@ -651,9 +651,9 @@ fn signature_is_significant(e: Effect, fit: &FitResult, fixed: &ModelSpec, bar: 
         // (through the polymer past the cut, or a shared electrode) has
         // the drive's sign. A negative κ bends the neighbours against
         // the drive, which no leak of charge does: it is the fit
-        // reshaping where along the strip each segment's moment acts
-        // (a resistive electrode charging from its contact: literature
-        // null seed 60001, κ = -0.11), not crosstalk.
+        // reshaping where along the strip each segment's moment acts on
+        // a strip whose form it lacks (literature null seed 60001,
+        // κ = -0.11), not crosstalk.
         Effect::SegmentCrosstalk => fit
             .estimates
             .iter()
