@@ -70,8 +70,7 @@ pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
     for i in (1..n).step_by(3) {
         consider(i, &mut hold);
     }
-    let rest: Vec<usize> = (2..n).step_by(3).chain((0..n).step_by(3)).collect();
-    for i in rest {
+    for i in (2..n).step_by(3).chain((0..n).step_by(3)) {
         if hold.len() >= MIN_HELD_OUT {
             break;
         }
