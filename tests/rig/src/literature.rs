@@ -124,6 +124,16 @@ impl Drying {
     }
 }
 
+/// The true strip's first undamped angular frequencies, rad/s, with its
+/// tip free and held (clamped–free and clamped–pinned Euler–Bernoulli
+/// roots 1.8751 and 3.9266), on the true section and mass per length with
+/// the water's added mass ([`crate::strip::section`]).
+pub fn first_modes_rad_s(sample: &Sample, hidden: &Hidden) -> [f64; 2] {
+    let (ei, mass) = crate::strip::section(sample, hidden);
+    let scale = (ei / (mass * sample.length_m.powi(4))).sqrt();
+    [1.875_104_068_7_f64, 3.926_602_312_f64].map(|beta_l| beta_l * beta_l * scale)
+}
+
 /// The departures' strengths, each in the unit of the diagnosis's own
 /// probe (`identify.rs`), for power curves.
 pub type Strengths = Vec<(&'static str, f64)>;
@@ -184,18 +194,13 @@ impl Literature {
     }
 
     /// The spectrum's damping ratio of the strip's first mode, free or
-    /// with its tip held (the load cell's ringing), whichever is larger:
-    /// what the diagnosis's `damping` probe measures (a constant modal
-    /// ratio) at the mode that shows it best. The true section's
-    /// stiffness and mass per length, the water's added mass with it
-    /// ([`crate::strip::section`]); the Euler–Bernoulli roots of a
-    /// clamped–free (1.8751) and a clamped–pinned (3.9266) beam.
+    /// with its tip held (the load cell's ringing), whichever is larger
+    /// ([`first_modes_rad_s`]): what the diagnosis's `damping` probe
+    /// measures (a constant modal ratio) at the mode that shows it best.
     pub fn first_mode_damping(&self, sample: &Sample, hidden: &Hidden) -> f64 {
-        let (ei, mass) = crate::strip::section(sample, hidden);
-        let scale = (ei / (mass * sample.length_m.powi(4))).sqrt();
-        [1.875_104_068_7_f64, 3.926_602_312_f64]
+        first_modes_rad_s(sample, hidden)
             .iter()
-            .map(|beta_l| self.mode_damping(beta_l * beta_l * scale))
+            .map(|&omega| self.mode_damping(omega))
             .fold(0.0, f64::max)
     }
 
