@@ -51,6 +51,31 @@ pub fn truth(sample: &Sample, hidden: &Hidden) -> BTreeMap<String, f64> {
     t
 }
 
+/// The pseudo-true value of every knob of `twin_fit`, the `finrs fit
+/// --json` document of the session's twin with its measurement errors
+/// shrunk ([`crate::sweep::write_twin`]): where the strip is not the
+/// model (the literature strip's lines, spectrum and measured geometry),
+/// no knob has a value in the strip to be scored against, but the fit
+/// still has a value it tends to on endless data, the misspecified
+/// model's pseudo-truth (White, 1982). An interval that holds it is
+/// honest about the noise; one that misses it too often is too narrow.
+pub fn pseudo_truth(twin_fit: &serde_json::Value) -> anyhow::Result<BTreeMap<String, f64>> {
+    let estimates = twin_fit["estimates"]
+        .as_array()
+        .ok_or_else(|| anyhow::anyhow!("the twin's fit JSON has no `estimates` list"))?;
+    let mut t = BTreeMap::new();
+    for e in estimates {
+        let knob = e["knob"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("an estimate of the twin without a `knob`: {e}"))?;
+        let value = e["value"].as_f64().ok_or_else(|| {
+            anyhow::anyhow!("the twin's estimate {knob}: `value` is not a number")
+        })?;
+        t.insert(knob.to_string(), value);
+    }
+    Ok(t)
+}
+
 /// One fitted knob against its true value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scored {
@@ -273,6 +298,28 @@ mod tests {
         // A document without estimates is refused, naming what is missing.
         let err = score(&serde_json::json!({}), &t).unwrap_err();
         assert!(err.to_string().contains("estimates"), "{err}");
+    }
+
+    #[test]
+    fn a_twins_estimates_are_the_truths_every_knob_of_both_fits_scored() {
+        let twin = serde_json::json!({"estimates": [
+            {"knob": "r1_ohm", "value": 160.0, "low": 159.9, "high": 160.1},
+            {"knob": "damping_ratio", "value": 0.05, "low": 0.049, "high": 0.051},
+        ]});
+        let t = pseudo_truth(&twin).unwrap();
+        assert_eq!(t.len(), 2);
+        let fit = serde_json::json!({"estimates": [
+            {"knob": "r1_ohm", "value": 151.0, "low": 149.0, "high": 153.0},
+            {"knob": "damping_ratio", "value": 0.047, "low": 0.04, "high": 0.06},
+            {"knob": "c_f", "value": 1.2e-4, "low": 1.1e-4, "high": 1.3e-4},
+        ]});
+        let s = score(&fit, &t).unwrap();
+        // Damping now has a truth; C, which the twin's fit lacks, has none.
+        assert_eq!(s.len(), 2);
+        assert!(!s[0].covered(), "160 is beyond 149-153");
+        assert!(s[1].covered());
+        let err = pseudo_truth(&serde_json::json!({"estimates": [{"knob": "c_f"}]})).unwrap_err();
+        assert!(err.to_string().contains("c_f: `value`"), "{err}");
     }
 
     #[test]

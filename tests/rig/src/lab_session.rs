@@ -435,7 +435,7 @@ fn measure_lab(
     let mut channels = Vec::new();
     for (k, i) in truth.currents_a.iter().enumerate() {
         let zero = c.zeros.map_or(vec![0.0; rows], |z| at(&z.currents[k]));
-        let step = quant.map_or(1e-6, |q| q.current_a);
+        let step = quant.map_or(sensors.daq_step, |q| q.current_a);
         channels.push((
             Channel::Current(k),
             daq(i, sensors.current_a, zero, step, rng),
@@ -448,7 +448,7 @@ fn measure_lab(
             let z0 = z.force.at(c.t0_s);
             at(&z.force).into_iter().map(|v| v - z0).collect()
         });
-        let step = quant.map_or(1e-6, |q| q.force_n);
+        let step = quant.map_or(sensors.daq_step, |q| q.force_n);
         channels.push((
             Channel::Force,
             daq(&truth.force_n, sensors.force_n, zero, step, rng),
@@ -463,7 +463,7 @@ fn measure_lab(
                 let camera_channel =
                     |series: &[(f64, f64)], along: bool, rng: &mut dyn rand::RngCore| {
                         // The rest shape is found to a fraction of a millimetre.
-                        let offset = rng.gen_range(-2e-4..2e-4);
+                        let offset = rng.gen_range(-sensors.rest_offset_m..sensors.rest_offset_m);
                         let zero = if along { &zero_x } else { &zero_y };
                         let mut pink = bench
                             .pink_fraction
@@ -504,7 +504,7 @@ fn measure_lab(
             }
             Tracker::Laser(laser) => {
                 let n = white(laser.noise_m);
-                let offset = rng.gen_range(-2e-4..2e-4);
+                let offset = rng.gen_range(-sensors.rest_offset_m..sensors.rest_offset_m);
                 let mut pink = bench
                     .pink_fraction
                     .map(|f| bench::pink(rows, laser.noise_m * f.sqrt(), c.layout.rate_hz, rng))

@@ -166,6 +166,11 @@ pub struct Sensors {
     pub pixel_m: f64,
     /// Load-cell noise, N rms.
     pub force_n: f64,
+    /// The DAQ's count (current, A, and force, N, alike).
+    pub daq_step: f64,
+    /// How far off the rest shape is found, m: each camera channel's
+    /// offset is drawn within ±this.
+    pub rest_offset_m: f64,
 }
 
 impl Sensors {
@@ -177,6 +182,25 @@ impl Sensors {
             camera_m: 5e-5 * f,
             pixel_m: 1.09e-4,
             force_n: 2e-5 * f,
+            daq_step: 1e-6,
+            rest_offset_m: 2e-4,
+        }
+    }
+
+    /// The same sensors with every error `scale` times as large: noise,
+    /// counts, pixels and the rest shape's offset. Each draw consumes the
+    /// random stream as before, so a session written with scaled sensors
+    /// is its twin with the measurement's errors shrunk, the strip, the
+    /// protocol and the bench's draws the same (`rig-coverage`'s
+    /// pseudo-truths).
+    pub fn scaled(&self, scale: f64) -> Sensors {
+        Sensors {
+            current_a: self.current_a * scale,
+            camera_m: self.camera_m * scale,
+            pixel_m: self.pixel_m * scale,
+            force_n: self.force_n * scale,
+            daq_step: self.daq_step * scale,
+            rest_offset_m: self.rest_offset_m * scale,
         }
     }
 }
@@ -406,7 +430,7 @@ fn measure(
             .collect();
         channels.push((
             Channel::Current(k),
-            daq_channel(raw, daq_extra(sensors.current_a, rng)),
+            daq_channel(raw, daq_extra(sensors.current_a, rng), sensors.daq_step),
         ));
     }
     if truth.force_n.is_empty() {
@@ -414,7 +438,7 @@ fn measure(
         let frames = camera.iter().filter(|&&f| f).count();
         let camera_channel = |series: &[(f64, f64)], along: bool, rng: &mut dyn rand::RngCore| {
             // The rest shape is found to a fraction of a millimetre.
-            let offset = rng.gen_range(-2e-4..2e-4);
+            let offset = rng.gen_range(-sensors.rest_offset_m..sensors.rest_offset_m);
             let raw: Vec<Option<f64>> = (0..rows)
                 .map(|r| {
                     camera[r].then(|| {
@@ -461,21 +485,21 @@ fn measure(
             .collect();
         channels.push((
             Channel::Force,
-            daq_channel(raw, daq_extra(sensors.force_n, rng)),
+            daq_channel(raw, daq_extra(sensors.force_n, rng), sensors.daq_step),
         ));
     }
     rec.channels = channels;
 }
 
 /// A DAQ channel's samples: the value with its noise and the bench's
-/// additions, in the DAQ's microunit steps.
-fn daq_channel(raw: Vec<f64>, extra: Option<Vec<f64>>) -> Vec<Option<f64>> {
+/// additions, in the DAQ's counts of `step`.
+fn daq_channel(raw: Vec<f64>, extra: Option<Vec<f64>>, step: f64) -> Vec<Option<f64>> {
     match extra {
-        None => raw.into_iter().map(|v| Some(round(v, 1e-6))).collect(),
+        None => raw.into_iter().map(|v| Some(round(v, step))).collect(),
         Some(extra) => raw
             .into_iter()
             .zip(extra)
-            .map(|(v, e)| Some(round(v + e, 1e-6)))
+            .map(|(v, e)| Some(round(v + e, step)))
             .collect(),
     }
 }

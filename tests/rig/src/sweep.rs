@@ -213,6 +213,19 @@ pub fn plan_literature_null(first: u64, count: usize) -> Vec<Scenario> {
         .collect()
 }
 
+/// The scenarios of the sweep the binaries' `--literature` and `--null`
+/// flags choose (the lab's apart): the off-class sweep ([`plan`]), its
+/// null ([`plan_null`]), the literature sweep ([`plan_literature`]) or
+/// its null ([`plan_literature_null`]).
+pub fn plan_of(literature: bool, null: bool, first: u64, count: usize) -> Vec<Scenario> {
+    match (literature, null) {
+        (true, true) => plan_literature_null(first, count),
+        (true, false) => plan_literature(first, count),
+        (false, true) => plan_null(first, count),
+        (false, false) => plan(first, count),
+    }
+}
+
 /// Whether the literature sweep's session `seed` is in water: three in
 /// ten, from a stream of the seed's own apart from its draws.
 fn in_water(seed: u64) -> bool {
@@ -409,7 +422,32 @@ pub fn strip_of(s: &Scenario) -> anyhow::Result<(Sample, Hidden)> {
 /// Writes the scenario's session into `dir` and says what a right
 /// diagnosis of it names.
 pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {
+    write_drawn(s, dir, draw(s)?)
+}
+
+/// Writes the scenario's twin into `dir`: the same session with every
+/// measurement error `noise_scale` times as large ([`Sensors::scaled`]).
+/// The fit of a twin whose errors are shrunk is the fitted model's
+/// pseudo-true value on this strip and protocol, what the fit would give
+/// on endless data: where the strip is not the model, the truth its
+/// intervals can be scored against (`rig-coverage`). Refused on the lab's
+/// bench, whose artefacts are not all the sensors'.
+pub fn write_twin(s: &Scenario, dir: &Path, noise_scale: f64) -> anyhow::Result<Expected> {
+    anyhow::ensure!(
+        s.lab.is_none(),
+        "seed {}: a lab session has no twin (its artefacts are not the sensors' alone)",
+        s.seed
+    );
+    anyhow::ensure!(
+        noise_scale > 0.0 && noise_scale.is_finite(),
+        "the twin's noise scale must be a positive number, got {noise_scale}"
+    );
     let mut d = draw(s)?;
+    d.sensors = d.sensors.scaled(noise_scale);
+    write_drawn(s, dir, d)
+}
+
+fn write_drawn(s: &Scenario, dir: &Path, mut d: Draws) -> anyhow::Result<Expected> {
     let runs: Vec<Run> = match &d.lab_protocol {
         Some(p) => p.runs.clone(),
         None => runs_of(s),

@@ -159,6 +159,8 @@ fn sensors() -> Sensors {
         camera_m: 5e-5,
         pixel_m: 1.09e-4,
         force_n: 2e-5,
+        daq_step: 1e-6,
+        rest_offset_m: 2e-4,
     }
 }
 

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use finrs::recording::{Channel, Recording, Voltages};
 use finrs_rig::literature::{Drying, Literature};
 use finrs_rig::strip::{run, Truth, BLOCKED_MESH, MESH};
-use finrs_rig::sweep::{plan_literature, strengths_of, strip_of, write_scenario};
+use finrs_rig::sweep::{plan_literature, strengths_of, strip_of, write_scenario, write_twin};
 use finrs_rig::{Hidden, Sample, Tip};
 use rand::SeedableRng;
 
@@ -197,4 +197,52 @@ fn a_literature_session_is_measured_with_a_ruler_and_a_balance() {
         .iter()
         .any(|(n, x)| *n == "electrochemical-nonlinearity" && *x > 0.0));
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The standard deviation of segment 1's current over the first
+/// recording's opening rest, A.
+fn rest_spread_a(dir: &std::path::Path, name: &str) -> f64 {
+    let rec = Recording::read(&dir.join(format!("{name}.csv"))).unwrap();
+    let current = rec.channel(Channel::Current(0)).unwrap();
+    let rest: Vec<f64> = (0..rec.t_s.len())
+        .take_while(|&r| rec.v_v.row(r).is_some_and(|v| v.iter().all(|v| *v == 0.0)))
+        .filter_map(|r| current[r])
+        .collect();
+    assert!(rest.len() > 100, "{} rest rows", rest.len());
+    let mean = rest.iter().sum::<f64>() / rest.len() as f64;
+    (rest.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / rest.len() as f64).sqrt()
+}
+
+#[test]
+fn a_twin_is_the_session_with_its_measurement_errors_scaled() {
+    let root: PathBuf = std::env::temp_dir().join(format!("finrs-twin-{}", std::process::id()));
+    std::fs::remove_dir_all(&root).ok();
+    let s = &finrs_rig::sweep::plan_literature_null(60_000, 1)[0];
+    let (session, same, small) = (root.join("session"), root.join("same"), root.join("small"));
+    write_scenario(s, &session).unwrap();
+    // At scale 1 the twin draws everything as the session did: the same
+    // bytes, so a smaller scale changes the errors and nothing else.
+    write_twin(s, &same, 1.0).unwrap();
+    write_twin(s, &small, 0.1).unwrap();
+    let runs = finrs_rig::sweep::runs_of(s);
+    for r in &runs {
+        let file = format!("{}.csv", r.name);
+        assert_eq!(
+            std::fs::read(session.join(&file)).unwrap(),
+            std::fs::read(same.join(&file)).unwrap(),
+            "{file}"
+        );
+    }
+    let ratio = rest_spread_a(&small, &runs[0].name) / rest_spread_a(&session, &runs[0].name);
+    assert!((0.08..0.12).contains(&ratio), "rest spread ratio {ratio}");
+    // Nothing else is scaled: the metadata's geometry is the same.
+    let meta = |d: &std::path::Path| {
+        Recording::read(&d.join(format!("{}.csv", runs[0].name)))
+            .unwrap()
+            .meta
+    };
+    assert_eq!(meta(&session).thickness_m, meta(&small).thickness_m);
+    let err = write_twin(s, &root.join("zero"), 0.0).unwrap_err();
+    assert!(err.to_string().contains("noise scale"), "{err}");
+    std::fs::remove_dir_all(&root).ok();
 }

@@ -1,9 +1,18 @@
-//! `rig-coverage`: fits each session of a seeded off-class sweep with the
-//! `finrs` binary, once with the structure the strip truly has and once
-//! with the baseline alone, and counts how often each 95 % interval holds
-//! the rig's true value (`finrs_rig::coverage`). Each fit's wall time is
-//! kept too: with `--jobs 1` the fit has the machine's cores to itself,
-//! the benchmark of #12's 10 s a session.
+//! `rig-coverage`: fits each session of a seeded sweep with the `finrs`
+//! binary and counts how often each 95 % interval holds the truth
+//! (`finrs_rig::coverage`).
+//!
+//! - On the off-class rig, whose strip shares the fitted knobs, the truth
+//!   is the rig's own value, and each session is fitted twice: with the
+//!   structure the strip truly has and with the baseline alone.
+//! - On the literature strip (`--literature`), no knob has a value in the
+//!   strip, so each session is fitted with its true structure beside its
+//!   twin (the same session with every measurement error `--twin-noise`
+//!   times as large), and the twin's estimates are the truths: the
+//!   misspecified model's pseudo-true values, every knob scored.
+//!
+//! Each fit's wall time is kept too: with `--jobs 1` the fit has the
+//! machine's cores to itself, the benchmark of #12's 10 s a session.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -11,12 +20,13 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use finrs_rig::coverage::{markdown, median, score, tally, Scored};
+use finrs_rig::coverage::{markdown, median, pseudo_truth, score, tally, Scored};
 use finrs_rig::runner::{each_session, SweepArgs};
-use finrs_rig::sweep::{plan, structure_of, truth_of, write_scenario, Scenario};
+use finrs_rig::sweep::{plan_of, structure_of, truth_of, write_scenario, write_twin, Scenario};
 
-/// Fits off-class rig sessions with their true structure and with the
-/// baseline, and scores each fitted interval against the rig's value.
+/// Fits rig sessions with their true structure (and the off-class rig's
+/// with the baseline too), and scores each fitted interval against the
+/// rig's value or the twin's estimate.
 #[derive(Parser)]
 #[command(version)]
 struct Cli {
@@ -24,13 +34,33 @@ struct Cli {
     run: SweepArgs,
     /// Directory for the table (coverage.md), every scored interval
     /// (coverage.csv), each fit's wall time (fit-seconds.csv) and JSON
-    /// (fits/seed-N-STRUCTURE.json).
+    /// (fits/seed-N-STRUCTURE.json, the twin's seed-N-STRUCTURE-twin.json).
     #[arg(long)]
     out: PathBuf,
+    /// The literature sweep's sessions (`sweep::plan_literature`), scored
+    /// against their twins' fits.
+    #[arg(long)]
+    literature: bool,
+    /// The null sweep's sessions (with `--literature`, the literature
+    /// strip's base alone).
+    #[arg(long)]
+    null: bool,
+    /// The twin's measurement errors over the session's: small enough that
+    /// the twin's own scatter is a few percent of an interval, large
+    /// enough that its rests still set the fit's weights by noise.
+    #[arg(long, default_value_t = 0.05)]
+    twin_noise: f64,
 }
 
-/// The two structures each session is fitted with.
-const STRUCTURES: [&str; 2] = ["true", "baseline"];
+/// The structures a session is fitted with: the one its strip truly has,
+/// and on the off-class rig the baseline too.
+fn structures(s: &Scenario) -> &'static [&'static str] {
+    if s.literature {
+        &["true"]
+    } else {
+        &["true", "baseline"]
+    }
+}
 
 /// Fits `dir` with `effects` into `json`; the fit's JSON and its wall
 /// time, s.
@@ -63,40 +93,52 @@ fn fit(
     Ok((value, seconds))
 }
 
-/// The session's scored intervals and fit times, s, under each of
-/// [`STRUCTURES`].
-type Fitted = ([Vec<Scored>; 2], [f64; 2]);
+/// Per structure fitted: its label, the scored intervals and the fit's
+/// wall time, s.
+type Fitted = Vec<(&'static str, Vec<Scored>, f64)>;
 
 /// The session's scored intervals and fit times.
 fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Fitted> {
     let dir = cli.out.join(format!("session-{}", s.seed));
     write_scenario(s, &dir)?;
-    let truth = truth_of(s)?;
+    let twin_dir = cli.out.join(format!("twin-{}", s.seed));
+    if s.literature {
+        write_twin(s, &twin_dir, cli.twin_noise)?;
+    }
     let structure = structure_of(s)?;
-    let mut out = [Vec::new(), Vec::new()];
-    let mut seconds = [0.0; 2];
-    for (k, label) in STRUCTURES.iter().enumerate() {
-        let effects: &[&str] = if k == 0 { &structure } else { &[] };
-        let json = cli
-            .out
-            .join("fits")
-            .join(format!("seed-{}-{label}.json", s.seed));
-        let (value, t) = fit(cli, &dir, effects, &json)?;
-        out[k] = score(&value, &truth)?;
-        seconds[k] = t;
+    let mut out = Vec::new();
+    for &label in structures(s) {
+        let effects: &[&str] = if label == "true" { &structure } else { &[] };
+        let json = |twin: &str| {
+            cli.out
+                .join("fits")
+                .join(format!("seed-{}-{label}{twin}.json", s.seed))
+        };
+        let (value, t) = fit(cli, &dir, effects, &json(""))?;
+        let truth = if s.literature {
+            let (twin, _) = fit(cli, &twin_dir, effects, &json("-twin"))?;
+            pseudo_truth(&twin)?
+        } else {
+            truth_of(s)?
+        };
+        out.push((label, score(&value, &truth)?, t));
     }
     std::fs::remove_dir_all(&dir).ok();
-    Ok((out, seconds))
+    std::fs::remove_dir_all(&twin_dir).ok();
+    Ok(out)
 }
 
 /// The fits' wall times under each structure: median, the slowest and how
 /// many took over #12's 10 s.
 fn times(results: &[(Scenario, Fitted)]) -> String {
     let mut out = String::from(
-        "\n`finrs fit` wall time (s; one session at a time has both cores with `--jobs 1`):\n\n| structure | fits | median | slowest (seed) | over 10 s |\n|---|---|---|---|---|\n",
+        "\n`finrs fit` wall time (s; one session at a time has both cores with `--jobs 1`; the twins' fits not counted):\n\n| structure | fits | median | slowest (seed) | over 10 s |\n|---|---|---|---|---|\n",
     );
-    for (k, label) in STRUCTURES.iter().enumerate() {
-        let mut t: Vec<(f64, u64)> = results.iter().map(|(s, f)| (f.1[k], s.seed)).collect();
+    for label in ["true", "baseline"] {
+        let mut t: Vec<(f64, u64)> = results
+            .iter()
+            .flat_map(|(s, f)| f.iter().filter(|x| x.0 == label).map(|x| (x.2, s.seed)))
+            .collect();
         t.sort_by(|a, b| a.0.total_cmp(&b.0));
         let Some(&(max, slowest)) = t.last() else {
             continue;
@@ -115,10 +157,16 @@ fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     cli.run.check()?;
     std::fs::create_dir_all(cli.out.join("fits"))?;
-    let scenarios = plan(cli.run.first_seed, cli.run.sessions);
+    let scenarios = plan_of(
+        cli.literature,
+        cli.null,
+        cli.run.first_seed,
+        cli.run.sessions,
+    );
     let results: Vec<(Scenario, Fitted)> = each_session(&scenarios, cli.run.jobs, |s| {
-        let (scored, seconds) = one(&cli, s)?;
-        let missed: Vec<&str> = scored[0]
+        let fitted = one(&cli, s)?;
+        let missed: Vec<&str> = fitted[0]
+            .1
             .iter()
             .filter(|x| !x.covered())
             .map(|x| x.knob.as_str())
@@ -133,15 +181,13 @@ fn main() -> anyhow::Result<()> {
                 missed.join(",")
             }
         );
-        Ok((s.clone(), (scored, seconds)))
+        Ok((s.clone(), fitted))
     });
     let mut csv = String::from("seed,row,structure,knob,truth,value,low,high,covered\n");
     let mut fit_csv = String::from("seed,row,structure,seconds\n");
-    for (s, (scored, seconds)) in &results {
-        for (label, t) in STRUCTURES.iter().zip(seconds) {
+    for (s, fitted) in &results {
+        for (label, list, t) in fitted {
             fit_csv.push_str(&format!("{},{},{label},{t:.2}\n", s.seed, s.row()));
-        }
-        for (label, list) in STRUCTURES.iter().zip(scored) {
             for x in list {
                 csv.push_str(&format!(
                     "{},{},{label},{},{:e},{:e},{:e},{:e},{}\n",
@@ -157,17 +203,28 @@ fn main() -> anyhow::Result<()> {
             }
         }
     }
-    let tallies: Vec<(&str, _)> = STRUCTURES
-        .iter()
-        .enumerate()
-        .map(|(k, &label)| {
-            let scored = results.iter().map(|(_, f)| f.0[k].as_slice());
+    let tallies: Vec<(&str, _)> = ["true", "baseline"]
+        .into_iter()
+        .map(|label| {
+            let scored = results
+                .iter()
+                .flat_map(|(_, f)| f.iter().filter(|x| x.0 == label).map(|x| x.1.as_slice()));
             (label, tally(scored))
         })
+        .filter(|(_, t)| !t.is_empty())
         .collect();
+    let truths = if cli.literature {
+        format!(
+            "the truths are each session's twin's estimates (its measurement errors {} times the session's), the fitted model's pseudo-true values on that strip and protocol",
+            cli.twin_noise
+        )
+    } else {
+        "the truths are the rig's own values of the knobs that mean the same in the rig".to_string()
+    };
     let md = format!(
-        "{} sessions from seed {}; `true`: fitted with the catalogue effects the strip has, `baseline`: with none.\n\n{}{}",
+        "{} of {} sessions from seed {} (a session whose fit failed is named on stderr); `true`: fitted with the catalogue effects the strip has, `baseline`: with none; {truths}.\n\n{}{}",
         results.len(),
+        scenarios.len(),
         cli.run.first_seed,
         markdown(&tallies),
         times(&results)

@@ -11,8 +11,7 @@ use finrs::session::Session;
 use finrs_rig::expect::{names_given, score, Expected};
 use finrs_rig::runner::{each_session, SweepArgs};
 use finrs_rig::sweep::{
-    csv, expected_of, markdown, plan, plan_lab, plan_literature, plan_literature_null, plan_null,
-    write_scenario, Outcome, Scenario,
+    csv, expected_of, markdown, plan_lab, plan_of, write_scenario, Outcome, Scenario,
 };
 use finrs_rig::trivial::TRIVIAL;
 
@@ -288,20 +287,19 @@ fn main() -> anyhow::Result<()> {
             finrs_rig::LAB_ARTEFACTS
         );
     }
-    let mut scenarios = if cli.null && cli.literature {
-        plan_literature_null(cli.run.first_seed, cli.run.sessions)
-    } else if cli.null {
-        plan_null(cli.run.first_seed, cli.run.sessions)
-    } else if cli.literature {
-        plan_literature(cli.run.first_seed, cli.run.sessions)
-    } else if cli.lab {
+    let mut scenarios = if cli.lab && !cli.null && !cli.literature {
         let mut p = plan_lab(cli.run.first_seed, cli.run.sessions);
         for s in &mut p {
             s.lab_without = cli.lab_without.clone();
         }
         p
     } else {
-        plan(cli.run.first_seed, cli.run.sessions)
+        plan_of(
+            cli.literature,
+            cli.null,
+            cli.run.first_seed,
+            cli.run.sessions,
+        )
     };
     if let Some(s) = cli
         .only
