@@ -35,8 +35,13 @@
 //!   §3.5.4; DS8626 gives 16 µs typical a byte), so the tick overruns and
 //!   its unseen periods go out as dropped samples. Only when a sector is
 //!   full (every 4096 stores) is the other erased: DS8626 gives up to 4 s
-//!   for a 128 KiB sector at x8, during which nothing runs, so the
-//!   watchdog is widened to [`ERASE_WATCHDOG_MS`] first and restored after.
+//!   for a 128 KiB sector at x8, during which nothing runs. Each log's
+//!   position is read at boot, before the watchdog starts, and kept in RAM:
+//!   a store touches one record. Before each store touches the flash the
+//!   watchdog is widened to cover the datasheet's longest program (and
+//!   erase) on the fastest LSI (`flash_timing`: 25 ms for a calibration
+//!   record, 58 ms for a model record, 5.9 s with an erase) and restored
+//!   after.
 //! - Panic, HardFault, NMI and any interrupt without a handler: every used
 //!   timer's PWM outputs are forced low (the bridge open) and its compare
 //!   registers zeroed, and every used DAC set to its 0 V code, by register
@@ -75,8 +80,9 @@ use crate::config::{
 };
 use crate::{Mono, SYSCLK_HZ};
 use finrs_firmware_support::calibration_store::{self, BOARD_REGION};
+use finrs_firmware_support::flash_timing::store_watchdog_ms;
 use finrs_firmware_support::model_store;
-use finrs_firmware_support::record_log::StoreError;
+use finrs_firmware_support::record_log::{Cursor, StoreError, Work};
 use finrs_firmware_support::reset;
 use finrs_firmware_support::supply::{self, Supplies, SupplyError};
 use finrs_firmware_support::sync::SyncMark;
@@ -91,11 +97,6 @@ pub const PWM_HZ: u32 = 25_000;
 /// Watchdog period, ms: 20 sample periods, far beyond any normal jitter,
 /// short enough that a hung firmware stops driving within a blink.
 pub const WATCHDOG_MS: u32 = 20;
-
-/// Watchdog period while a flash sector is erased, ms: twice DS8626's
-/// longest 128 KiB erase at x8 (4 s), so that the LSI's spread (17 to 47
-/// kHz, nominal 32) still leaves it above 4 s.
-pub const ERASE_WATCHDOG_MS: u32 = 8_000;
 
 /// Frame up channel, bytes. A Sample is 19 + 8 N bytes: 43 at N = 3 (43
 /// kB/s at 1 kHz), 83 at N = 8. probe-rs polls RTT every few ms but a busy
@@ -280,8 +281,14 @@ pub struct Io {
     /// The supplies were in range at boot; if not, nothing is ever driven.
     supply_ok: bool,
     watchdog: IndependentWatchdog,
-    /// The calibration's records (flash sectors 10 and 11).
+    /// The calibration's records (flash sectors 10 and 11) and the
+    /// model's (8 and 9).
     flash: LockedFlash,
+    /// Each log's position, from the boot's scan; `None` if its region
+    /// could not be read then (nothing is stored: a scan would outrun the
+    /// watchdog).
+    calibration_log: Option<Cursor>,
+    model_log: Option<Cursor>,
     /// The camera's sync LED (`pins::SYNC_LED`) and when to light it.
     sync_led: Pin<'E', 7, Output<PushPull>>,
     sync: SyncMark,
@@ -512,21 +519,24 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     init_trigger(dp.TIM5, &dp.TIM3, &mut rcc);
 
     let mut flash = LockedFlash::new(dp.FLASH);
-    let stored_calibration = match calibration_store::load(&mut flash, BOARD_REGION) {
-        Ok(found) => found,
-        Err(_) => {
-            defmt::warn!("calibration: flash unreadable, build defaults");
-            None
-        }
-    };
+    // The only reads of the whole logs (tens of ms for a full sector),
+    // before the watchdog starts; each store after touches one record.
+    let (stored_calibration, calibration_log) =
+        match calibration_store::load(&mut flash, BOARD_REGION) {
+            Ok((found, cursor)) => (found, Some(cursor)),
+            Err(_) => {
+                defmt::warn!("calibration: flash unreadable, build defaults, no store");
+                (None, None)
+            }
+        };
     if let Some(s) = stored_calibration {
         defmt::info!("calibration: record {} from flash", s.seq);
     }
-    let stored_model = match model_store::load(&mut flash, model_store::BOARD_REGION) {
-        Ok(found) => found,
+    let (stored_model, model_log) = match model_store::load(&mut flash, model_store::BOARD_REGION) {
+        Ok((found, cursor)) => (found, Some(cursor)),
         Err(_) => {
-            defmt::warn!("model: flash unreadable, none held");
-            None
+            defmt::warn!("model: flash unreadable, none held, no store");
+            (None, None)
         }
     };
 
@@ -553,6 +563,8 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             supply_ok: supply.is_ok(),
             watchdog,
             flash,
+            calibration_log,
+            model_log,
             sync_led,
             sync: SyncMark::new(),
         },
@@ -839,9 +851,19 @@ impl Io {
     /// Appends `calibration` to the flash records; true once it reads back.
     /// Call with the outputs at 0 V: it stalls the core (module doc).
     pub fn store_calibration(&mut self, calibration: &Calibration) -> bool {
-        self.store("calibration", |flash, before_erase| {
-            calibration_store::save(flash, BOARD_REGION, calibration, before_erase)
-        })
+        let Self {
+            flash,
+            watchdog,
+            calibration_log,
+            ..
+        } = self;
+        store(
+            flash,
+            watchdog,
+            calibration_log,
+            "calibration",
+            |f, at, before| calibration_store::save(f, BOARD_REGION, at, calibration, before),
+        )
     }
 
     /// Appends `record` to the model's log in flash (sectors 8 and 9), as
@@ -849,49 +871,63 @@ impl Io {
     /// calibration's: 256 bytes programmed, a sector erased only when the
     /// other is full.
     pub fn store_model(&mut self, record: &finrs_frames::ModelRecord) -> bool {
-        self.store("model", |flash, before_erase| {
-            model_store::save(flash, model_store::BOARD_REGION, record, before_erase)
-        })
-    }
-
-    /// Runs one store's `save` on the unlocked flash, the watchdog widened
-    /// for an erase (`save` calls its second argument first) and set back
-    /// after; logs the outcome under `what`.
-    fn store<E>(
-        &mut self,
-        what: &str,
-        save: impl FnOnce(&mut UnlockedFlash<'_>, &mut dyn FnMut()) -> Result<u32, StoreError<E>>,
-    ) -> bool {
         let Self {
-            flash, watchdog, ..
+            flash,
+            watchdog,
+            model_log,
+            ..
         } = self;
-        let mut erased = false;
-        let result = {
-            let mut unlocked = flash.unlocked();
-            save(&mut unlocked, &mut || {
-                erased = true;
-                set_watchdog(watchdog, ERASE_WATCHDOG_MS);
-            })
-        };
-        if erased {
-            set_watchdog(watchdog, WATCHDOG_MS);
-        }
-        match result {
-            Ok(seq) => {
-                defmt::info!("{=str}: stored as record {}", what, seq);
-                true
-            }
-            Err(_) => {
-                defmt::error!("{=str}: the flash write failed; not stored", what);
-                false
-            }
-        }
+        store(flash, watchdog, model_log, "model", |f, at, before| {
+            model_store::save(f, model_store::BOARD_REGION, at, record, before)
+        })
     }
 
     /// Whether the next group already ended (this period overran), or
     /// ADC2/ADC3's group was late (their results are then a period old).
     pub fn deadline_missed(&mut self) -> bool {
         core::mem::take(&mut self.secondary_late) || self.adc1.sr().read().jeoc().bit_is_set()
+    }
+}
+
+/// Runs one store's `save` at the log's position `log` on the unlocked
+/// flash, the watchdog widened first to cover the datasheet's longest time
+/// for what the store says it will do (`flash_timing`) and set back after;
+/// logs the outcome under `what`.
+fn store<E>(
+    flash: &mut LockedFlash,
+    watchdog: &mut IndependentWatchdog,
+    log: &mut Option<Cursor>,
+    what: &str,
+    save: impl FnOnce(
+        &mut UnlockedFlash<'_>,
+        &mut Cursor,
+        &mut dyn FnMut(Work),
+    ) -> Result<u32, StoreError<E>>,
+) -> bool {
+    let Some(at) = log else {
+        defmt::error!("{=str}: its flash was unreadable at boot; not stored", what);
+        return false;
+    };
+    let mut widened = false;
+    let result = {
+        let mut unlocked = flash.unlocked();
+        save(&mut unlocked, at, &mut |work| {
+            widened = true;
+            set_watchdog(watchdog, store_watchdog_ms(work, WATCHDOG_MS));
+        })
+    };
+    if widened {
+        set_watchdog(watchdog, WATCHDOG_MS);
+    }
+    match result {
+        Ok(seq) => {
+            defmt::info!("{=str}: stored as record {}", what, seq);
+            true
+        }
+        Err(_) => {
+            defmt::error!("{=str}: the flash write failed; not stored", what);
+            false
+        }
     }
 }
 

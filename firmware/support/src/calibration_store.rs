@@ -45,17 +45,18 @@
 //!
 //! let mut flash = Ram([0xFF; 256]);
 //! let region = Region { offset: 0, sector_len: 128 };
-//! assert_eq!(load(&mut flash, region).unwrap(), None);
+//! let (none, mut cursor) = load(&mut flash, region).unwrap();
+//! assert_eq!(none, None);
 //! let c = Calibration { newtons_per_count: 2.5e-5, current_zero_counts: [2048; 8] };
-//! save(&mut flash, region, &c, || {}).unwrap();
-//! assert_eq!(load(&mut flash, region).unwrap().map(|r| r.calibration), Some(c));
+//! save(&mut flash, region, &mut cursor, &c, |_| {}).unwrap();
+//! assert_eq!(load(&mut flash, region).unwrap().0.map(|r| r.calibration), Some(c));
 //! ```
 
 use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 use finrs_frames::{Calibration, CALIBRATION_LEN};
 
 use crate::record_log::Log;
-pub use crate::record_log::{Region, StoreError};
+pub use crate::record_log::{Cursor, Region, StoreError, Work};
 
 /// Bytes per record (a power of two: records never straddle a 16-byte
 /// flash row).
@@ -95,20 +96,26 @@ pub fn decode_record(r: &[u8; RECORD_LEN]) -> Option<Stored> {
     })
 }
 
-/// The calibration in force, `None` if the region holds no valid record.
-pub fn load<F: ReadNorFlash>(flash: &mut F, region: Region) -> Result<Option<Stored>, F::Error> {
-    Ok(LOG.load(flash, region)?.and_then(|r| decode_record(&r)))
+/// The calibration in force, `None` if the region holds no valid record,
+/// and the log's position for [`save`]. Reads the whole region: at boot.
+pub fn load<F: ReadNorFlash>(
+    flash: &mut F,
+    region: Region,
+) -> Result<(Option<Stored>, Cursor), F::Error> {
+    let (newest, cursor) = LOG.open(flash, region)?;
+    Ok((newest.and_then(|r| decode_record(&r)), cursor))
 }
 
-/// Appends `calibration` as the newest record: after the last used slot of
-/// the newest record's sector, or, if that sector is full, at the start of
-/// the other one, erased first (after calling `before_erase`). Reads it
-/// back. Returns the record's sequence number.
+/// Appends `calibration` as the newest record at `cursor` (see
+/// [`crate::record_log`]): one slot programmed and read back, a sector
+/// erased first when the other is full; `before` is told which. Returns
+/// the record's sequence number.
 pub fn save<F: NorFlash>(
     flash: &mut F,
     region: Region,
+    cursor: &mut Cursor,
     calibration: &Calibration,
-    before_erase: impl FnOnce(),
+    before: impl FnOnce(Work),
 ) -> Result<u32, StoreError<F::Error>> {
-    LOG.save(flash, region, &calibration.to_bytes(), before_erase)
+    LOG.append(flash, region, cursor, &calibration.to_bytes(), before)
 }

@@ -28,6 +28,7 @@
 
 pub mod calibration_store;
 pub mod config;
+pub mod flash_timing;
 pub mod identity;
 pub mod model_store;
 pub mod pins;

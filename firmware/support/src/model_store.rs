@@ -38,20 +38,21 @@
 //!
 //! let mut flash = Ram([0xFF; 2048]);
 //! let region = Region { offset: 0, sector_len: 1024 };
-//! assert_eq!(load(&mut flash, region).unwrap(), None);
+//! let (none, mut cursor) = load(&mut flash, region).unwrap();
+//! assert_eq!(none, None);
 //! let record = ModelRecord([7; MODEL_RECORD_LEN]);
 //! // Four records a sector: the fifth store moves to the other sector.
 //! for k in 1..=5 {
-//!     assert_eq!(save(&mut flash, region, &record, || {}).unwrap(), k);
+//!     assert_eq!(save(&mut flash, region, &mut cursor, &record, |_| {}).unwrap(), k);
 //! }
-//! assert_eq!(load(&mut flash, region).unwrap(), Some(record));
+//! assert_eq!(load(&mut flash, region).unwrap().0, Some(record));
 //! ```
 
 use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 use finrs_frames::{ModelRecord, MODEL_RECORD_LEN};
 
 use crate::record_log::Log;
-pub use crate::record_log::{Region, StoreError};
+pub use crate::record_log::{Cursor, Region, StoreError, Work};
 
 /// Bytes per record.
 pub const RECORD_LEN: usize = 256;
@@ -67,24 +68,29 @@ pub const BOARD_REGION: Region = Region {
     sector_len: 0x2_0000,
 };
 
-/// The model stored last, `None` if the region holds no valid record.
+/// The model stored last, `None` if the region holds no valid record,
+/// and the log's position for [`save`]. Reads the whole region: at boot.
 pub fn load<F: ReadNorFlash>(
     flash: &mut F,
     region: Region,
-) -> Result<Option<ModelRecord>, F::Error> {
-    Ok(LOG.load(flash, region)?.and_then(|r| {
+) -> Result<(Option<ModelRecord>, Cursor), F::Error> {
+    let (newest, cursor) = LOG.open(flash, region)?;
+    let record = newest.and_then(|r| {
         let (body, _) = LOG.decode(&r)?;
         Some(ModelRecord(body.try_into().ok()?))
-    }))
+    });
+    Ok((record, cursor))
 }
 
-/// Appends `record` as the newest (see [`crate::record_log`]); returns its
-/// sequence number.
+/// Appends `record` as the newest at `cursor` (see [`crate::record_log`]);
+/// `before` is told what the store is about to do. Returns its sequence
+/// number.
 pub fn save<F: NorFlash>(
     flash: &mut F,
     region: Region,
+    cursor: &mut Cursor,
     record: &ModelRecord,
-    before_erase: impl FnOnce(),
+    before: impl FnOnce(Work),
 ) -> Result<u32, StoreError<F::Error>> {
-    LOG.save(flash, region, &record.0, before_erase)
+    LOG.append(flash, region, cursor, &record.0, before)
 }

@@ -12,9 +12,16 @@
 //! the record in force is the valid one with the highest sequence number,
 //! and the next store goes after the last slot of its sector that is not
 //! erased. When that sector is full, the other one is erased and takes the
-//! store: the newest record is never in the sector being erased
-//! (`before_erase` runs first: on the board an erase stalls the core for
-//! seconds and the watchdog must be widened).
+//! store: the newest record is never in the sector being erased.
+//!
+//! Only the boot reads the whole region ([`Log::open`], a CRC over every
+//! used slot: tens of milliseconds for a full sector). It leaves a
+//! [`Cursor`], the log's position in RAM, and a store after it touches one
+//! slot: it programs the record and reads it back, with an erase first when
+//! the sector is full ([`Log::append`]). Before it touches the flash, the
+//! store says what it is about to do ([`Work`]), so that the board can
+//! widen its watchdog to the datasheet's longest time for it
+//! ([`crate::flash_timing`]).
 
 use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 use finrs_frames::crc16;
@@ -44,6 +51,40 @@ pub enum StoreError<E> {
     /// The record read back differs from the one written (a worn or
     /// protected sector).
     Verify,
+}
+
+/// A log's position, from the boot's scan ([`Log::open`]) and kept by each
+/// store after it ([`Log::append`]), so that a store reads nothing but the
+/// record it programmed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cursor {
+    /// The sector holding the newest valid record, if any: never erased.
+    newest: Option<u8>,
+    /// The sector the next record goes to, and its slot there (the
+    /// sector's slot count when it is full).
+    sector: u8,
+    slot: u32,
+    /// The next record's sequence number: one past every number tried,
+    /// so that a record whose read-back failed is never outnumbered by a
+    /// stale one.
+    seq: u32,
+}
+
+/// What a store is about to do to the flash.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Work {
+    /// Program `bytes` (one record) and read them back.
+    Program {
+        /// Bytes programmed.
+        bytes: u32,
+    },
+    /// Erase a sector of `sector_bytes`, then program `bytes`.
+    EraseAndProgram {
+        /// The sector's length, bytes.
+        sector_bytes: u32,
+        /// Bytes programmed after it.
+        bytes: u32,
+    },
 }
 
 /// One store's records: `R` bytes each, a body of `body_len` bytes.
@@ -127,55 +168,65 @@ impl<const R: usize> Log<R> {
         Ok(Scan { newest, next_free })
     }
 
-    /// Both sectors' scans, and the sector holding the newest record (the
-    /// first if neither holds one).
-    fn scan_both<F: ReadNorFlash>(
+    /// Reads the whole region once (at boot): the newest valid record,
+    /// `None` if the region holds none, and the log's position.
+    pub(crate) fn open<F: ReadNorFlash>(
         &self,
         flash: &mut F,
         region: Region,
-    ) -> Result<([Scan<R>; 2], usize), F::Error> {
+    ) -> Result<(Option<[u8; R]>, Cursor), F::Error> {
         let scans = [self.scan(flash, region, 0)?, self.scan(flash, region, 1)?];
         let seq = |k: usize| scans[k].newest.map(|(_, s)| s);
+        // The sector with the newest record (the first if neither has one).
         let active = usize::from(seq(1) > seq(0));
-        Ok((scans, active))
+        let newest = scans[active].newest;
+        let cursor = Cursor {
+            newest: newest.map(|_| active as u8),
+            sector: active as u8,
+            slot: scans[active].next_free,
+            seq: newest.map_or(1, |(_, s)| s.wrapping_add(1)),
+        };
+        Ok((newest.map(|(r, _)| r), cursor))
     }
 
-    /// The newest valid record, `None` if the region holds none.
-    pub(crate) fn load<F: ReadNorFlash>(
+    /// Appends `body` as the newest record at `cursor`: in the next slot of
+    /// its sector or, when that sector is full, at the start of the other
+    /// one (never the newest record's), erased first. Calls `before` with
+    /// what it is about to do, then reads the record back. Returns the
+    /// record's sequence number. Whatever fails, the cursor stays true to
+    /// the flash: a slot programmed in part is passed over, an erase cut
+    /// short is done again by the next store.
+    pub(crate) fn append<F: NorFlash>(
         &self,
         flash: &mut F,
         region: Region,
-    ) -> Result<Option<[u8; R]>, F::Error> {
-        let (scans, active) = self.scan_both(flash, region)?;
-        Ok(scans[active].newest.map(|(r, _)| r))
-    }
-
-    /// Appends `body` as the newest record: after the last used slot of
-    /// the newest record's sector, or, if that sector is full, at the
-    /// start of the other one, erased first (after calling
-    /// `before_erase`). Reads it back. Returns the record's sequence
-    /// number.
-    pub(crate) fn save<F: NorFlash>(
-        &self,
-        flash: &mut F,
-        region: Region,
+        cursor: &mut Cursor,
         body: &[u8],
-        before_erase: impl FnOnce(),
+        before: impl FnOnce(Work),
     ) -> Result<u32, StoreError<F::Error>> {
-        let (scans, mut active) = self.scan_both(flash, region).map_err(StoreError::Flash)?;
-        let seq = scans[active].newest.map_or(1, |(_, s)| s.wrapping_add(1));
-        let mut slot = scans[active].next_free;
-        if slot >= self.slots(region) {
-            // The newest record stays where it is until this one is complete.
-            active = 1 - active;
-            before_erase();
-            let from = region.sector(active);
+        let full = cursor.slot >= self.slots(region);
+        if full {
+            before(Work::EraseAndProgram {
+                sector_bytes: region.sector_len,
+                bytes: R as u32,
+            });
+            // The other sector than the newest record's: after a record
+            // that failed in a fresh sector, that is the same fresh one.
+            let target = cursor.newest.map_or(1 - cursor.sector, |k| 1 - k);
+            let from = region.sector(usize::from(target));
             flash
                 .erase(from, from + region.sector_len)
                 .map_err(StoreError::Flash)?;
-            slot = 0;
+            cursor.sector = target;
+            cursor.slot = 0;
+        } else {
+            before(Work::Program { bytes: R as u32 });
         }
-        let at = region.sector(active) + slot * R as u32;
+        let seq = cursor.seq;
+        let at = region.sector(usize::from(cursor.sector)) + cursor.slot * R as u32;
+        // From here the slot is no longer erased, whatever happens.
+        cursor.slot += 1;
+        cursor.seq = seq.wrapping_add(1);
         let record = self.encode(body, seq);
         flash.write(at, &record).map_err(StoreError::Flash)?;
         let mut back = [0u8; R];
@@ -183,6 +234,7 @@ impl<const R: usize> Log<R> {
         if back != record {
             return Err(StoreError::Verify);
         }
+        cursor.newest = Some(cursor.sector);
         Ok(seq)
     }
 }
