@@ -123,6 +123,23 @@ impl Knob {
         matches!(self, Knob::R1 | Knob::R2 | Knob::C | Knob::P | Knob::Ei)
     }
 
+    /// Whether the value is a ramp of `θ`, held at 0 for every `θ ≤ 0`
+    /// ([`ramp`]): there the value does not move with `θ`, and its
+    /// delta-method interval would be a point.
+    pub fn floored(&self) -> bool {
+        matches!(
+            self,
+            Knob::Zeta
+                | Knob::Beta
+                | Knob::AddedMass
+                | Knob::Drag
+                | Knob::Dehydration
+                | Knob::DryingCurvature
+                | Knob::FreeMode(_)
+                | Knob::BlockedMode(_)
+        )
+    }
+
     /// Name and unit, as reports and the TOML file say them.
     pub fn name(&self) -> &'static str {
         match self {

@@ -270,7 +270,15 @@ pub fn estimates(
             }
             let se = value_cov[(j, j)].max(0.0).sqrt();
             let se = if se.is_finite() { se } else { f64::INFINITY };
-            let (low, high) = interval(knob.positive(), value, se);
+            // A ramp knob at its floor has no slope there, so the delta
+            // method gives it a zero-width interval: as if the data pinned
+            // it at 0, where they only say it is not above what the rest
+            // explains. The data do not bound it from here: 0 and up.
+            let (low, high) = if knob.floored() && value == 0.0 && se == 0.0 {
+                (0.0, f64::INFINITY)
+            } else {
+                interval(knob.positive(), value, se)
+            };
             Estimate {
                 knob,
                 value,
@@ -486,6 +494,28 @@ mod tests {
         }
         // Wilson–Hilferty's (the whiteness tests') within 0.2 % of it.
         assert!((wilson_hilferty(9, 1.644_853_6) / chi2_quantile(9, 0.95) - 1.0).abs() < 2e-3);
+    }
+
+    #[test]
+    fn a_ramp_knob_at_its_floor_is_bounded_below_only() {
+        use super::super::effect::Effect;
+        let fixed = crate::model::predict::ModelSpec::baseline(model_core::Params::main_m_2006());
+        let space = Space::new(&[Effect::Damping], 3, fixed);
+        let mut theta = space.start_theta(&fixed);
+        let zeta = space.knobs.iter().position(|k| *k == Knob::Zeta).unwrap();
+        let r1 = space.knobs.iter().position(|k| *k == Knob::R1).unwrap();
+        // θ below the ramp's bend: ζ₀ = 0 and no slope, so no spread.
+        theta[zeta] = -0.5;
+        let n = space.knobs.len();
+        let active: Vec<usize> = (0..n).collect();
+        let est = estimates(&space, &theta, &DMatrix::zeros(n, n), &active);
+        assert_eq!(est[zeta].value, 0.0);
+        assert_eq!((est[zeta].low, est[zeta].high), (0.0, f64::INFINITY));
+        // It never counts as excluding 0 or as above it.
+        assert!(!excludes_at(&est[zeta], 0.0, 1.96) && !above_zero_at(&est[zeta], 1.96));
+        // A knob off any floor keeps its delta-method interval.
+        assert_eq!(est[r1].low, est[r1].value);
+        assert_eq!(est[r1].high, est[r1].value);
     }
 
     #[test]
