@@ -60,20 +60,41 @@ pub fn truth(sample: &Sample, hidden: &Hidden) -> BTreeMap<String, f64> {
 /// model's pseudo-truth (White, 1982). An interval that holds it is
 /// honest about the noise; one that misses it too often is too narrow.
 pub fn pseudo_truth(twin_fit: &serde_json::Value) -> anyhow::Result<BTreeMap<String, f64>> {
-    let estimates = twin_fit["estimates"]
+    estimates_of(twin_fit, "the twin's fit")?
+        .into_iter()
+        .map(|(knob, e)| {
+            Ok((
+                knob.to_string(),
+                number(e, knob, "value", "the twin's fit")?,
+            ))
+        })
+        .collect()
+}
+
+/// The estimates of `fit`, a `finrs fit --json` document (`what`, in
+/// messages), each with its knob's name.
+fn estimates_of<'a>(
+    fit: &'a serde_json::Value,
+    what: &str,
+) -> anyhow::Result<Vec<(&'a str, &'a serde_json::Value)>> {
+    let list = fit["estimates"]
         .as_array()
-        .ok_or_else(|| anyhow::anyhow!("the twin's fit JSON has no `estimates` list"))?;
-    let mut t = BTreeMap::new();
-    for e in estimates {
-        let knob = e["knob"]
-            .as_str()
-            .ok_or_else(|| anyhow::anyhow!("an estimate of the twin without a `knob`: {e}"))?;
-        let value = e["value"].as_f64().ok_or_else(|| {
-            anyhow::anyhow!("the twin's estimate {knob}: `value` is not a number")
-        })?;
-        t.insert(knob.to_string(), value);
-    }
-    Ok(t)
+        .ok_or_else(|| anyhow::anyhow!("{what}'s JSON has no `estimates` list"))?;
+    list.iter()
+        .map(|e| {
+            let knob = e["knob"]
+                .as_str()
+                .ok_or_else(|| anyhow::anyhow!("an estimate of {what} without a `knob`: {e}"))?;
+            Ok((knob, e))
+        })
+        .collect()
+}
+
+/// Field `field` of the estimate `e` of `knob` in `what`: a number.
+fn number(e: &serde_json::Value, knob: &str, field: &str, what: &str) -> anyhow::Result<f64> {
+    e[field]
+        .as_f64()
+        .ok_or_else(|| anyhow::anyhow!("{what}, estimate {knob}: `{field}` is not a number"))
 }
 
 /// One fitted knob against its true value.
@@ -120,22 +141,12 @@ pub fn score(
     fit: &serde_json::Value,
     truth: &BTreeMap<String, f64>,
 ) -> anyhow::Result<Vec<Scored>> {
-    let estimates = fit["estimates"]
-        .as_array()
-        .ok_or_else(|| anyhow::anyhow!("the fit's JSON has no `estimates` list"))?;
     let mut out = Vec::new();
-    for e in estimates {
-        let knob = e["knob"]
-            .as_str()
-            .ok_or_else(|| anyhow::anyhow!("an estimate without a `knob`: {e}"))?;
+    for (knob, e) in estimates_of(fit, "the fit")? {
         let Some(&t) = truth.get(knob) else {
             continue;
         };
-        let number = |field: &str| {
-            e[field]
-                .as_f64()
-                .ok_or_else(|| anyhow::anyhow!("estimate {knob}: `{field}` is not a number"))
-        };
+        let number = |field: &str| number(e, knob, field, "the fit");
         // JSON has no infinity: `finrs fit` writes an unbounded side of an
         // interval (a knob the data cannot pin, such as `p` once `b` has
         // gone to zero) as null. It covers every value on its side.
