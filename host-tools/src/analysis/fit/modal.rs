@@ -31,6 +31,10 @@ const WINDOW_S: f64 = 2.0;
 /// there, and the peak is four hertz wide.
 const FIRST_LOOK_S: f64 = 0.25;
 
+/// The fewest rows a ringing window may hold: the first look takes at
+/// least 8, and a decay fitted on fewer than a few dozen is noise.
+const MIN_WINDOW_ROWS: usize = 32;
+
 /// A mode as it rings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ringing {
@@ -110,11 +114,15 @@ pub fn measured_blocked_ringing(
         let Some(start) = r.rest_rows.checked_add(settle) else {
             continue;
         };
-        if start.checked_add(len).is_none_or(|end| end > force.len()) {
+        // A window of a few rows (a sampling period of seconds) holds no
+        // ringing to find; it is skipped, not read past its end.
+        if len < MIN_WINDOW_ROWS || start.checked_add(len).is_none_or(|end| end > force.len()) {
             continue;
         }
         // The drive must hold over the window, or its own steps dominate.
-        let v0 = &r.rec.v_v[start];
+        let Some(v0) = r.rec.v_v.row(start) else {
+            continue;
+        };
         let held = |row: usize| v0.iter().enumerate().all(|(k, &v)| r.reads_as(k, row, v));
         if !(start..start + len).all(held) {
             continue;
@@ -141,7 +149,7 @@ fn ringing(y: &[f64], dt_s: f64, lo_hz: f64, hi_hz: f64) -> Option<Ringing> {
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
     let left = detrend(y);
     let rings = rms(&left) > 1e-6 * rms(y);
-    if !rings {
+    if !rings || y.len() < MIN_WINDOW_ROWS {
         return None;
     }
     let first = ((FIRST_LOOK_S / dt_s).round() as usize).clamp(8, y.len());
@@ -356,6 +364,15 @@ mod tests {
                 (got.damping_ratio - zeta).abs() < 0.1 * zeta,
                 "{f} {zeta}: {got:?}"
             );
+        }
+    }
+
+    #[test]
+    fn a_window_of_a_few_rows_is_no_ringing_and_no_panic() {
+        // A sampling period of seconds leaves a 2 s window a row or two.
+        for len in [0, 1, 2, 7, 8, MIN_WINDOW_ROWS - 1] {
+            let y = ringing_on_trend(67.0, 0.04, len);
+            assert_eq!(ringing(&y, 1e-3, 20.0, 300.0), None, "{len} rows");
         }
     }
 }
