@@ -145,6 +145,18 @@ mod app {
         let Some(input) = io.read() else {
             return;
         };
+        // The bridge supply drifted (read this period): latched before the
+        // tick, whose voltages are then 0 (`write_v` holds the outputs off
+        // on its own while a reading is out of band).
+        if let Some(e) = io.take_supply_fault() {
+            cx.shared.controller.lock(|c| {
+                // Once: a supply that stays out raises it every period.
+                if c.fault_state().is_none() {
+                    defmt::error!("{}", defmt::Display2Format(&e));
+                    c.fault(FaultCode::Supply, None, frames);
+                }
+            });
+        }
         let (out, faulted, to_store, model_to_store) = cx.shared.controller.lock(|c| {
             let out = c.tick(&input, frames);
             (

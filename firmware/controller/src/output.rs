@@ -68,6 +68,23 @@ fn abs(v: f32) -> f32 {
     }
 }
 
+/// A supply a bridge can work duties out from: finite and above 0.
+fn valid_supply(supply_v: f32) -> Result<(), OutputError> {
+    if !supply_v.is_finite() {
+        return Err(OutputError {
+            field: "supply_v",
+            rule: "must be finite",
+        });
+    }
+    if supply_v <= 0.0 {
+        return Err(OutputError {
+            field: "supply_v",
+            rule: "must be above 0",
+        });
+    }
+    Ok(())
+}
+
 /// `x` (finite or infinite) clamped to `0..=max` and rounded down.
 fn floor_clamped(x: f32, max: u16) -> u16 {
     let max_f = f32::from(max);
@@ -117,18 +134,7 @@ pub struct HBridge<A: SetDutyCycle, B: SetDutyCycle> {
 impl<A: SetDutyCycle, B: SetDutyCycle> HBridge<A, B> {
     /// A bridge on the supply `supply_v` (finite, above 0), turned off.
     pub fn new(a: A, b: B, supply_v: f32) -> Result<Self, OutputError> {
-        if !supply_v.is_finite() {
-            return Err(OutputError {
-                field: "supply_v",
-                rule: "must be finite",
-            });
-        }
-        if supply_v <= 0.0 {
-            return Err(OutputError {
-                field: "supply_v",
-                rule: "must be above 0",
-            });
-        }
+        valid_supply(supply_v)?;
         let mut bridge = Self {
             a,
             b,
@@ -142,6 +148,17 @@ impl<A: SetDutyCycle, B: SetDutyCycle> HBridge<A, B> {
     /// The bridge's supply, V.
     pub fn supply_v(&self) -> f32 {
         self.supply_v
+    }
+
+    /// The supply as measured now, V (finite, above 0): the next
+    /// [`set_v`](SegmentOutput::set_v) works its duty out from it. Every
+    /// volt on the strip is a fraction of the supply, so a supply that
+    /// rose since the bridge was made would put more than the command on
+    /// the strip. Refused, the supply kept, if it breaks a rule.
+    pub fn set_supply_v(&mut self, supply_v: f32) -> Result<(), OutputError> {
+        valid_supply(supply_v)?;
+        self.supply_v = supply_v;
+        Ok(())
     }
 
     /// PWM errors met so far.

@@ -55,31 +55,34 @@ struct Inputs {
     duty_b: u16,
 }
 
-/// What the driver does to the terminals: a voltage, or open.
-fn driver(in1: bool, in2: bool) -> Option<f64> {
+/// What the driver on `supply_v` does to the terminals: a voltage, or open.
+fn driver(in1: bool, in2: bool, supply_v: f64) -> Option<f64> {
     match (in1, in2) {
-        (true, false) => Some(SUPPLY_V),
-        (false, true) => Some(-SUPPLY_V),
+        (true, false) => Some(supply_v),
+        (false, true) => Some(-supply_v),
         (true, true) => Some(0.0),
         (false, false) => None,
     }
 }
 
-/// The strip's circuit: the charge on `C` as its voltage.
+/// The strip's circuit, the charge on `C` as its voltage, behind a
+/// driver on `supply_v`.
 struct Strip {
     r1_ohm: f64,
     r2_ohm: f64,
     c_f: f64,
     v_c: f64,
+    supply_v: f64,
 }
 
 impl Strip {
-    fn new(p: &Params) -> Self {
+    fn new(p: &Params, supply_v: f64) -> Self {
         Self {
             r1_ohm: p.r1_ohm,
             r2_ohm: p.r2_ohm,
             c_f: p.c_f,
             v_c: 0.0,
+            supply_v,
         }
     }
 
@@ -98,7 +101,7 @@ impl Strip {
                 let tau_s = (self.r1_ohm + self.r2_ohm) * self.c_f;
                 let share = self.r2_ohm / (self.r1_ohm + self.r2_ohm);
                 assert!(
-                    (start * share).abs() <= SUPPLY_V,
+                    (start * share).abs() <= self.supply_v,
                     "an open terminal at {} V would turn a body diode on",
                     start * share
                 );
@@ -121,7 +124,7 @@ impl Strip {
         let (mut terminal, mut c, mut c_peak) = (0.0, 0.0, self.v_c.abs());
         for (from, to) in [(0, first), (first, second), (second, PWM_STEPS)] {
             if to > from {
-                let u = driver(from < a, from < b);
+                let u = driver(from < a, from < b, self.supply_v);
                 let (t, v) = self.hold(u, f64::from(to - from) * step_s);
                 terminal += t;
                 c += v;
@@ -143,9 +146,14 @@ struct Settled {
 }
 
 /// Runs the strip from rest for ten of its slowest time constants, then
-/// measures a thousand periods.
+/// measures a thousand periods, on the board's supply.
 fn settle(p: &Params, inputs: Inputs) -> Settled {
-    let mut strip = Strip::new(p);
+    settle_on(p, inputs, SUPPLY_V)
+}
+
+/// [`settle`] behind a driver on `supply_v`.
+fn settle_on(p: &Params, inputs: Inputs, supply_v: f64) -> Settled {
+    let mut strip = Strip::new(p, supply_v);
     let slowest_s = (p.r1_ohm + p.r2_ohm) * p.c_f;
     let periods = (10.0 * slowest_s / PERIOD_S).ceil() as usize;
     for _ in 0..periods {
@@ -168,8 +176,17 @@ fn settle(p: &Params, inputs: Inputs) -> Settled {
 
 /// The inputs [`HBridge`] sets for `v`.
 fn slow_decay(v: f32) -> Inputs {
+    slow_decay_told(v, SUPPLY_V as f32, None)
+}
+
+/// The inputs an [`HBridge`] made on `boot_v` sets for `v`, told the supply
+/// `measured_v` (if any) before.
+fn slow_decay_told(v: f32, boot_v: f32, measured_v: Option<f32>) -> Inputs {
     let (a, b) = (Leg(Rc::default()), Leg(Rc::default()));
-    let mut bridge = HBridge::new(a.clone(), b.clone(), SUPPLY_V as f32).unwrap();
+    let mut bridge = HBridge::new(a.clone(), b.clone(), boot_v).unwrap();
+    if let Some(measured_v) = measured_v {
+        bridge.set_supply_v(measured_v).unwrap();
+    }
     bridge.set_v(v);
     Inputs {
         duty_a: a.0.get(),
@@ -251,5 +268,36 @@ fn coast_leaves_the_strip_charged_above_the_command_and_the_limit() {
         let at_limit = settle(&p, coast(4.0));
         assert!(at_limit.terminal_v > LIMIT_V + 0.5, "{name}: {at_limit:?}");
         assert!(at_limit.c_mean_v > LIMIT_V + 0.5, "{name}: {at_limit:?}");
+    }
+}
+
+#[test]
+fn a_bridge_told_the_measured_supply_holds_the_limit_when_the_supply_rises() {
+    // The supply at boot was 5.0 V; it is now 5.5 V (a bench supply
+    // turned up). One PWM step at 5.5 V is 0.82 mV.
+    let (boot_v, now_v) = (5.0f32, 5.5f64);
+    let step_v = now_v / f64::from(PWM_STEPS);
+    for (name, p) in strips() {
+        for v in [4.0f32, -4.0, 2.0] {
+            let want = f64::from(v);
+            // Working the duties out from the boot's supply: 10 % more on
+            // the strip, past the limit at 4 V.
+            let stale = settle_on(&p, slow_decay_told(v, boot_v, None), now_v);
+            assert!(
+                (stale.terminal_v - 1.1 * want).abs() < 2.0 * step_v,
+                "{name}, {v} V: {stale:?}"
+            );
+            // Told the supply as read (`SupplyMonitor` on the board, every
+            // tick): the command, within a step below it.
+            let told = settle_on(&p, slow_decay_told(v, boot_v, Some(now_v as f32)), now_v);
+            assert!(
+                told.terminal_v.abs() <= want.abs() + 1e-9
+                    && told.terminal_v.abs() > want.abs() - 1.01 * step_v,
+                "{name}, {v} V: {told:?}"
+            );
+            assert!(told.terminal_v.abs() <= LIMIT_V, "{name}, {v} V: {told:?}");
+        }
+        let stale = settle_on(&p, slow_decay_told(4.0, boot_v, None), now_v);
+        assert!(stale.terminal_v > LIMIT_V + 0.35, "{name}: {stale:?}");
     }
 }

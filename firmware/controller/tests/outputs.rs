@@ -133,7 +133,22 @@ fn h_bridge_refuses_a_bad_supply() {
         };
         let e = HBridge::new(pwm('A'), pwm('B'), supply_v).err().unwrap();
         assert_eq!(e.field, "supply_v", "{supply_v}");
+        // A measured supply that breaks the rule is refused, the old kept.
+        let mut good = HBridge::new(pwm('A'), pwm('B'), 5.0).unwrap();
+        assert_eq!(good.set_supply_v(supply_v).unwrap_err().field, "supply_v");
+        assert_eq!(good.supply_v(), 5.0);
     }
+}
+
+#[test]
+fn h_bridge_works_its_duty_out_from_the_supply_it_was_last_told() {
+    let (mut b, _) = bridge(1000, 5.0);
+    b.set_v(2.0);
+    b.set_supply_v(5.5).unwrap();
+    b.set_v(2.0);
+    let (a, legb) = b.release();
+    // 2 V of 5.5: 363.6 forward steps, rounded down, 636 braking.
+    assert_eq!((a.duty, legb.duty), (1000, 1000 - 363));
 }
 
 #[test]

@@ -112,6 +112,13 @@ pub struct Io {
     /// The supplies were in range at boot; if not, nothing is ever driven
     /// (as on the board).
     supply_ok: bool,
+    /// The bridge supply read every period, as on the board (QEMU's holds
+    /// at its boot value); `None` if the boot's reading failed.
+    monitor: Option<finrs_firmware_support::supply::SupplyMonitor>,
+    /// The last reading was within the monitor's band.
+    supply_now_ok: bool,
+    /// This period's reading, if out of the band.
+    supply_fault: Option<finrs_firmware_support::supply::SupplyError>,
     /// The virtual bench's clamp and camera: the plant above is then the
     /// blocked strip, used while the world says blocked.
     #[cfg(feature = "qemu-serial")]
@@ -237,6 +244,11 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
             noise: sim::NOISE_SEED,
             tick: 0,
             supply_ok: supply.is_ok(),
+            monitor: supply
+                .ok()
+                .map(finrs_firmware_support::supply::SupplyMonitor::new),
+            supply_now_ok: true,
+            supply_fault: None,
             #[cfg(feature = "qemu-serial")]
             world,
         },
@@ -345,6 +357,7 @@ impl Io {
             current_counts[sim::INJECT_SEGMENT] =
                 to_counts(f32::from(CURRENT_ZERO_COUNTS) + 1.1 * OVERCURRENT_A / AMPS_PER_COUNT);
         }
+        self.follow_supply();
         Some(TickInput {
             tick,
             t_us: (tick * 1_000_000 / u64::from(SAMPLE_HZ)) as u32,
@@ -353,10 +366,36 @@ impl Io {
         })
     }
 
+    /// The period's reading of the bridge supply, as the board's: the
+    /// divider's counts of the supply QEMU booted with (its segments are
+    /// the plant's, with no duty to work out).
+    fn follow_supply(&mut self) {
+        use finrs_firmware_support::supply::SUPPLY_DIVIDER;
+        let Some(monitor) = self.monitor.as_mut() else {
+            return;
+        };
+        let counts = monitor.boot_v() / SUPPLY_DIVIDER / finrs_firmware_support::config::DAC_VREF_V
+            * 4095.0
+            + 0.5;
+        match monitor.update(counts as u16) {
+            Ok(_) => self.supply_now_ok = true,
+            Err(e) => {
+                self.supply_now_ok = false;
+                self.supply_fault = Some(e);
+            }
+        }
+    }
+
+    /// This period's supply reading if it was out of the monitor's band:
+    /// the sample task latches it as a `Supply` fault.
+    pub fn take_supply_fault(&mut self) -> Option<finrs_firmware_support::supply::SupplyError> {
+        self.supply_fault.take()
+    }
+
     /// Applies the commanded voltages (`None`: every output off) and steps
     /// the plant one sample.
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        match v.filter(|_| self.supply_ok) {
+        match v.filter(|_| self.supply_ok && self.supply_now_ok) {
             Some(v) => {
                 for (s, &v) in self.segments.iter_mut().zip(v) {
                     s.set_v(v);

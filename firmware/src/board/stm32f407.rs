@@ -84,7 +84,7 @@ use finrs_firmware_support::flash_timing::store_watchdog_ms;
 use finrs_firmware_support::model_store;
 use finrs_firmware_support::record_log::{Cursor, StoreError, Work};
 use finrs_firmware_support::reset;
-use finrs_firmware_support::supply::{self, Supplies, SupplyError};
+use finrs_firmware_support::supply::{self, Supplies, SupplyError, SupplyMonitor};
 use finrs_firmware_support::sync::SyncMark;
 use finrs_frames::Calibration;
 use stm32f4xx_hal::flash::{FlashExt, LockedFlash, UnlockedFlash};
@@ -165,13 +165,16 @@ const ADC2_SHUNTS: usize = if N <= 3 {
     4
 };
 const ADC3_SHUNTS: usize = N.saturating_sub(7);
+/// The bridge supply's divider, read last in ADC3's group.
+const SUPPLY_SENSE_CHANNEL: u8 = finrs_firmware_support::pins::BRIDGE_SUPPLY_SENSE.channel;
 
 const _: () = {
     assert!(N >= 1 && N <= 8, "the board's pin map has 1..=8 segments");
     assert!(ADC1_SHUNTS + ADC2_SHUNTS + ADC3_SHUNTS == N);
-    // ADC1's group (with the load cell) is never shorter than the others:
-    // its end is the end of all.
-    assert!(ADC2_SHUNTS <= ADC1_SHUNTS + 1 && ADC3_SHUNTS <= ADC1_SHUNTS + 1);
+    // ADC1's group (with the load cell) is never shorter than the others
+    // (ADC3's with the supply's divider): its end is the end of all.
+    assert!(ADC2_SHUNTS <= ADC1_SHUNTS + 1 && ADC3_SHUNTS <= ADC1_SHUNTS);
+    assert!(finrs_firmware_support::pins::BRIDGE_SUPPLY_SENSE.adc == 3);
     assert!(USES_DAC1 || !USES_DAC2, "DAC2 is used only with DAC1");
     // The groups above are the ones the pin table wires the shunts to.
     use finrs_firmware_support::pins::adc_of_segment;
@@ -280,6 +283,15 @@ pub struct Io {
     secondary_late: bool,
     /// The supplies were in range at boot; if not, nothing is ever driven.
     supply_ok: bool,
+    /// The bridge supply, read every period by ADC3's group; `None` if the
+    /// boot's reading failed (nothing is driven then).
+    monitor: Option<SupplyMonitor>,
+    /// The last period's reading was within the monitor's band: nothing is
+    /// driven while it is not, whatever the controller says.
+    supply_now_ok: bool,
+    /// This period's reading, if out of the band, for the sample task to
+    /// latch as a `Supply` fault.
+    supply_fault: Option<SupplyError>,
     watchdog: IndependentWatchdog,
     /// The calibration's records (flash sectors 10 and 11) and the
     /// model's (8 and 9).
@@ -561,6 +573,9 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             segments,
             secondary_late: false,
             supply_ok: supply.is_ok(),
+            monitor: supply.ok().map(SupplyMonitor::new),
+            supply_now_ok: true,
+            supply_fault: None,
             watchdog,
             flash,
             calibration_log,
@@ -657,11 +672,13 @@ fn init_rtt() -> (FrameOut, CommandIn) {
 }
 
 /// ADC1 (load cell, shunts 0..=2), ADC2 (shunts 3..=6) and ADC3 (shunt
-/// 7), those in use: 12-bit, 21 MHz (PCLK2 / 4), an injected group each
-/// started by TIM5_TRGO on its rising edge; only ADC1 raises the interrupt
-/// (JEOC). 84 cycles of sampling (4 µs) per channel suit the amplifiers'
-/// outputs; ADC1's group of at most 4 takes 4 × (84 + 12) / 21 MHz ≈ 18 µs
-/// of the 1 ms period, the others run beside it.
+/// 7, then the bridge supply's divider on PC3, IN13), those in use:
+/// 12-bit, 21 MHz (PCLK2 / 4), an injected group each started by
+/// TIM5_TRGO on its rising edge; only ADC1 raises the interrupt (JEOC).
+/// 84 cycles of sampling (4 µs) per channel suit the amplifiers' outputs
+/// and the divider's 3.2 kΩ; ADC1's group of at most 4 takes 4 × (84 +
+/// 12) / 21 MHz ≈ 18 µs of the 1 ms period, the others (ADC3's 2 at most)
+/// run beside it.
 fn init_adcs(
     adc1: &pac::ADC1,
     adc2: &pac::ADC2,
@@ -681,9 +698,7 @@ fn init_adcs(
     if ADC2_SHUNTS > 0 {
         pac::ADC2::enable(rcc);
     }
-    if ADC3_SHUNTS > 0 {
-        pac::ADC3::enable(rcc);
-    }
+    pac::ADC3::enable(rcc);
     pac::ADC1::reset(rcc);
     common.ccr().modify(|_, w| w.adcpre().div4());
     let mut group1 = [pins::LOAD_CELL_CHANNEL; 4];
@@ -692,9 +707,11 @@ fn init_adcs(
     if ADC2_SHUNTS > 0 {
         init_group(adc2, &pins::SHUNT_CHANNELS[3..3 + ADC2_SHUNTS], false);
     }
-    if ADC3_SHUNTS > 0 {
-        init_group(adc3, &pins::SHUNT_CHANNELS[7..8], false);
-    }
+    // PC3 is ADC123_IN13 (`pins::DATASHEET_LQFP100`): ADC3 reads it after
+    // shunt 7, if any, so the supply is read every period with the rest.
+    let mut group3 = [SUPPLY_SENSE_CHANNEL; 2];
+    group3[..ADC3_SHUNTS].copy_from_slice(&pins::SHUNT_CHANNELS[7..7 + ADC3_SHUNTS]);
+    init_group(adc3, &group3[..=ADC3_SHUNTS], false);
 }
 
 /// One ADC's injected group: `channels` (1..=4, each below 19) in order,
@@ -795,7 +812,7 @@ impl Io {
         if ADC2_SHUNTS > 0 && !secondary_done(&self.adc2) {
             self.secondary_late = true;
         }
-        if ADC3_SHUNTS > 0 && !secondary_done(&self.adc3) {
+        if !secondary_done(&self.adc3) {
             self.secondary_late = true;
         }
         let counts = |adc: &pac::adc1::RegisterBlock, i: usize| adc.jdr(i).read().jdata().bits();
@@ -807,6 +824,7 @@ impl Io {
                 _ => counts(&self.adc3, 0),
             };
         }
+        self.follow_supply(counts(&self.adc3, ADC3_SHUNTS));
         Some(TickInput {
             tick,
             t_us: (tick * 1_000_000 / u64::from(SAMPLE_HZ)) as u32,
@@ -815,12 +833,43 @@ impl Io {
         })
     }
 
+    /// The period's reading of the bridge supply: the bridges work their
+    /// next duties out from it, or, out of the monitor's band, nothing is
+    /// driven and the fault waits for [`take_supply_fault`](Self::take_supply_fault).
+    fn follow_supply(&mut self, sense_counts: u16) {
+        let Some(monitor) = self.monitor.as_mut() else {
+            return;
+        };
+        match monitor.update(sense_counts) {
+            Ok(duty_supply_v) => {
+                self.supply_now_ok = true;
+                for segment in self.segments.iter_mut() {
+                    if let Segment::Bridge(b) = segment {
+                        // Finite and above 0 by the monitor's band.
+                        let _ = b.set_supply_v(duty_supply_v);
+                    }
+                }
+            }
+            Err(e) => {
+                self.supply_now_ok = false;
+                self.supply_fault = Some(e);
+            }
+        }
+    }
+
+    /// This period's supply reading if it was out of the monitor's band
+    /// (every period while it stays out): the sample task latches it as a
+    /// `Supply` fault.
+    pub fn take_supply_fault(&mut self) -> Option<SupplyError> {
+        self.supply_fault.take()
+    }
+
     /// Writes the controller's voltages to the segments, or turns them off
     /// (`None`: a bridge opened, where 0 V would brake it).
     /// The sync LED follows what is applied: lit for a moment when a drive
     /// starts after a rest (`finrs_firmware_support::sync`).
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        let applied = match v.filter(|_| self.supply_ok) {
+        let applied = match v.filter(|_| self.supply_ok && self.supply_now_ok) {
             Some(v) => {
                 for (segment, &v) in self.segments.iter_mut().zip(v) {
                     segment.set_v(v);

@@ -123,12 +123,14 @@ pub const SHUNTS: [Input; 8] = [
     },
 ];
 
-/// The bridge supply's divider ([`supply`](crate::supply)): PC3, ADC1 IN13,
-/// read once at boot by ADC1's regular group. On the Discovery PC3 is the
-/// MEMS microphone's output: lift it (as PA4/PA5 for DAC segments).
+/// The bridge supply's divider ([`supply`](crate::supply)): PC3, IN13 of
+/// all three ADCs, read at boot by ADC1's regular group and then every
+/// period by ADC3's injected group, after shunt 7 if any. On the Discovery
+/// PC3 is the MEMS microphone's output: lift it (as PA4/PA5 for DAC
+/// segments).
 pub const BRIDGE_SUPPLY_SENSE: Input = Input {
     pin: Pin::new(b'C', 3),
-    adc: 1,
+    adc: 3,
     channel: 13,
 };
 

@@ -4,6 +4,12 @@
 //! duty that gives a voltage is that voltage over the supply, and every
 //! scale assumes VDDA.
 //!
+//! The bridges' supply is then read again every tick ([`SupplyMonitor`]):
+//! a bench supply turned from 5.0 to 5.5 V would otherwise turn a 4 V
+//! command into 4.4 V on the strip. Each reading sets the supply the
+//! duties are worked out from, and one that has drifted from the boot's
+//! by more than [`BRIDGE_DRIFT_TOLERANCE`] is a fault.
+//!
 //! ```
 //! use finrs_firmware_support::supply::{check, vdda_v};
 //!
@@ -33,6 +39,21 @@ pub const VDDA_TOLERANCE: f32 = 0.05;
 
 /// How far the bridge supply may be from [`BRIDGE_SUPPLY_V`] (a fraction).
 pub const BRIDGE_TOLERANCE: f32 = 0.10;
+
+/// How far the bridge supply may drift from its boot reading while the
+/// board runs (a fraction) before it is a `Supply` fault: a supply that
+/// moves by this much is being turned or is failing. Ten times the
+/// reading's noise (a few counts in 2 180, 0.2 %).
+pub const BRIDGE_DRIFT_TOLERANCE: f32 = 0.03;
+
+/// Readings averaged into the supply the duties use besides the latest
+/// (see [`SupplyMonitor::update`]).
+pub const SUPPLY_MEAN_TICKS: usize = 8;
+
+/// Counts added to a reading before it sets the duties: a reading low by
+/// its rounding and a count of noise must not give a duty that puts more
+/// than the command on the strip.
+pub const SUPPLY_MARGIN_COUNTS: f32 = 2.0;
 
 /// VDDA from the internal reference: `3.3 V × VREFINT_CAL / VREFINT`;
 /// `None` for a reading of 0 (no conversion).
@@ -117,6 +138,88 @@ pub fn check(vdda_v: f32, bridge_v: f32) -> Result<Supplies, SupplyError> {
     Ok(Supplies { vdda_v, bridge_v })
 }
 
+/// The bridge supply, read every tick: the supply the duties are worked
+/// out from, and the fault when it has drifted from the boot's reading.
+///
+/// ```
+/// use finrs_firmware_support::supply::{check, SupplyMonitor};
+///
+/// let boot = check(3.0, 5.0).unwrap();
+/// let mut monitor = SupplyMonitor::new(boot);
+/// // 5 V through the divider at VDDA 3.0 V: 2183 counts.
+/// let duty_supply_v = monitor.update(2183).unwrap();
+/// assert!(duty_supply_v >= 5.0 && duty_supply_v < 5.01);
+/// // 5.5 V: a fault, whatever the range at boot allowed.
+/// assert!(monitor.update(2401).is_err());
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct SupplyMonitor {
+    vdda_v: f32,
+    boot_v: f32,
+    recent: [u16; SUPPLY_MEAN_TICKS],
+    next: usize,
+}
+
+impl SupplyMonitor {
+    /// A monitor of the supplies measured at boot (VDDA scales every
+    /// reading; the bridge supply is the reference for the drift).
+    pub fn new(boot: Supplies) -> Self {
+        let counts = boot.bridge_v / SUPPLY_DIVIDER / boot.vdda_v * 4095.0;
+        let counts = if counts > 0.0 && counts < 4095.0 {
+            counts as u16
+        } else {
+            4095
+        };
+        SupplyMonitor {
+            vdda_v: boot.vdda_v,
+            boot_v: boot.bridge_v,
+            recent: [counts; SUPPLY_MEAN_TICKS],
+            next: 0,
+        }
+    }
+
+    /// The supply at boot, V.
+    pub fn boot_v(&self) -> f32 {
+        self.boot_v
+    }
+
+    /// One tick's reading of the divider, `counts`: the supply to work the
+    /// duties out from, V, or the fault if the reading has drifted past
+    /// [`BRIDGE_DRIFT_TOLERANCE`] of the boot's or left [`check`]'s range.
+    ///
+    /// The duties take the higher of this reading and the mean of the last
+    /// [`SUPPLY_MEAN_TICKS`], plus [`SUPPLY_MARGIN_COUNTS`]: a supply that
+    /// rises is followed at once, one that falls a few milliseconds late,
+    /// so that a duty errs low, never high (the strip then sees a little
+    /// less than the command, never more).
+    pub fn update(&mut self, counts: u16) -> Result<f32, SupplyError> {
+        self.recent[self.next] = counts;
+        self.next = (self.next + 1) % SUPPLY_MEAN_TICKS;
+        let v = bridge_supply_v(counts, self.vdda_v);
+        let (low, high) = (
+            self.boot_v * (1.0 - BRIDGE_DRIFT_TOLERANCE),
+            self.boot_v * (1.0 + BRIDGE_DRIFT_TOLERANCE),
+        );
+        if !(low..=high).contains(&v) {
+            return Err(SupplyError {
+                supply: "bridge supply",
+                measured_v: v,
+                min_v: low,
+                max_v: high,
+            });
+        }
+        check(self.vdda_v, v)?;
+        let sum: u32 = self.recent.iter().map(|&c| u32::from(c)).sum();
+        let mean = sum as f32 / SUPPLY_MEAN_TICKS as f32;
+        let highest = if mean > f32::from(counts) {
+            mean
+        } else {
+            f32::from(counts)
+        };
+        Ok((highest + SUPPLY_MARGIN_COUNTS) / 4095.0 * self.vdda_v * SUPPLY_DIVIDER)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -145,5 +248,53 @@ mod tests {
         );
         assert!(check(3.0, 5.6).is_err());
         assert!(check(f32::NAN, 5.0).is_err() && check(3.0, f32::NAN).is_err());
+    }
+
+    /// The counts the divider gives for `v` at VDDA 3.0 V, rounded.
+    fn counts(v: f32) -> u16 {
+        (v / SUPPLY_DIVIDER / 3.0 * 4095.0 + 0.5) as u16
+    }
+
+    #[test]
+    fn the_monitor_follows_a_rise_at_once_and_a_fall_late() {
+        let mut m = SupplyMonitor::new(check(3.0, 5.0).unwrap());
+        let at = |m: &mut SupplyMonitor, v: f32| m.update(counts(v)).unwrap();
+        // Steady: the reading plus its margin, a few millivolts above.
+        let steady = at(&mut m, 5.0);
+        assert!((5.0..5.015).contains(&steady), "{steady}");
+        // A rise within the tolerance counts on the tick it is read.
+        assert!(at(&mut m, 5.1) >= 5.1);
+        // A fall is followed as the mean forgets the higher readings: the
+        // duties stay those of a higher supply meanwhile (the strip gets
+        // less, not more).
+        let after_fall = at(&mut m, 4.9);
+        assert!(after_fall > 4.95, "{after_fall}");
+        for _ in 0..SUPPLY_MEAN_TICKS {
+            at(&mut m, 4.9);
+        }
+        let settled = at(&mut m, 4.9);
+        assert!((4.9..4.915).contains(&settled), "{settled}");
+    }
+
+    #[test]
+    fn a_drift_past_the_tolerance_is_a_fault_in_range_or_not() {
+        let mut m = SupplyMonitor::new(check(3.0, 5.0).unwrap());
+        // 5.5 V (read to the count: 5 499 mV) is within the boot check's
+        // ±10 %, yet past the drift's 3 %.
+        let e = m.update(counts(5.5)).unwrap_err();
+        assert_eq!(e.supply, "bridge supply");
+        assert_eq!(
+            e.to_string(),
+            "bridge supply at 5499 mV, outside 4850..=5150 mV: not driving"
+        );
+        assert!(m.update(counts(4.8)).is_err());
+        // Back within: no fault (the controller's latch keeps the one seen).
+        assert!(m.update(counts(5.1)).is_ok());
+        // A board that booted at 4.55 V may not drift below the 4.5 V its
+        // duties need at full drive, however small the drift.
+        let mut low = SupplyMonitor::new(check(3.0, 4.55).unwrap());
+        assert!(low.update(counts(4.48)).is_err());
+        // No conversion (0 counts) or a full-scale one is never a supply.
+        assert!(m.update(0).is_err() && m.update(4095).is_err());
     }
 }

@@ -8,6 +8,10 @@
 //! - A bridge (slow decay) puts the forward fraction of its period times
 //!   the supply on the strip on average: it must not exceed the limit, and
 //!   must be within one PWM step of the command.
+//! - The bridges' supply may move while the board runs: each tick's reading
+//!   goes through the board's [`SupplyMonitor`] to the bridges, or raises
+//!   a `Supply` fault that turns them off; the strip's voltage is worked
+//!   out on the supply as it truly is.
 //! - A DAC segment's amplifier gives the gain times (the DAC's volts − the
 //!   0 V code's): the DAC's volts must lie within the output buffer's swing
 //!   (a code beyond it would be clipped silently by the buffer), and the
@@ -25,7 +29,8 @@ use finrs_drive::{Envelope, Limits, Program};
 use finrs_firmware_support::config::{
     self, BRIDGE_SUPPLY_V, DAC_BUFFER_MARGIN_V, DAC_GAIN, DAC_VREF_V, DAC_ZERO_CODE, N,
 };
-use finrs_frames::Command;
+use finrs_firmware_support::supply::{self, SupplyMonitor, SUPPLY_DIVIDER};
+use finrs_frames::{Command, FaultCode};
 use proptest::prelude::*;
 
 /// TIM1/TIM8 at 168 MHz and TIM2/TIM4 at 84 MHz, counting 25 kHz periods.
@@ -98,12 +103,13 @@ impl Bridge {
         Bridge { bridge, a, b, max }
     }
 
-    /// The average voltage on the strip: leg A held high and B high for
-    /// all but the forward part drives forward, the other way round
-    /// reverse, both high 0 V, both low open (no current: 0 V driven).
-    fn on_strip_v(&self) -> f32 {
+    /// The average voltage on the strip on the supply `supply_v`: leg A
+    /// held high and B high for all but the forward part drives forward,
+    /// the other way round reverse, both high 0 V, both low open (no
+    /// current: 0 V driven).
+    fn on_strip_v(&self, supply_v: f32) -> f32 {
         let (a, b, max) = (self.a.get(), self.b.get(), self.max);
-        let forward = |braking: u16| f32::from(max - braking) / f32::from(max) * BRIDGE_SUPPLY_V;
+        let forward = |braking: u16| f32::from(max - braking) / f32::from(max) * supply_v;
         match (a == max, b == max) {
             (true, _) => forward(b),
             (false, true) => -forward(a),
@@ -147,8 +153,30 @@ fn command() -> impl Strategy<Value = Command> {
 
 /// Runs `ops` (a command, then that many ticks) on a controller with the
 /// board's configuration (its starting limit `limit_v`) and checks each
-/// stage's voltage on the strip after every tick.
+/// stage's voltage on the strip after every tick, the bridges' supply
+/// steady at the board's.
 fn run(ops: &[(Command, u16)], limit_v: f32) -> Result<(), TestCaseError> {
+    run_on(ops, limit_v, &|_| (BRIDGE_SUPPLY_V, 0))
+}
+
+/// The divider's reading of `v` at VDDA = the DAC's reference, rounded,
+/// `noise` counts off.
+fn counts_of(v: f32, noise: i16) -> u16 {
+    let exact = v / SUPPLY_DIVIDER / DAC_VREF_V * 4095.0;
+    ((exact + 0.5) as i32 + i32::from(noise)).clamp(0, 4095) as u16
+}
+
+/// [`run`] with the bridges' true supply and its reading's noise in counts
+/// at each tick from `supply`: the board's [`SupplyMonitor`] reads it
+/// before the controller's tick, and either tells the bridges the supply
+/// or raises the `Supply` fault, which holds them off.
+fn run_on(
+    ops: &[(Command, u16)],
+    limit_v: f32,
+    supply: &dyn Fn(u64) -> (f32, i16),
+) -> Result<(), TestCaseError> {
+    let boot = supply::check(DAC_VREF_V, BRIDGE_SUPPLY_V).unwrap();
+    let mut monitor = SupplyMonitor::new(boot);
     let mut cfg = config::controller_config().unwrap();
     cfg.limits = Limits::new(limit_v, cfg.limits.slew_v_per_s()).unwrap();
     let mut c = Controller::<N>::new(cfg).unwrap();
@@ -161,6 +189,19 @@ fn run(ops: &[(Command, u16)], limit_v: f32) -> Result<(), TestCaseError> {
     for (command, ticks) in ops {
         let _ = c.command(*command);
         for _ in 0..*ticks {
+            let (supply_v, noise) = supply(tick);
+            let told_v = match monitor.update(counts_of(supply_v, noise)) {
+                Ok(duty_supply_v) => {
+                    for b in bridges.iter_mut() {
+                        b.bridge.set_supply_v(duty_supply_v).unwrap();
+                    }
+                    Some(duty_supply_v)
+                }
+                Err(_) => {
+                    c.fault(FaultCode::Supply, None, &mut Sink);
+                    None
+                }
+            };
             let input = TickInput {
                 tick,
                 t_us: (tick * 1000) as u32,
@@ -170,11 +211,28 @@ fn run(ops: &[(Command, u16)], limit_v: f32) -> Result<(), TestCaseError> {
             tick += 1;
             let out = c.tick(&input, &mut Sink).voltages_v;
             let limit = c.limits().max_abs_v();
+            let faulted = c.fault_state().is_some();
+            prop_assert!(
+                told_v.is_some() || faulted,
+                "a bad supply reading latched no fault"
+            );
+            // What the monitor errs low by: its margin, and a supply that
+            // fell within the last ticks.
+            let low_by = told_v.map_or(0.0, |t| (t - supply_v).max(0.0) / t);
             for &v in &out {
                 for b in bridges.iter_mut() {
-                    b.bridge.set_v(v);
-                    let on_strip = b.on_strip_v();
-                    let step = BRIDGE_SUPPLY_V / f32::from(b.max);
+                    // The board's `write_v`: off while a fault is latched.
+                    if faulted {
+                        b.bridge.off();
+                    } else {
+                        b.bridge.set_v(v);
+                    }
+                    let on_strip = b.on_strip_v(supply_v);
+                    if faulted {
+                        prop_assert_eq!(on_strip, 0.0);
+                        continue;
+                    }
+                    let step = supply_v / f32::from(b.max) + low_by * v.abs();
                     prop_assert!(
                         on_strip.abs() <= limit * (1.0 + 1e-6),
                         "bridge: {v} V gives {on_strip} V, limit {limit} V"
@@ -204,6 +262,28 @@ fn run(ops: &[(Command, u16)], limit_v: f32) -> Result<(), TestCaseError> {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// The bridges' supply wanders, steps and jumps while the board runs
+    /// (a bench supply turned, a battery sagging), its reading a count or
+    /// two off: the strip never sees more than the limit.
+    #[test]
+    fn a_moving_supply_never_puts_more_than_the_limit_on_the_strip(
+        ops in prop::collection::vec((command(), 1u16..400), 1..8),
+        steps in prop::collection::vec((0u64..3000, 4.4f32..5.7), 0..6),
+        noise_seed in any::<u64>(),
+    ) {
+        let supply = |tick: u64| {
+            // The last step at or before `tick`, from the boot's 5 V.
+            let v = steps
+                .iter()
+                .filter(|(at, _)| *at <= tick)
+                .max_by_key(|(at, _)| *at)
+                .map_or(BRIDGE_SUPPLY_V, |s| s.1);
+            let noise = ((noise_seed ^ tick.wrapping_mul(0x9E37_79B9_7F4A_7C15)) % 5) as i16 - 2;
+            (v, noise)
+        };
+        run_on(&ops, config::power_up_limit_v(true), &supply)?;
+    }
 
     /// At the limit a build with DAC segments starts with, so that both
     /// stages run with the same controller.
