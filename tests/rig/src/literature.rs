@@ -48,6 +48,13 @@ pub const WATER_SPLIT_V: f64 = 1.23;
 /// linear leak's").
 pub const STRENGTH_AT_V: f64 = 3.0;
 
+/// The parts of the literature strip's base that an ablation can leave out
+/// ([`Literature::without`]): `line` (each segment's electrode a lumped
+/// `R1`–`C`, as the fit's), `spectrum` (no relaxing modulus: an undamped,
+/// elastic beam), `ruler` (the metadata's geometry and the laminate's mass
+/// per length exact).
+pub const BASE_PARTS: [&str; 3] = ["line", "spectrum", "ruler"];
+
 /// The literature strip's physics beyond [`Sample`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Literature {
@@ -162,6 +169,29 @@ impl Literature {
             measured: [ruler(rng, 0.01), ruler(rng, 0.02), ruler(rng, 0.04)],
             mass_factor: ruler(rng, 0.05),
         }
+    }
+
+    /// The base without `parts` (of [`BASE_PARTS`]), everything drawn as
+    /// it would be with them: an ablation that tells which part of the
+    /// base a diagnosis's false names come from. An unknown part is
+    /// refused, naming the known ones.
+    pub fn without(&mut self, parts: &[String]) -> Result<(), String> {
+        for part in parts {
+            match part.as_str() {
+                "line" => self.sheet_over_r1 = 0.0,
+                "spectrum" => self.spectrum.iter_mut().for_each(|(g, _)| *g = 0.0),
+                "ruler" => {
+                    self.measured = [1.0; 3];
+                    self.mass_factor = 1.0;
+                }
+                other => {
+                    return Err(format!(
+                        "`{other}` is no part of the literature strip's base: {BASE_PARTS:?}"
+                    ))
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The relaxing share of the modulus, `Σ g`.
@@ -376,8 +406,17 @@ impl Lines<'_> {
 
     /// The line's node potentials, V, for cell voltages `v`: a tridiagonal
     /// system (Thomas's algorithm); `drive` is `None` when the contact is
-    /// open.
+    /// open. Without a sheet resistance (an ablation) the nodes are one:
+    /// the lumped circuit.
     fn nodes(cell: &Cell, v: &[f64; CELLS], drive: Option<f64>) -> [f64; CELLS] {
+        if cell.gap_ohm == 0.0 {
+            let g_ion = 1.0 / cell.ionic_ohm;
+            let (g_c, into) = drive.map_or((0.0, 0.0), |d| {
+                (1.0 / cell.contact_ohm, d / cell.contact_ohm)
+            });
+            let phi = (into + g_ion * v.iter().sum::<f64>()) / (g_c + CELLS as f64 * g_ion);
+            return [phi; CELLS];
+        }
         let (g_ion, g_s, g_c) = (
             1.0 / cell.ionic_ohm,
             1.0 / cell.gap_ohm,
@@ -739,6 +778,56 @@ mod tests {
             lines.step(&mut y, &[2.0], None, 0.0, dt);
         }
         assert!(y[0] > y[3 * (CELLS - 1)]);
+    }
+
+    #[test]
+    fn without_its_line_the_strip_charges_as_the_lumped_circuit() {
+        use crate::strip::Electrical;
+        let s = sample();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let mut lit = Literature::draw_base(&mut rng);
+        let drawn = lit.clone();
+        lit.without(&["line".to_string()]).unwrap();
+        assert_eq!(lit.sheet_over_r1, 0.0);
+        assert_eq!(
+            (&lit.spectrum, lit.measured),
+            (&drawn.spectrum, drawn.measured)
+        );
+        let h = Hidden {
+            literature: Some(lit),
+            ..Hidden::default()
+        };
+        let lines = Lines {
+            s: &s,
+            h: &h,
+            lit: h.literature.as_ref().unwrap(),
+        };
+        // R1 in series with C and R2 across C: i(t) = V/(R1+R2) + V R2/(R1 (R1+R2)) e^{−t/τ},
+        // τ = C R1 R2/(R1+R2).
+        let (r1, r2, c) = (s.r1_ohm, s.r2_ohm, s.c_f);
+        let tau = c * r1 * r2 / (r1 + r2);
+        let want = |t: f64| 2.0 / (r1 + r2) + 2.0 * r2 / (r1 * (r1 + r2)) * (-t / tau).exp();
+        let (mut x, dt, mut i) = (lines.rest(1), tau / 400.0, [0.0]);
+        for k in 0..2000 {
+            let t = k as f64 * dt;
+            lines.currents(&x, &[2.0], None, 0.0, &mut i);
+            assert!(
+                (i[0] / want(t) - 1.0).abs() < 1e-6,
+                "t = {t}: {} against {}",
+                i[0],
+                want(t)
+            );
+            lines.step(&mut x, &[2.0], None, 0.0, dt);
+        }
+        // The other parts, and a name that is none.
+        let mut lit = drawn.clone();
+        lit.without(&["spectrum".to_string(), "ruler".to_string()])
+            .unwrap();
+        assert_eq!(lit.relaxing(), 0.0);
+        assert_eq!((lit.measured, lit.mass_factor), ([1.0; 3], 1.0));
+        assert_eq!(lit.sheet_over_r1, drawn.sheet_over_r1);
+        let e = lit.without(&["sheet".to_string()]).unwrap_err();
+        assert!(e.contains("`sheet`") && e.contains("line"), "{e}");
     }
 
     #[test]

@@ -62,6 +62,9 @@ pub struct Scenario {
     pub null: bool,
     /// The literature strip ([`crate::literature`], [`plan_literature`]).
     pub literature: bool,
+    /// Parts of the literature strip's base left out
+    /// ([`crate::literature::Literature::without`]): an ablation.
+    pub literature_without: Vec<String>,
 }
 
 impl Scenario {
@@ -315,6 +318,12 @@ fn draw(s: &Scenario) -> anyhow::Result<Draws> {
     };
     let hidden = if s.literature {
         crate::literature::Literature::draw(&s.hidden, &sample, span_s(&runs_of(s)), &mut rng)
+            .and_then(|mut h| {
+                if let Some(lit) = h.literature.as_mut() {
+                    lit.without(&s.literature_without)?;
+                }
+                Ok(h)
+            })
     } else if ideal {
         anyhow::ensure!(
             s.hidden.is_empty() && s.bench.is_empty(),

@@ -62,6 +62,12 @@ struct Cli {
     /// perfect bench (`sweep::plan_literature_null`).
     #[arg(long, conflicts_with = "lab")]
     literature: bool,
+    /// Parts of the literature strip's base left out, comma-separated
+    /// (`line`, `spectrum`, `ruler`; `finrs_rig::literature::BASE_PARTS`),
+    /// every draw as with them: an ablation that tells which part a
+    /// sweep's false names come from. Give the sweep an OUT of its own.
+    #[arg(long, value_delimiter = ',', requires = "literature")]
+    literature_without: Vec<String>,
 }
 
 /// What `finrs diagnose` said of one session, as kept in OUT/results so
@@ -287,6 +293,16 @@ fn main() -> anyhow::Result<()> {
             finrs_rig::LAB_ARTEFACTS
         );
     }
+    if let Some(w) = cli
+        .literature_without
+        .iter()
+        .find(|w| !finrs_rig::literature::BASE_PARTS.contains(&w.as_str()))
+    {
+        anyhow::bail!(
+            "--literature-without `{w}`: the literature strip's base has {:?}",
+            finrs_rig::literature::BASE_PARTS
+        );
+    }
     let mut scenarios = if cli.lab && !cli.null && !cli.literature {
         let mut p = plan_lab(cli.run.first_seed, cli.run.sessions);
         for s in &mut p {
@@ -294,12 +310,16 @@ fn main() -> anyhow::Result<()> {
         }
         p
     } else {
-        plan_of(
+        let mut p = plan_of(
             cli.literature,
             cli.null,
             cli.run.first_seed,
             cli.run.sessions,
-        )
+        );
+        for s in &mut p {
+            s.literature_without = cli.literature_without.clone();
+        }
+        p
     };
     if let Some(s) = cli
         .only
