@@ -109,14 +109,11 @@ pub struct Io {
     /// Sample periods so far: the pacer pends one sample task per period,
     /// so here the count is the tasks'.
     tick: u64,
-    /// The supplies were in range at boot; if not, nothing is ever driven
-    /// (as on the board).
-    supply_ok: bool,
     /// The bridge supply read every period, as on the board (QEMU's holds
-    /// at its boot value); `None` if the boot's reading failed.
+    /// at its boot value); `None` if the supplies were out of range at
+    /// boot: nothing is ever driven then, nor while the last reading is
+    /// out of the monitor's band (as on the board).
     monitor: Option<finrs_firmware_support::supply::SupplyMonitor>,
-    /// The last reading was within the monitor's band.
-    supply_now_ok: bool,
     /// This period's reading, if out of the band.
     supply_fault: Option<finrs_firmware_support::supply::SupplyError>,
     /// The virtual bench's clamp and camera: the plant above is then the
@@ -243,11 +240,9 @@ pub fn init(mut core: cortex_m::Peripherals, device: pac::Peripherals) -> Parts 
             currents_a: [0.0; N],
             noise: sim::NOISE_SEED,
             tick: 0,
-            supply_ok: supply.is_ok(),
             monitor: supply
                 .ok()
                 .map(finrs_firmware_support::supply::SupplyMonitor::new),
-            supply_now_ok: true,
             supply_fault: None,
             #[cfg(feature = "qemu-serial")]
             world,
@@ -370,19 +365,14 @@ impl Io {
     /// divider's counts of the supply QEMU booted with (its segments are
     /// the plant's, with no duty to work out).
     fn follow_supply(&mut self) {
-        use finrs_firmware_support::supply::SUPPLY_DIVIDER;
+        use finrs_firmware_support::supply::bridge_sense_counts;
         let Some(monitor) = self.monitor.as_mut() else {
             return;
         };
-        let counts = monitor.boot_v() / SUPPLY_DIVIDER / finrs_firmware_support::config::DAC_VREF_V
-            * 4095.0
-            + 0.5;
-        match monitor.update(counts as u16) {
-            Ok(_) => self.supply_now_ok = true,
-            Err(e) => {
-                self.supply_now_ok = false;
-                self.supply_fault = Some(e);
-            }
+        let vdda_v = finrs_firmware_support::config::DAC_VREF_V;
+        let counts = bridge_sense_counts(monitor.boot_v(), vdda_v) + 0.5;
+        if let Err(e) = monitor.update(counts as u16) {
+            self.supply_fault = Some(e);
         }
     }
 
@@ -395,7 +385,11 @@ impl Io {
     /// Applies the commanded voltages (`None`: every output off) and steps
     /// the plant one sample.
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        match v.filter(|_| self.supply_ok && self.supply_now_ok) {
+        let in_band = self
+            .monitor
+            .as_ref()
+            .is_some_and(finrs_firmware_support::supply::SupplyMonitor::in_band);
+        match v.filter(|_| in_band) {
             Some(v) => {
                 for (s, &v) in self.segments.iter_mut().zip(v) {
                     s.set_v(v);

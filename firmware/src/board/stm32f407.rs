@@ -281,14 +281,11 @@ pub struct Io {
     segments: [Segment; N],
     /// ADC2/ADC3's group was not done when ADC1's was.
     secondary_late: bool,
-    /// The supplies were in range at boot; if not, nothing is ever driven.
-    supply_ok: bool,
     /// The bridge supply, read every period by ADC3's group; `None` if the
-    /// boot's reading failed (nothing is driven then).
+    /// supplies were out of range at boot: nothing is ever driven then,
+    /// nor while the last reading is out of the monitor's band, whatever
+    /// the controller says.
     monitor: Option<SupplyMonitor>,
-    /// The last period's reading was within the monitor's band: nothing is
-    /// driven while it is not, whatever the controller says.
-    supply_now_ok: bool,
     /// This period's reading, if out of the band, for the sample task to
     /// latch as a `Supply` fault.
     supply_fault: Option<SupplyError>,
@@ -572,9 +569,7 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             },
             segments,
             secondary_late: false,
-            supply_ok: supply.is_ok(),
             monitor: supply.ok().map(SupplyMonitor::new),
-            supply_now_ok: true,
             supply_fault: None,
             watchdog,
             flash,
@@ -842,7 +837,6 @@ impl Io {
         };
         match monitor.update(sense_counts) {
             Ok(duty_supply_v) => {
-                self.supply_now_ok = true;
                 for segment in self.segments.iter_mut() {
                     if let Segment::Bridge(b) = segment {
                         // Finite and above 0 by the monitor's band.
@@ -850,10 +844,7 @@ impl Io {
                     }
                 }
             }
-            Err(e) => {
-                self.supply_now_ok = false;
-                self.supply_fault = Some(e);
-            }
+            Err(e) => self.supply_fault = Some(e),
         }
     }
 
@@ -869,7 +860,8 @@ impl Io {
     /// The sync LED follows what is applied: lit for a moment when a drive
     /// starts after a rest (`finrs_firmware_support::sync`).
     pub fn write_v(&mut self, v: Option<&[f32; N]>) {
-        let applied = match v.filter(|_| self.supply_ok && self.supply_now_ok) {
+        let in_band = self.monitor.as_ref().is_some_and(SupplyMonitor::in_band);
+        let applied = match v.filter(|_| in_band) {
             Some(v) => {
                 for (segment, &v) in self.segments.iter_mut().zip(v) {
                     segment.set_v(v);

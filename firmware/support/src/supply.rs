@@ -64,7 +64,18 @@ pub fn vdda_v(vrefint_cal_counts: u16, vrefint_counts: u16) -> Option<f32> {
 
 /// The bridge supply from its divider's reading, with VDDA as measured.
 pub fn bridge_supply_v(counts: u16, vdda_v: f32) -> f32 {
-    f32::from(counts) / 4095.0 * vdda_v * SUPPLY_DIVIDER
+    supply_of_counts(f32::from(counts), vdda_v)
+}
+
+/// [`bridge_supply_v`] of a reading between counts (a mean, a margin).
+fn supply_of_counts(counts: f32, vdda_v: f32) -> f32 {
+    counts / 4095.0 * vdda_v * SUPPLY_DIVIDER
+}
+
+/// The divider's reading of the bridge supply `bridge_v` with VDDA at
+/// `vdda_v`, in counts, unrounded: [`bridge_supply_v`]'s inverse.
+pub fn bridge_sense_counts(bridge_v: f32, vdda_v: f32) -> f32 {
+    bridge_v / SUPPLY_DIVIDER / vdda_v * 4095.0
 }
 
 /// The supplies, measured and within range.
@@ -158,13 +169,14 @@ pub struct SupplyMonitor {
     boot_v: f32,
     recent: [u16; SUPPLY_MEAN_TICKS],
     next: usize,
+    in_band: bool,
 }
 
 impl SupplyMonitor {
     /// A monitor of the supplies measured at boot (VDDA scales every
     /// reading; the bridge supply is the reference for the drift).
     pub fn new(boot: Supplies) -> Self {
-        let counts = boot.bridge_v / SUPPLY_DIVIDER / boot.vdda_v * 4095.0;
+        let counts = bridge_sense_counts(boot.bridge_v, boot.vdda_v);
         let counts = if counts > 0.0 && counts < 4095.0 {
             counts as u16
         } else {
@@ -175,12 +187,19 @@ impl SupplyMonitor {
             boot_v: boot.bridge_v,
             recent: [counts; SUPPLY_MEAN_TICKS],
             next: 0,
+            in_band: true,
         }
     }
 
     /// The supply at boot, V.
     pub fn boot_v(&self) -> f32 {
         self.boot_v
+    }
+
+    /// Whether the last reading was within the band (true before the
+    /// first): nothing may be driven while it is not.
+    pub fn in_band(&self) -> bool {
+        self.in_band
     }
 
     /// One tick's reading of the divider, `counts`: the supply to work the
@@ -195,6 +214,13 @@ impl SupplyMonitor {
     pub fn update(&mut self, counts: u16) -> Result<f32, SupplyError> {
         self.recent[self.next] = counts;
         self.next = (self.next + 1) % SUPPLY_MEAN_TICKS;
+        let duty_supply = self.duty_supply_v(counts);
+        self.in_band = duty_supply.is_ok();
+        duty_supply
+    }
+
+    /// [`update`](Self::update)'s answer once `counts` is in `recent`.
+    fn duty_supply_v(&self, counts: u16) -> Result<f32, SupplyError> {
         let v = bridge_supply_v(counts, self.vdda_v);
         let (low, high) = (
             self.boot_v * (1.0 - BRIDGE_DRIFT_TOLERANCE),
@@ -216,7 +242,10 @@ impl SupplyMonitor {
         } else {
             f32::from(counts)
         };
-        Ok((highest + SUPPLY_MARGIN_COUNTS) / 4095.0 * self.vdda_v * SUPPLY_DIVIDER)
+        Ok(supply_of_counts(
+            highest + SUPPLY_MARGIN_COUNTS,
+            self.vdda_v,
+        ))
     }
 }
 
@@ -252,7 +281,7 @@ mod tests {
 
     /// The counts the divider gives for `v` at VDDA 3.0 V, rounded.
     fn counts(v: f32) -> u16 {
-        (v / SUPPLY_DIVIDER / 3.0 * 4095.0 + 0.5) as u16
+        (bridge_sense_counts(v, 3.0) + 0.5) as u16
     }
 
     #[test]
@@ -288,8 +317,10 @@ mod tests {
             "bridge supply at 5499 mV, outside 4850..=5150 mV: not driving"
         );
         assert!(m.update(counts(4.8)).is_err());
+        assert!(!m.in_band());
         // Back within: no fault (the controller's latch keeps the one seen).
         assert!(m.update(counts(5.1)).is_ok());
+        assert!(m.in_band());
         // A board that booted at 4.55 V may not drift below the 4.5 V its
         // duties need at full drive, however small the drift.
         let mut low = SupplyMonitor::new(check(3.0, 4.55).unwrap());

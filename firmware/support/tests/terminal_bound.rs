@@ -29,7 +29,7 @@ use finrs_drive::{Envelope, Limits, Program};
 use finrs_firmware_support::config::{
     self, BRIDGE_SUPPLY_V, DAC_BUFFER_MARGIN_V, DAC_GAIN, DAC_VREF_V, DAC_ZERO_CODE, N,
 };
-use finrs_firmware_support::supply::{self, SupplyMonitor, SUPPLY_DIVIDER};
+use finrs_firmware_support::supply::{self, SupplyMonitor};
 use finrs_frames::{Command, FaultCode};
 use proptest::prelude::*;
 
@@ -162,7 +162,7 @@ fn run(ops: &[(Command, u16)], limit_v: f32) -> Result<(), TestCaseError> {
 /// The divider's reading of `v` at VDDA = the DAC's reference, rounded,
 /// `noise` counts off.
 fn counts_of(v: f32, noise: i16) -> u16 {
-    let exact = v / SUPPLY_DIVIDER / DAC_VREF_V * 4095.0;
+    let exact = supply::bridge_sense_counts(v, DAC_VREF_V);
     ((exact + 0.5) as i32 + i32::from(noise)).clamp(0, 4095) as u16
 }
 

@@ -148,6 +148,7 @@ pub fn diagnose(
         train: &train,
         hold: &hold,
         fixed,
+        alone: driven_alone(session, &train),
     };
     let untestable = untestable(session);
     let found = search.run(&baseline, &base_hold, &untestable, progress)?;
@@ -282,6 +283,8 @@ struct Search<'a> {
     train: &'a [usize],
     hold: &'a [usize],
     fixed: ModelSpec,
+    /// The segments a training recording drives alone ([`driven_alone`]).
+    alone: Vec<usize>,
 }
 
 /// Where the forward search ended.
@@ -474,11 +477,6 @@ impl Search<'_> {
         Ok(())
     }
 
-    /// [`driven_alone`] in the training part.
-    fn driven_alone(&self) -> Vec<usize> {
-        driven_alone(self.session, self.train)
-    }
-
     /// Whether the session's own evidence calls for `e` (see
     /// [`choose`]): the fluid's loading in a session in water.
     fn expected(&self, e: Effect) -> bool {
@@ -537,12 +535,12 @@ impl Search<'_> {
         let ((fit, score), (base_fit, base_hold)) = (with, without);
         let delta_bic = fit.bic - base_fit.bic;
         let rss_gain = 1.0 - score.rss / base_hold.rss;
-        let alone = self.driven_alone();
-        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed, bar, &alone);
+        let alone = &self.alone;
+        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed, bar, alone);
         // The highest any of its effects' tests had to clear.
         let signature_z = m
             .iter()
-            .map(|&e| bar.split(signature_tests(e, fit, &alone)).z())
+            .map(|&e| bar.split(signature_tests(e, fit, alone)).z())
             .fold(0.0, f64::max);
         Candidate {
             name: m.iter().map(|e| e.name()).collect::<Vec<_>>().join("+"),
@@ -618,7 +616,7 @@ pub fn tested_channels<'a>(
 /// ([`signature_tests`]). Without this, an effect that contains another
 /// (linear drag is mass-proportional damping) could be named for the
 /// other's work. `alone`: the segments a training recording drives alone
-/// ([`Search::driven_alone`]).
+/// ([`driven_alone`]).
 fn signature_is_significant(
     e: Effect,
     fit: &FitResult,
