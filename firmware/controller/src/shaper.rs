@@ -438,6 +438,13 @@ impl<const N: usize, const E: usize, const S: usize> Shaper<N, E, S> {
         limit_v: f32,
         t_session_s: f32,
     ) -> Result<ShapedMotion<N>, ShapeRefused> {
+        // No model is ever held above the bound (none is checked there),
+        // but said so the build leaves the body out: its 30.6 KB frame was
+        // taken on every SetMotion at N = 8, and put the stack's bound
+        // 9 KB past its room there (scripts/check-stack, 2026-11-29).
+        if N > MAX_SHAPED_SEGMENTS {
+            return Err(ShapeRefused::NoModel);
+        }
         let model = self.model.as_ref().ok_or(ShapeRefused::NoModel)?;
         let (rate_per_s, curvature) = model.drying;
         let drying = if rate_per_s == 0.0 {

@@ -252,3 +252,26 @@ fn bad_models_and_motions_are_refused_with_their_reason() {
     ));
     assert!(!c.running());
 }
+
+#[test]
+fn above_the_bound_a_model_is_refused_for_its_size_and_a_motion_has_none() {
+    // The build whose stack cannot hold a model's check (`MAX_SHAPED_SEGMENTS`):
+    // the refusals come before any strip is built, so that the build leaves
+    // those frames out (scripts/check-stack).
+    const N8: usize = 8;
+    const S8: usize = state_len(N8, ELEMENTS);
+    const { assert!(N8 > finrs_controller::shaper::MAX_SHAPED_SEGMENTS) };
+    let record = ModelRecord::encode(&model());
+    assert!(matches!(
+        Shaper::<N8, ELEMENTS, S8>::check(&record, DT_S),
+        Err(ShapeRefused::TooManySegments(8))
+    ));
+    let shaper = Shaper::<N8, ELEMENTS, S8>::new();
+    let Command::SetMotion { motion: m, .. } = motion(1e-4, 1.0, 60.0) else {
+        unreachable!()
+    };
+    assert!(matches!(
+        shaper.program(&m, Envelope::STEADY, 4.0, 0.0),
+        Err(ShapeRefused::NoModel)
+    ));
+}

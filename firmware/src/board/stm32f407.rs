@@ -1060,13 +1060,22 @@ fn zero_outputs_now() {
 }
 
 /// Outputs to zero first, then the message, then stop for the debugger
-/// (the watchdog resets the board if none is attached).
+/// (the watchdog resets the board if none is attached). The message only
+/// on the first entry: rtt-target's logger panics when it is already
+/// taken, so a panic while a log line is written (or in this message)
+/// would enter here again and log again, each entry a frame deeper, until
+/// the stack ran off the RAM (scripts/check-stack bounds one entry).
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     zero_outputs_now();
-    defmt::error!("panic: {}", defmt::Display2Format(info));
+    if !PANICKED.swap(true, core::sync::atomic::Ordering::Relaxed) {
+        defmt::error!("panic: {}", defmt::Display2Format(info));
+    }
     cortex_m::asm::udf()
 }
+
+/// Set by the panic handler's first entry.
+static PANICKED: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
 
 /// A fault other than a panic: outputs to zero, then wait for the watchdog.
 /// Nothing is logged: a HardFault can preempt a critical section, the
