@@ -294,7 +294,11 @@ impl Literature {
             });
         }
         if let Some((beta, _)) = h.back_branch.as_mut() {
-            *beta = log_uniform(rng, 0.02, 2.0);
+            // Drawn in the probe's unit ([`back_relaxation`]), the branch's
+            // β following: a β of 1 or less relaxes the strip only part
+            // way, which the catalogue calls the baseline (FORMAT.md).
+            let s = log_uniform(rng, 0.02, 1.0);
+            *beta = 1.0 + s * sample.p_per_s / sample.z_per_s;
         }
         if let Some(k) = h.crosstalk.as_mut() {
             *k = log_uniform(rng, 0.005, 0.35);
@@ -331,7 +335,7 @@ pub fn strengths(sample: &Sample, hidden: &Hidden) -> Strengths {
         }
     }
     if let Some((beta, _)) = hidden.back_branch {
-        out.push(("back-relaxation", beta));
+        out.push(("back-relaxation", back_relaxation(sample, beta)));
     }
     if let Some(k) = hidden.crosstalk {
         out.push(("segment-crosstalk", k));
@@ -345,6 +349,16 @@ pub fn strengths(sample: &Sample, hidden: &Hidden) -> Strengths {
         out.push((crate::sample::SEGMENT_VARIATION, most));
     }
     out
+}
+
+/// A back branch's strength in the diagnosis's probe unit (`identify.rs`:
+/// the steady moment against the instant one, below zero, `−b/(a p)`):
+/// the lead network `K (q + (z − p) r)` less the branch's `β K (z/p) b`,
+/// with `r → q/p` and `b → q` held, bends `K (z/p)(1 − β) q` against the
+/// instant `K q`, so `(z/p)(β − 1)`. Below zero where `β < 1`: a strip that
+/// relaxes only part way, no back-relaxation.
+pub fn back_relaxation(sample: &Sample, beta: f64) -> f64 {
+    sample.z_per_s / sample.p_per_s * (beta - 1.0)
 }
 
 /// The diagnosis's plausible strength of each effect (`identify.rs`'s

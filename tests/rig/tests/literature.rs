@@ -246,3 +246,27 @@ fn a_twin_is_the_session_with_its_measurement_errors_scaled() {
     assert!(err.to_string().contains("noise scale"), "{err}");
     std::fs::remove_dir_all(&root).ok();
 }
+
+#[test]
+fn a_back_relaxing_strip_ends_bent_the_other_way() {
+    // The catalogue's back-relaxation (FORMAT.md): held, the strip ends
+    // bent against its first bend. Drawn in the probe's unit, every draw
+    // is one (a branch of β ≤ 1 only relaxes part way: the baseline).
+    for seed in 0..4 {
+        let mut r = rng(100 + seed);
+        let sample = Sample::draw_off_class(&mut r);
+        let hidden = Literature::draw(&["back-relaxation"], &sample, 150.0, &mut r).unwrap();
+        let s = finrs_rig::literature::strengths(&sample, &hidden)
+            .into_iter()
+            .find(|(n, _)| *n == "back-relaxation")
+            .unwrap()
+            .1;
+        assert!((0.02..=1.0).contains(&s), "{s}");
+        let t = blocked(&sample, &hidden, &step(1.0, 0.0, 90.0));
+        let (first, last) = (t.force_n[100], *t.force_n.last().unwrap());
+        assert!(
+            first * last < 0.0,
+            "seed {seed}: {last} N at 90 s after {first} N at 0.1 s (strength {s})"
+        );
+    }
+}
