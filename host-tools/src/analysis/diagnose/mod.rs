@@ -45,6 +45,7 @@
 pub mod analyses;
 pub mod choose;
 pub mod drift;
+mod drying;
 pub mod faults;
 pub mod floors;
 mod gates;

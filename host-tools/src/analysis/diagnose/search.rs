@@ -5,6 +5,7 @@ use rayon::prelude::*;
 use super::analyses;
 use super::choose::{choose, Passed};
 use super::drift;
+use super::drying;
 use super::faults;
 use super::floors::sensor_floors;
 use super::gates::{each_mode_damping_kept, holdout_gain_passes, Bar, DELTA_BIC};
@@ -149,6 +150,7 @@ pub fn diagnose(
         hold: &hold,
         fixed,
         alone: driven_alone(session, &train),
+        span_s: span_s(session, &train),
     };
     let untestable = untestable(session);
     let found = search.run(&baseline, &base_hold, &untestable, progress)?;
@@ -285,6 +287,8 @@ struct Search<'a> {
     fixed: ModelSpec,
     /// The segments a training recording drives alone ([`driven_alone`]).
     alone: Vec<usize>,
+    /// The training recordings' span on the session clock ([`span_s`]).
+    span_s: f64,
 }
 
 /// Where the forward search ended.
@@ -536,7 +540,8 @@ impl Search<'_> {
         let delta_bic = fit.bic - base_fit.bic;
         let rss_gain = 1.0 - score.rss / base_hold.rss;
         let alone = &self.alone;
-        let own_term = |&e: &Effect| signature_is_significant(e, fit, &self.fixed, bar, alone);
+        let own_term =
+            |&e: &Effect| signature_is_significant(e, fit, &self.fixed, bar, alone, self.span_s);
         // The highest any of its effects' tests had to clear.
         let signature_z = m
             .iter()
@@ -616,13 +621,15 @@ pub fn tested_channels<'a>(
 /// ([`signature_tests`]). Without this, an effect that contains another
 /// (linear drag is mass-proportional damping) could be named for the
 /// other's work. `alone`: the segments a training recording drives alone
-/// ([`driven_alone`]).
+/// ([`driven_alone`]); `span_s`: the training recordings' span on the
+/// session clock ([`span_s`]).
 fn signature_is_significant(
     e: Effect,
     fit: &FitResult,
     fixed: &ModelSpec,
     bar: Bar,
     alone: &[usize],
+    span_s: f64,
 ) -> bool {
     let bar = bar.split(signature_tests(e, fit, alone));
     let (z, tail) = (bar.z(), bar.tail());
@@ -655,7 +662,11 @@ fn signature_is_significant(
             .estimates
             .iter()
             .any(|est| est.knob == Knob::B && below_zero_at(est, z)),
-        Effect::Dehydration => excludes(Knob::Dehydration, 0.0),
+        // The gain lost over the session, not the rate: the law's
+        // curvature trades against its rate ([`drying`]).
+        Effect::Dehydration => {
+            drying::loss_over(fit, span_s).is_some_and(|(loss, se)| loss - z * se > 0.0)
+        }
         // A neighbour bent the driven segment's way: charge reaching it
         // (through the polymer past the cut, or a shared electrode) has
         // the drive's sign. A negative κ bends the neighbours against
@@ -675,6 +686,19 @@ fn signature_is_significant(
             .iter()
             .any(|est| shows_apart(est.knob, alone) && beyond_at(est, SEGMENT_ALIKE, z)),
     }
+}
+
+/// Session time by which the recordings `recordings` have all ended, s
+/// (their `t_session_start_s`, 0 where not given, plus their length): the
+/// span over which a drying fitted on them takes its gain.
+fn span_s(session: &Session, recordings: &[usize]) -> f64 {
+    recordings
+        .iter()
+        .map(|&i| {
+            let r = &session.recordings[i];
+            r.t_start_s.unwrap_or(0.0) + r.rec.t_s.last().copied().unwrap_or(0.0)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// The segments (from 0) that some recording of `recordings` drives alone:
