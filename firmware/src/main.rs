@@ -170,6 +170,8 @@ mod app {
         // hold a bridge braked, not open.
         io.write_v((!faulted).then_some(&out.voltages_v));
         io.feed_watchdog();
+        // Only this task moves it: a core that stops lets the bridges sleep.
+        io.keep_alive(!faulted);
         // Here, where the watchdog is, with the outputs at 0 V (the
         // controller takes a calibration only then): the write overruns
         // this tick on purpose, and the periods it hides go out as dropped

@@ -437,6 +437,10 @@ impl Io {
     /// QEMU does not emulate the IWDG: nothing to feed.
     pub fn feed_watchdog(&mut self) {}
 
+    /// QEMU's board has no bridges to keep awake
+    /// (`finrs_firmware_support::keepalive`, the real board's).
+    pub fn keep_alive(&mut self, _healthy: bool) {}
+
     /// QEMU's netduinoplus2 models no flash programming: a calibration the
     /// host sets is used but not stored (the Info frame says "unsaved").
     pub fn store_calibration(&mut self, _: &finrs_frames::Calibration) -> bool {

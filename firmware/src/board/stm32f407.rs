@@ -81,6 +81,7 @@ use crate::config::{
 use crate::{Mono, SYSCLK_HZ};
 use finrs_firmware_support::calibration_store::{self, BOARD_REGION};
 use finrs_firmware_support::flash_timing::store_watchdog_ms;
+use finrs_firmware_support::keepalive::Keepalive;
 use finrs_firmware_support::model_store;
 use finrs_firmware_support::record_log::{Cursor, StoreError, Work};
 use finrs_firmware_support::reset;
@@ -300,6 +301,9 @@ pub struct Io {
     model_log: Option<Cursor>,
     /// The camera's sync LED (`pins::SYNC_LED`) and when to light it.
     sync_led: Pin<'E', 7, Output<PushPull>>,
+    /// The bridges' keep-alive into the nSLEEP monostable (BOARD.md).
+    keepalive_pin: Pin<'E', 10, Output<PushPull>>,
+    keepalive: Keepalive,
     sync: SyncMark,
 }
 
@@ -552,6 +556,9 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
     // The camera's sync LED, dark until a drive starts.
     const { assert!(finrs_firmware_support::pins::SYNC_LED.is(b'E', 7)) };
     let sync_led = e.pe7.into_push_pull_output();
+    // The bridges' keep-alive, low (asleep) until the first sample period.
+    const { assert!(finrs_firmware_support::pins::KEEPALIVE.is(b'E', 10)) };
+    let keepalive_pin = e.pe10.into_push_pull_output();
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.stop_on_debug(&dp.DBGMCU, true);
@@ -577,6 +584,8 @@ pub fn init(core: cortex_m::Peripherals, dp: pac::Peripherals) -> Parts {
             model_log,
             sync_led,
             sync: SyncMark::new(),
+            keepalive_pin,
+            keepalive: Keepalive::new(),
         },
         frames,
         commands,
@@ -887,6 +896,13 @@ impl Io {
     /// Feeds the IWDG.
     pub fn feed_watchdog(&mut self) {
         self.watchdog.feed();
+    }
+
+    /// Moves the bridges' keep-alive (`finrs_firmware_support::keepalive`):
+    /// flipped each period while `healthy`, low while a fault is latched.
+    pub fn keep_alive(&mut self, healthy: bool) {
+        let high = self.keepalive.level(healthy);
+        self.keepalive_pin.set_state(PinState::from(high));
     }
 
     /// Appends `calibration` to the flash records; true once it reads back.

@@ -11,6 +11,8 @@
 //!   sensor scales both boards run with.
 //! - [`identity`]: the firmware's version and git commit for its Info
 //!   frame.
+//! - [`keepalive`]: the pin only a running sample task moves, which keeps
+//!   the bridges awake.
 //! - [`pins`]: the analogue inputs' pins, ADCs and channels, checked
 //!   against the datasheet.
 //! - [`reset`]: why the core last reset, from RCC_CSR's flags.
@@ -30,6 +32,7 @@ pub mod calibration_store;
 pub mod config;
 pub mod flash_timing;
 pub mod identity;
+pub mod keepalive;
 pub mod model_store;
 pub mod pins;
 pub mod record_log;

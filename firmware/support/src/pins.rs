@@ -155,6 +155,12 @@ pub const DAC_OUTPUTS: [Pin; 2] = [Pin::new(b'A', 4), Pin::new(b'A', 5)];
 /// LED in the camera's view.
 pub const SYNC_LED: Pin = Pin::new(b'E', 7);
 
+/// The bridges' keep-alive ([`keepalive`](crate::keepalive)): PE10, a
+/// push-pull output into the monostable that holds every DRV8833's nSLEEP
+/// (firmware/BOARD.md, "Lock-up"). A header pin on the Discovery (check
+/// its user manual's pin table, UM1472, before wiring one).
+pub const KEEPALIVE: Pin = Pin::new(b'E', 10);
+
 /// Whether `pin` is none of the drive's and sensors' pins: no bridge leg,
 /// DAC output, analogue input of `map` or the supply's sense.
 pub const fn is_free(pin: Pin, map: &[Input]) -> bool {
@@ -188,6 +194,12 @@ pub const SYNC_LED_IS_FREE: bool = is_free(SYNC_LED, &MAP);
 const _: () = assert!(
     SYNC_LED_IS_FREE,
     "the sync LED's pin is used by the drive or a sensor"
+);
+
+/// The keep-alive is on a pin nothing else uses, the sync LED's neither.
+const _: () = assert!(
+    is_free(KEEPALIVE, &MAP) && !KEEPALIVE.is(SYNC_LED.port, SYNC_LED.number),
+    "the keep-alive's pin is used by the drive, a sensor or the sync LED"
 );
 
 /// The ADC whose injected group reads segment `i`'s shunt: at most four
