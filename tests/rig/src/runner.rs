@@ -80,9 +80,76 @@ pub fn each_session<T: Send>(
     .collect()
 }
 
+/// One task's share of a sweep, `K/N` (1-based, as a job array numbers
+/// its tasks): the scenarios at places `K, K + N, K + 2N, …` of the plan,
+/// so that `N` tasks together run each once and each gets every row of the
+/// plan's turns alike.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// This task, 1..=`count`.
+    pub index: usize,
+    /// Tasks in all.
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let rule = "a shard is K/N, task K of N, 1 <= K <= N";
+        let (k, n) = s.split_once('/').ok_or_else(|| format!("`{s}`: {rule}"))?;
+        let whole = |x: &str| {
+            x.trim()
+                .parse::<usize>()
+                .map_err(|e| format!("`{s}`: {rule} ({e})"))
+        };
+        let (index, count) = (whole(k)?, whole(n)?);
+        if index == 0 || index > count {
+            return Err(format!("`{s}`: {rule}"));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl Shard {
+    /// This task's share of `plan`, in the plan's order.
+    pub fn take<T>(self, plan: Vec<T>) -> Vec<T> {
+        plan.into_iter()
+            .enumerate()
+            .filter(|(i, _)| i % self.count == self.index - 1)
+            .map(|(_, x)| x)
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_shards_of_a_plan_run_each_scenario_once() {
+        let plan: Vec<u64> = (100..117).collect();
+        for count in [1, 2, 3, 17, 20] {
+            let mut all: Vec<u64> = (1..=count)
+                .flat_map(|index| Shard { index, count }.take(plan.clone()))
+                .collect();
+            all.sort_unstable();
+            assert_eq!(all, plan, "{count} shards");
+        }
+        assert_eq!(
+            "2/3".parse::<Shard>().unwrap().take(plan.clone()),
+            [101, 104, 107, 110, 113, 116]
+        );
+    }
+
+    #[test]
+    fn a_shard_out_of_its_range_is_refused_with_the_rule() {
+        assert_eq!("4/4".parse(), Ok(Shard { index: 4, count: 4 }));
+        for bad in ["0/4", "5/4", "1/0", "3", "a/4", "-1/4", ""] {
+            let err = bad.parse::<Shard>().unwrap_err();
+            assert!(err.contains("K/N") && err.contains(bad), "{bad}: {err}");
+        }
+    }
 
     #[test]
     fn every_item_runs_once_and_the_results_keep_the_items_order() {

@@ -68,6 +68,19 @@ struct Cli {
     /// sweep's false names come from. Give the sweep an OUT of its own.
     #[arg(long, value_delimiter = ',', requires = "literature")]
     literature_without: Vec<String>,
+    /// Only task K of N's share of the sweep, `K/N` (a job array's task,
+    /// e.g. `$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`): the sessions
+    /// at places K, K + N, ... of the plan. A shard keeps its results in
+    /// OUT/results and writes no matrix; the same command without
+    /// --shard (and with --kept-only) then merges them (docs/rig.md, "On
+    /// a cluster").
+    #[arg(long)]
+    shard: Option<finrs_rig::runner::Shard>,
+    /// Diagnose nothing: every session must have a kept result in
+    /// OUT/results, else the sweep stops naming the seeds without one
+    /// (a merge of shards that all finished).
+    #[arg(long, conflicts_with_all = ["fresh", "shard"])]
+    kept_only: bool,
 }
 
 /// What `finrs diagnose` said of one session, as kept in OUT/results so
@@ -335,6 +348,25 @@ fn main() -> anyhow::Result<()> {
     if !cli.only.is_empty() {
         scenarios.retain(|x| cli.only.contains(&x.seed));
     }
+    if let Some(shard) = cli.shard {
+        scenarios = shard.take(scenarios);
+    }
+    if cli.kept_only {
+        let missing: Vec<u64> = scenarios
+            .iter()
+            .filter(|s| !matches!(kept(&cli, s), Ok(Some(_))))
+            .map(|s| s.seed)
+            .collect();
+        anyhow::ensure!(
+            missing.is_empty(),
+            "--kept-only: {} of {} sessions have no kept result of their row in {}: seeds {:?}{}",
+            missing.len(),
+            scenarios.len(),
+            cli.out.join("results").display(),
+            &missing[..missing.len().min(20)],
+            if missing.len() > 20 { " and more" } else { "" }
+        );
+    }
     let outcomes: Vec<Outcome> = each_session(&scenarios, cli.run.jobs, |s| {
         let o = one(&cli, s)?;
         eprintln!(
@@ -348,6 +380,17 @@ fn main() -> anyhow::Result<()> {
         );
         Ok(o)
     });
+    if let Some(shard) = cli.shard {
+        println!(
+            "shard {}/{}: {} of {} sessions kept in {}; the same command without --shard, with --kept-only, merges the shards",
+            shard.index,
+            shard.count,
+            outcomes.len(),
+            scenarios.len(),
+            cli.out.join("results").display()
+        );
+        return Ok(());
+    }
     let md = markdown(&outcomes);
     std::fs::write(cli.out.join("sweep.md"), &md)?;
     std::fs::write(cli.out.join("sweep.csv"), csv(&outcomes))?;
