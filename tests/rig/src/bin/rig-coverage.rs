@@ -50,6 +50,21 @@ struct Cli {
     /// enough that its rests still set the fit's weights by noise.
     #[arg(long, default_value_t = 0.05)]
     twin_noise: f64,
+    /// Only task K of N's share of the sessions, `K/N` (a job array's
+    /// task; as `rig-sweep --shard`): its fits kept in OUT/fits, no table
+    /// written. A fit kept there (its JSON and its `.seconds`) is not run
+    /// again by a later run on the same OUT without --fresh.
+    #[arg(long)]
+    shard: Option<finrs_rig::runner::Shard>,
+    /// Fit nothing: every fit must be kept in OUT/fits, else the run stops
+    /// naming the sessions without one (a merge of shards that all
+    /// finished).
+    #[arg(long, conflicts_with_all = ["shard", "fresh"])]
+    kept_only: bool,
+    /// Fit every session again, even those with fits kept in OUT/fits by
+    /// an earlier run (of another `finrs`, say).
+    #[arg(long)]
+    fresh: bool,
 }
 
 /// The structures a session can be fitted with: the one its strip truly
@@ -97,6 +112,39 @@ fn fit(
     Ok((value, seconds))
 }
 
+/// A fit kept in OUT/fits by an earlier run: its JSON and its wall time
+/// (the `.seconds` beside it, written after the JSON, so that a fit
+/// interrupted while writing is not taken as kept).
+fn kept_fit(json: &Path) -> Option<(serde_json::Value, f64)> {
+    let seconds = std::fs::read_to_string(json.with_extension("seconds")).ok()?;
+    let value = serde_json::from_str(&std::fs::read_to_string(json).ok()?).ok()?;
+    Some((value, seconds.trim().parse().ok()?))
+}
+
+/// The kept fit of `dir` into `json`, or a fit run now and kept (`write`
+/// writes the session first); with --kept-only, no fit is run.
+fn fit_or_kept(
+    cli: &Cli,
+    write: &dyn Fn() -> anyhow::Result<()>,
+    dir: &Path,
+    effects: &[&str],
+    json: &Path,
+) -> anyhow::Result<(serde_json::Value, f64)> {
+    if let Some(kept) = kept_fit(json).filter(|_| !cli.fresh) {
+        return Ok(kept);
+    }
+    anyhow::ensure!(
+        !cli.kept_only,
+        "--kept-only: no kept fit {} (with its .seconds)",
+        json.display()
+    );
+    write()?;
+    let (value, seconds) = fit(cli, dir, effects, json)?;
+    std::fs::write(json.with_extension("seconds"), format!("{seconds}\n"))
+        .with_context(|| json.display().to_string())?;
+    Ok((value, seconds))
+}
+
 /// Per structure fitted: its label, the scored intervals and the fit's
 /// wall time, s.
 type Fitted = Vec<(&'static str, Vec<Scored>, f64)>;
@@ -104,11 +152,20 @@ type Fitted = Vec<(&'static str, Vec<Scored>, f64)>;
 /// The session's scored intervals and fit times.
 fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Fitted> {
     let dir = cli.out.join(format!("session-{}", s.seed));
-    write_scenario(s, &dir)?;
     let twin_dir = cli.out.join(format!("twin-{}", s.seed));
-    if s.literature {
-        write_twin(s, &twin_dir, cli.twin_noise)?;
-    }
+    // Written only when a fit must run (kept fits need no session).
+    let write = || -> anyhow::Result<()> {
+        if !dir.is_dir() {
+            write_scenario(s, &dir)?;
+        }
+        Ok(())
+    };
+    let write_twin_once = || -> anyhow::Result<()> {
+        if !twin_dir.is_dir() {
+            write_twin(s, &twin_dir, cli.twin_noise)?;
+        }
+        Ok(())
+    };
     let structure = structure_of(s)?;
     // The off-class rig's own values, the same for every structure.
     let rig_truth = if s.literature {
@@ -128,11 +185,12 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Fitted> {
                 .join("fits")
                 .join(format!("seed-{}-{label}{twin}.json", s.seed))
         };
-        let (value, t) = fit(cli, &dir, effects, &json(""))?;
+        let (value, t) = fit_or_kept(cli, &write, &dir, effects, &json(""))?;
         let scored = match &rig_truth {
             Some(truth) => score(&value, truth)?,
             None => {
-                let (twin, _) = fit(cli, &twin_dir, effects, &json("-twin"))?;
+                let (twin, _) =
+                    fit_or_kept(cli, &write_twin_once, &twin_dir, effects, &json("-twin"))?;
                 score(&value, &pseudo_truth(&twin)?)?
             }
         };
@@ -172,12 +230,15 @@ fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     cli.run.check()?;
     std::fs::create_dir_all(cli.out.join("fits"))?;
-    let scenarios = plan_of(
+    let mut scenarios = plan_of(
         cli.literature,
         cli.null,
         cli.run.first_seed,
         cli.run.sessions,
     );
+    if let Some(shard) = cli.shard {
+        scenarios = shard.take(scenarios);
+    }
     let results: Vec<(Scenario, Fitted)> = each_session(&scenarios, cli.run.jobs, |s| {
         let fitted = one(&cli, s)?;
         let missed: Vec<&str> = fitted[0]
@@ -198,6 +259,23 @@ fn main() -> anyhow::Result<()> {
         );
         Ok((s.clone(), fitted))
     });
+    anyhow::ensure!(
+        !cli.kept_only || results.len() == scenarios.len(),
+        "--kept-only: {} of {} sessions have no kept fits (named above)",
+        scenarios.len() - results.len(),
+        scenarios.len()
+    );
+    if let Some(shard) = cli.shard {
+        println!(
+            "shard {}/{}: {} of {} sessions' fits kept in {}; the same command without --shard, with --kept-only, merges the shards",
+            shard.index,
+            shard.count,
+            results.len(),
+            scenarios.len(),
+            cli.out.join("fits").display()
+        );
+        return Ok(());
+    }
     let mut csv = String::from("seed,row,structure,knob,truth,value,low,high,covered\n");
     let mut fit_csv = String::from("seed,row,structure,seconds\n");
     for (s, fitted) in &results {
