@@ -112,6 +112,17 @@ impl std::str::FromStr for Shard {
 }
 
 impl Shard {
+    /// What a shard's run prints at its end: `done` of its `planned`
+    /// sessions kept in `kept_in`, and how the shards merge.
+    pub fn summary(self, done: usize, planned: usize, kept_in: &std::path::Path) -> String {
+        format!(
+            "shard {}/{}: {done} of {planned} sessions kept in {}; the same command without --shard, with --kept-only, merges the shards",
+            self.index,
+            self.count,
+            kept_in.display()
+        )
+    }
+
     /// This task's share of `plan`, in the plan's order.
     pub fn take<T>(self, plan: Vec<T>) -> Vec<T> {
         plan.into_iter()

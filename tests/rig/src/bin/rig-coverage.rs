@@ -266,13 +266,10 @@ fn main() -> anyhow::Result<()> {
         scenarios.len()
     );
     if let Some(shard) = cli.shard {
+        let kept_in = cli.out.join("fits");
         println!(
-            "shard {}/{}: {} of {} sessions' fits kept in {}; the same command without --shard, with --kept-only, merges the shards",
-            shard.index,
-            shard.count,
-            results.len(),
-            scenarios.len(),
-            cli.out.join("fits").display()
+            "{}",
+            shard.summary(results.len(), scenarios.len(), &kept_in)
         );
         return Ok(());
     }

@@ -381,13 +381,10 @@ fn main() -> anyhow::Result<()> {
         Ok(o)
     });
     if let Some(shard) = cli.shard {
+        let kept_in = cli.out.join("results");
         println!(
-            "shard {}/{}: {} of {} sessions kept in {}; the same command without --shard, with --kept-only, merges the shards",
-            shard.index,
-            shard.count,
-            outcomes.len(),
-            scenarios.len(),
-            cli.out.join("results").display()
+            "{}",
+            shard.summary(outcomes.len(), scenarios.len(), &kept_in)
         );
         return Ok(());
     }
