@@ -38,6 +38,16 @@ pub struct SessionRecording {
 }
 
 impl SessionRecording {
+    /// Its length, s: the time of its last row.
+    pub fn length_s(&self) -> f64 {
+        self.rec.t_s.last().copied().unwrap_or(0.0)
+    }
+
+    /// Session time at its end, s, when its notes give its start.
+    pub fn end_s(&self) -> Option<f64> {
+        self.t_start_s.map(|t| t + self.length_s())
+    }
+
     /// The segments the recording drives (0-based): those whose voltage
     /// reads other than its rest at some sample.
     pub fn driven(&self) -> Vec<usize> {

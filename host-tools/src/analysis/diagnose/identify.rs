@@ -530,8 +530,7 @@ fn scales(session: &Session) -> Scales {
         for &v in r.rec.v_v.as_flat() {
             v_max = v_max.max(v.abs());
         }
-        let end = r.rec.t_s.last().copied().unwrap_or(0.0);
-        span_s = span_s.max(r.t_start_s.unwrap_or(0.0) + end);
+        span_s = span_s.max(r.end_s().unwrap_or(r.length_s()));
     }
     Scales {
         v_max,

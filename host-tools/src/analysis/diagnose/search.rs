@@ -696,7 +696,7 @@ fn span_s(session: &Session, recordings: &[usize]) -> f64 {
         .iter()
         .map(|&i| {
             let r = &session.recordings[i];
-            r.t_start_s.unwrap_or(0.0) + r.rec.t_s.last().copied().unwrap_or(0.0)
+            r.end_s().unwrap_or(r.length_s())
         })
         .fold(0.0, f64::max)
 }

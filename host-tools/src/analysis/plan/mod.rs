@@ -201,10 +201,7 @@ fn session_end_s(session: &Session) -> Option<f64> {
     session
         .recordings
         .iter()
-        .map(|r| {
-            r.t_start_s
-                .map(|t| t + r.rec.t_s.last().copied().unwrap_or(0.0))
-        })
+        .map(|r| r.end_s())
         .try_fold(0.0f64, |end, t| t.map(|t| end.max(t)))
 }
 
