@@ -112,35 +112,39 @@ fn fit(
     Ok((value, seconds))
 }
 
-/// A fit kept in OUT/fits by an earlier run: its JSON and its wall time
-/// (the `.seconds` beside it, written after the JSON, so that a fit
-/// interrupted while writing is not taken as kept).
-fn kept_fit(json: &Path) -> Option<(serde_json::Value, f64)> {
-    let seconds = std::fs::read_to_string(json.with_extension("seconds")).ok()?;
-    let value = serde_json::from_str(&std::fs::read_to_string(json).ok()?).ok()?;
-    Some((value, seconds.trim().parse().ok()?))
+/// The wall time beside a fit's JSON, written after it: a fit
+/// interrupted while writing has none, and is not taken as kept.
+fn seconds_path(json: &Path) -> PathBuf {
+    json.with_extension("seconds")
 }
 
-/// The kept fit of `dir` into `json`, or a fit run now and kept (`write`
-/// writes the session first); with --kept-only, no fit is run.
+/// Whether an earlier run kept the fit `json` (and --fresh does not ask
+/// for it again).
+fn is_kept(cli: &Cli, json: &Path) -> bool {
+    !cli.fresh && seconds_path(json).is_file()
+}
+
+/// The fit kept in `json` by an earlier run, or one of `dir` run now and
+/// kept.
 fn fit_or_kept(
     cli: &Cli,
-    write: &dyn Fn() -> anyhow::Result<()>,
     dir: &Path,
     effects: &[&str],
     json: &Path,
 ) -> anyhow::Result<(serde_json::Value, f64)> {
-    if let Some(kept) = kept_fit(json).filter(|_| !cli.fresh) {
-        return Ok(kept);
+    if is_kept(cli, json) {
+        let read = || -> anyhow::Result<(serde_json::Value, f64)> {
+            let value = serde_json::from_str(&std::fs::read_to_string(json)?)?;
+            let seconds = std::fs::read_to_string(seconds_path(json))?
+                .trim()
+                .parse()?;
+            Ok((value, seconds))
+        };
+        return read()
+            .with_context(|| format!("kept fit {} unreadable (run with --fresh)", json.display()));
     }
-    anyhow::ensure!(
-        !cli.kept_only,
-        "--kept-only: no kept fit {} (with its .seconds)",
-        json.display()
-    );
-    write()?;
     let (value, seconds) = fit(cli, dir, effects, json)?;
-    std::fs::write(json.with_extension("seconds"), format!("{seconds}\n"))
+    std::fs::write(seconds_path(json), format!("{seconds}\n"))
         .with_context(|| json.display().to_string())?;
     Ok((value, seconds))
 }
@@ -153,19 +157,28 @@ type Fitted = Vec<(&'static str, Vec<Scored>, f64)>;
 fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Fitted> {
     let dir = cli.out.join(format!("session-{}", s.seed));
     let twin_dir = cli.out.join(format!("twin-{}", s.seed));
-    // Written only when a fit must run (kept fits need no session).
-    let write = || -> anyhow::Result<()> {
-        if !dir.is_dir() {
-            write_scenario(s, &dir)?;
-        }
-        Ok(())
+    let json = |label: &str, twin: &str| {
+        cli.out
+            .join("fits")
+            .join(format!("seed-{}-{label}{twin}.json", s.seed))
     };
-    let write_twin_once = || -> anyhow::Result<()> {
-        if !twin_dir.is_dir() {
+    let twins: &[&str] = if s.literature { &["", "-twin"] } else { &[""] };
+    // The sessions are written only when some fit must run.
+    let all_kept = structures(s)
+        .iter()
+        .all(|&label| twins.iter().all(|twin| is_kept(cli, &json(label, twin))));
+    if !all_kept {
+        anyhow::ensure!(
+            !cli.kept_only,
+            "--kept-only: seed {}'s fits are not all kept in {}",
+            s.seed,
+            cli.out.join("fits").display()
+        );
+        write_scenario(s, &dir)?;
+        if s.literature {
             write_twin(s, &twin_dir, cli.twin_noise)?;
         }
-        Ok(())
-    };
+    }
     let structure = structure_of(s)?;
     // The off-class rig's own values, the same for every structure.
     let rig_truth = if s.literature {
@@ -180,17 +193,11 @@ fn one(cli: &Cli, s: &Scenario) -> anyhow::Result<Fitted> {
         } else {
             &[]
         };
-        let json = |twin: &str| {
-            cli.out
-                .join("fits")
-                .join(format!("seed-{}-{label}{twin}.json", s.seed))
-        };
-        let (value, t) = fit_or_kept(cli, &write, &dir, effects, &json(""))?;
+        let (value, t) = fit_or_kept(cli, &dir, effects, &json(label, ""))?;
         let scored = match &rig_truth {
             Some(truth) => score(&value, truth)?,
             None => {
-                let (twin, _) =
-                    fit_or_kept(cli, &write_twin_once, &twin_dir, effects, &json("-twin"))?;
+                let (twin, _) = fit_or_kept(cli, &twin_dir, effects, &json(label, "-twin"))?;
                 score(&value, &pseudo_truth(&twin)?)?
             }
         };
