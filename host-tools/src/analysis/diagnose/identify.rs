@@ -26,7 +26,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::gates::{DELTA_BIC, HOLDOUT_RSS_GAIN};
+use super::gates::{rss_per_recording, DELTA_BIC, HOLDOUT_RSS_GAIN};
 use crate::analysis::fit::{
     difference_step, normal, Effect, FitError, FitResult, Fitter, Knob, Space,
 };
@@ -65,7 +65,8 @@ pub struct Identifiability {
     /// absorb, percent.
     pub absorbed_percent: f64,
     /// Remaining held-out signature there, in units of the gate
-    /// (held-out RSS × [`HOLDOUT_RSS_GAIN`]).
+    /// ([`HOLDOUT_RSS_GAIN`] of each held-out recording's RSS, averaged
+    /// over them).
     pub holdout_signature_over_gate: f64,
     /// Other effects whose terms explain at least [`CONFOUNDED_SHARE`] of
     /// this one's remaining signature, with that share in percent.
@@ -204,6 +205,14 @@ struct Rows {
     /// Held out, and a current (the circuit's stage), per residual.
     hold: Vec<bool>,
     current: Vec<bool>,
+    /// Per residual, what its square counts in the held-out gain: one
+    /// over the held-out recordings' count times its recording's RSS at
+    /// the fitted model (0 in training). The search's gain
+    /// ([`holdout_gain`](super::gates::holdout_gain)) is the geometric
+    /// mean of the recordings' RSS ratios; an effect that saves `λᵣ` of
+    /// recording `r`'s `Aᵣ` gains `1 − exp(mean ln(1 − λᵣ/Aᵣ))`, to first
+    /// order `mean λᵣ/Aᵣ`, this weighted sum.
+    hold_weight: Vec<f64>,
 }
 
 /// Identifiability of every effect in `effects` (testable, not in the
@@ -227,26 +236,45 @@ pub fn identify(
     let scales = scales(session);
 
     let base_score = fitter.score(&all, &spec)?;
-    let mut hold_row = Vec::new();
-    let mut current = Vec::new();
-    for c in &base_score.channels {
+    let held = |c: &crate::analysis::fit::ChannelFit| {
         let index = session
             .recordings
             .iter()
             .position(|r| r.name == c.recording)
             .unwrap_or(0);
-        hold_row.extend(std::iter::repeat_n(
-            hold.contains(&index),
-            c.residuals.len(),
-        ));
+        hold.contains(&index)
+    };
+    let mut hold_row = Vec::new();
+    let mut current = Vec::new();
+    for c in &base_score.channels {
+        hold_row.extend(std::iter::repeat_n(held(c), c.residuals.len()));
         current.extend(std::iter::repeat_n(
             matches!(c.channel, Channel::Current(_)),
             c.residuals.len(),
         ));
     }
+    // Each held-out recording's RSS at the fitted model.
+    let hold_rss: Vec<(&str, f64)> = rss_per_recording(&base_score)
+        .into_iter()
+        .filter(|(r, _)| {
+            base_score
+                .channels
+                .iter()
+                .any(|c| c.recording == *r && held(c))
+        })
+        .collect();
+    let mut hold_weight = Vec::with_capacity(hold_row.len());
+    for c in &base_score.channels {
+        let w = match hold_rss.iter().find(|(r, _)| *r == c.recording) {
+            Some(&(_, a)) if a > 0.0 => 1.0 / (hold_rss.len() as f64 * a),
+            _ => 0.0,
+        };
+        hold_weight.extend(std::iter::repeat_n(w, c.residuals.len()));
+    }
     let rows = Rows {
         hold: hold_row,
         current,
+        hold_weight,
     };
     // The weighted residuals of a model over the session, flattened.
     let flat = |spec: &ModelSpec| -> Result<Vec<f64>, FitError> {
@@ -258,12 +286,6 @@ pub fn identify(
         .iter()
         .flat_map(|c| c.residuals.iter().copied())
         .collect();
-    let hold_rss: f64 = base
-        .iter()
-        .zip(&rows.hold)
-        .filter(|(_, &h)| h)
-        .map(|(r, _)| r * r)
-        .sum();
     let m_train = rows.hold.iter().filter(|&&h| !h).count();
 
     // The model's Jacobian, one column per knob (a session's simulation
@@ -286,7 +308,7 @@ pub fn identify(
     let beam: Vec<usize> = (0..space.knobs.len())
         .filter(|&j| !space.knobs[j].is_circuit())
         .collect();
-    let gate_hold = HOLDOUT_RSS_GAIN * hold_rss;
+    let gate_hold = HOLDOUT_RSS_GAIN;
     let ctx = Context {
         flat: &flat,
         base: &base,
@@ -417,11 +439,12 @@ impl Context<'_> {
                 .map(|(x, _)| x * x)
                 .sum()
         };
-        let (d_train, r_train, r_hold) = (
-            energy(&d, false),
-            energy(&remainder, false),
-            energy(&remainder, true),
-        );
+        let r_hold: f64 = remainder
+            .iter()
+            .zip(&self.rows.hold_weight)
+            .map(|(x, w)| w * x * x)
+            .sum();
+        let (d_train, r_train) = (energy(&d, false), energy(&remainder, false));
         let need = (self.gate_hold / r_hold).max(gate_train / r_train);
         Ok(Assessment {
             // A model that overflowed at this strength shows nothing.
@@ -671,6 +694,9 @@ mod tests {
         Rows {
             hold: (0..n).map(|i| i >= hold_from).collect(),
             current: (0..n).map(|i| i < current_below).collect(),
+            hold_weight: (0..n)
+                .map(|i| if i >= hold_from { 1.0 } else { 0.0 })
+                .collect(),
         }
     }
 

@@ -286,7 +286,8 @@ fn candidates(s: &mut String, v: &Verdict) {
     let _ = writeln!(
         s,
         "An effect is accepted when ΔBIC < {} on the training recordings and the \
-         held-out weighted RSS falls by more than {:.0} % and its own term stands \
+         held-out weighted RSS falls by more than {:.0} % (the geometric mean over the \
+         held-out recordings of each one's RSS ratio) and its own term stands \
          out from \"off\" by more than its bar, in standard errors: the first round \
          spends half of {:.0} %, each later round half of what the rounds before it \
          left, shared evenly among the round's candidates and among the tests of an \

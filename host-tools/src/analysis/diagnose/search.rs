@@ -8,7 +8,7 @@ use super::drift;
 use super::drying;
 use super::faults;
 use super::floors::sensor_floors;
-use super::gates::{each_mode_damping_kept, holdout_gain_passes, Bar, DELTA_BIC};
+use super::gates::{each_mode_damping_kept, holdout_gain, holdout_gain_passes, Bar, DELTA_BIC};
 use super::identify;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
@@ -166,7 +166,7 @@ pub fn diagnose(
         .fit
         .effects
         .contains(&Effect::Damping)
-        .then(|| 100.0 * (1.0 - each_hold.rss / found.hold.rss));
+        .then(|| 100.0 * holdout_gain(&each_hold, &found.hold));
     let each_mode_final = each_mode_gain_percent.is_some_and(each_mode_damping_kept);
     let final_hold = if each_mode_final {
         each_hold
@@ -368,7 +368,7 @@ impl Search<'_> {
                 candidate.passed &= passed
                     .iter()
                     .filter(|p| p.0.len() == 1 && m.contains(&p.0[0]))
-                    .all(|p| holdout_gain_passes(1.0 - score.rss / p.2.rss));
+                    .all(|p| holdout_gain_passes(holdout_gain(&score, &p.2)));
                 if candidate.passed {
                     passed.push((m, fit, score));
                 }
@@ -538,7 +538,7 @@ impl Search<'_> {
     ) -> Candidate {
         let ((fit, score), (base_fit, base_hold)) = (with, without);
         let delta_bic = fit.bic - base_fit.bic;
-        let rss_gain = 1.0 - score.rss / base_hold.rss;
+        let rss_gain = holdout_gain(score, base_hold);
         let alone = &self.alone;
         let own_term =
             |&e: &Effect| signature_is_significant(e, fit, &self.fixed, bar, alone, self.span_s);

@@ -219,6 +219,12 @@ const CUBIC_SCALE: f64 = 1e-2;
 const CROSSTALK_SCALE: f64 = 0.1;
 /// Dehydration rate, 1/s.
 const DEHYDRATION_SCALE: f64 = 1e-3;
+/// Highest curvature of the drying law: at `c` the loss falls off as
+/// `(1 + c r t)^(−1/c)`, and a curvature of hundreds puts the whole loss
+/// in a step at the session's start, which is the baseline's transient,
+/// not a strip losing water over minutes (unbounded, literature rig
+/// sessions ran it to 100–1300 and the drying took the start-up).
+const DRYING_CURVATURE_MAX: f64 = 3.0;
 /// Segment deviations: the factor is `e^{s θ}`, so it stays positive and
 /// is exactly 1 at `θ = 0`; a tenth is the rig's and the bench's typical
 /// spread (5 to 15 %).
@@ -411,7 +417,9 @@ impl Space {
                 }
                 Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
                 Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
-                Knob::DryingCurvature => spec.dehydration_curvature = ramp(t, 1.0),
+                Knob::DryingCurvature => {
+                    spec.dehydration_curvature = ramp(t, 1.0).min(DRYING_CURVATURE_MAX)
+                }
                 Knob::SegmentR1(i) => {
                     spec.ext.segment_variation.r1_deviation[*i] = (t * SEGMENT_SCALE).exp_m1()
                 }
@@ -579,5 +587,24 @@ mod tests {
         let space = Space::new(&[], 3, fixed);
         let start = space.spec(&space.start_theta(&fixed));
         assert!((start.params.p_per_s - fixed.params.p_per_s).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_drying_law_bends_no_further_than_its_bound() {
+        let fixed = ModelSpec::baseline(Params::main_m_2006());
+        let space = Space::new(&[Effect::Dehydration], 3, fixed);
+        let at = |c: f64| {
+            let mut theta = space.theta(&fixed);
+            let k = space
+                .knobs
+                .iter()
+                .position(|&k| k == Knob::DryingCurvature)
+                .unwrap();
+            theta[k] = c;
+            space.spec(&theta).dehydration_curvature
+        };
+        assert_eq!(at(-1.0), 0.0);
+        assert_eq!(at(2.0), 2.0);
+        assert_eq!(at(300.0), DRYING_CURVATURE_MAX);
     }
 }
