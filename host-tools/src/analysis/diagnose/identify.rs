@@ -236,40 +236,32 @@ pub fn identify(
     let scales = scales(session);
 
     let base_score = fitter.score(&all, &spec)?;
-    let held = |c: &crate::analysis::fit::ChannelFit| {
+    let held = |recording: &str| {
         let index = session
             .recordings
             .iter()
-            .position(|r| r.name == c.recording)
+            .position(|r| r.name == recording)
             .unwrap_or(0);
         hold.contains(&index)
     };
-    let mut hold_row = Vec::new();
-    let mut current = Vec::new();
-    for c in &base_score.channels {
-        hold_row.extend(std::iter::repeat_n(held(c), c.residuals.len()));
-        current.extend(std::iter::repeat_n(
-            matches!(c.channel, Channel::Current(_)),
-            c.residuals.len(),
-        ));
-    }
     // Each held-out recording's RSS at the fitted model.
     let hold_rss: Vec<(&str, f64)> = rss_per_recording(&base_score)
         .into_iter()
-        .filter(|(r, _)| {
-            base_score
-                .channels
-                .iter()
-                .any(|c| c.recording == *r && held(c))
-        })
+        .filter(|(r, _)| held(r))
         .collect();
-    let mut hold_weight = Vec::with_capacity(hold_row.len());
+    let (mut hold_row, mut current, mut hold_weight) = (Vec::new(), Vec::new(), Vec::new());
     for c in &base_score.channels {
+        let n = c.residuals.len();
+        hold_row.extend(std::iter::repeat_n(held(&c.recording), n));
+        current.extend(std::iter::repeat_n(
+            matches!(c.channel, Channel::Current(_)),
+            n,
+        ));
         let w = match hold_rss.iter().find(|(r, _)| *r == c.recording) {
             Some(&(_, a)) if a > 0.0 => 1.0 / (hold_rss.len() as f64 * a),
             _ => 0.0,
         };
-        hold_weight.extend(std::iter::repeat_n(w, c.residuals.len()));
+        hold_weight.extend(std::iter::repeat_n(w, n));
     }
     let rows = Rows {
         hold: hold_row,

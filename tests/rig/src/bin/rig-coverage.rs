@@ -106,10 +106,13 @@ fn fit(
         effects.join(","),
         String::from_utf8_lossy(&run.stderr).trim()
     );
+    Ok((read_json(json)?, seconds))
+}
+
+/// A fit's JSON as `finrs fit --json` wrote it.
+fn read_json(json: &Path) -> anyhow::Result<serde_json::Value> {
     let text = std::fs::read_to_string(json).with_context(|| json.display().to_string())?;
-    let value =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", json.display()))?;
-    Ok((value, seconds))
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", json.display()))
 }
 
 /// The wall time beside a fit's JSON, written after it: a fit
@@ -134,7 +137,7 @@ fn fit_or_kept(
 ) -> anyhow::Result<(serde_json::Value, f64)> {
     if is_kept(cli, json) {
         let read = || -> anyhow::Result<(serde_json::Value, f64)> {
-            let value = serde_json::from_str(&std::fs::read_to_string(json)?)?;
+            let value = read_json(json)?;
             let seconds = std::fs::read_to_string(seconds_path(json))?
                 .trim()
                 .parse()?;
