@@ -113,7 +113,7 @@ fn floor_clamped(x: f32, max: u16) -> u16 {
 /// off-time a coasting bridge leaves the strip open, and the strip, mostly
 /// a capacitor, keeps its charge, so its terminal voltage averages well
 /// above the duty × supply (a host simulation of the switching,
-/// `tests/bridge_decay.rs`, measures both).
+/// `firmware/support/tests/bridge_decay.rs`, measures both).
 ///
 /// [`off`](SegmentOutput::off) opens both outputs (both inputs low: the
 /// state the driver's pull-downs give an unprogrammed or reset MCU, and the

@@ -412,9 +412,28 @@ impl Io {
             }
         }
         self.plant.step(&mut self.x, &applied);
-        // What the shunts read at the next sample: the new state under the
-        // voltage still applied.
-        self.currents_a = self.plant.currents_a(&self.x, &applied);
+        self.currents_a = self.shunt_readings(dry);
+    }
+
+    /// What the shunts read at the next sample: the new state under the
+    /// voltage still applied. A bridge applies it as the supply for the
+    /// duty `|v| / V_s` of each period and 0 V for the rest, so its shunt
+    /// reads the two currents through the shunt's filter at the segment's
+    /// phase ([`sim::SHUNT_SAMPLE_PHASE`]); their mean is the current
+    /// under `v` (the plant's circuit is linear in it). A DAC segment's
+    /// voltage is held, and so is its current.
+    fn shunt_readings(&self, dry: f32) -> [f32; N] {
+        use finrs_firmware_support::config::{BRIDGE_SUPPLY_V, DAC_SEGMENTS, SHUNT_FILTER};
+        let phase = core::array::from_fn(|i| sim::SHUNT_SAMPLE_PHASE[i]);
+        // The plant's currents under `u`, dried as its voltages.
+        let currents_a = |u: &[f32; N]| self.plant.currents_a(&self.x, &u.map(|u| dry * u));
+        let v = self.segments.map(|s| s.v);
+        let mut read = SHUNT_FILTER.bridge_readings_a(&v, BRIDGE_SUPPLY_V, &phase, currents_a);
+        let held = currents_a(&v);
+        for i in DAC_SEGMENTS.into_iter().flatten() {
+            read[i] = held[i];
+        }
+        read
     }
 
     /// The force on the load cell: the blocked strip's, none when the

@@ -76,7 +76,7 @@ use stm32f4xx_hal::{
 
 use super::Parts;
 use crate::config::{
-    BRIDGE_SUPPLY_V, DAC_GAIN, DAC_SEGMENTS, DAC_VREF_V, DAC_ZERO_CODE, N, SAMPLE_HZ,
+    BRIDGE_SUPPLY_V, DAC_GAIN, DAC_SEGMENTS, DAC_VREF_V, DAC_ZERO_CODE, N, PWM_HZ, SAMPLE_HZ,
 };
 use crate::{Mono, SYSCLK_HZ};
 use finrs_firmware_support::calibration_store::{self, BOARD_REGION};
@@ -89,11 +89,6 @@ use finrs_firmware_support::supply::{self, Supplies, SupplyError, SupplyMonitor}
 use finrs_firmware_support::sync::SyncMark;
 use finrs_frames::Calibration;
 use stm32f4xx_hal::flash::{FlashExt, LockedFlash, UnlockedFlash};
-
-/// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
-/// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
-/// TIM2/TIM4 at 84 MHz 3360 (11.7 bits).
-pub const PWM_HZ: u32 = 25_000;
 
 /// Watchdog period, ms: 20 sample periods, far beyond any normal jitter,
 /// short enough that a hung firmware stops driving within a blink.

@@ -4,6 +4,8 @@
 use finrs_controller::{Calibration, Config};
 use finrs_drive::{LimitError, Limits};
 
+use crate::shunt_filter::ShuntFilter;
+
 /// Segments driven: `FINRS_SEGMENTS` at build time (1..=8), 3 if unset.
 /// rustc records the variable, so cargo rebuilds when it changes; a bad
 /// value stops the build naming the variable and the rule.
@@ -154,6 +156,22 @@ pub const AMPS_PER_COUNT: f32 = 2.5e-4;
 
 /// Shunt reading at zero current, counts (bipolar amplifier at mid-scale).
 pub const CURRENT_ZERO_COUNTS: u16 = 2048;
+
+/// H-bridge PWM frequency, Hz: above the audible range and the 20 kHz the
+/// issue asks; TIM1/TIM8 at 168 MHz still give 6720 steps (12.7 bits),
+/// TIM2/TIM4 at 84 MHz 3360 (11.7 bits).
+pub const PWM_HZ: u32 = 25_000;
+
+/// The shunt amplifier's output filter, two buffered RC sections of 1.6 kΩ
+/// and 100 nF (corner 995 Hz, 1 kHz here): the bridge's two-level current
+/// reaches the ADC as its mean within 0.16 % of the jump between its
+/// levels at any phase (0.06 mA on the seed's strip, a quarter of a
+/// count), and a current that moves slowly reads 0.32 ms late
+/// ([`ShuntFilter::lag_s`]). See [`crate::shunt_filter`].
+pub const SHUNT_FILTER: ShuntFilter = ShuntFilter {
+    corner_hz: 1_000.0,
+    pwm_hz: PWM_HZ as f32,
+};
 
 /// The calibration a board uses until one is stored in its flash
 /// (`finrs calibrate`): the nominal scale, every shunt at its nominal zero.

@@ -20,6 +20,8 @@
 //!   checked before anything drives.
 //! - [`sync`]: the camera's sync mark, lit when a drive starts after a
 //!   rest.
+//! - [`shunt_filter`]: the shunt amplifier's low-pass, and the mean
+//!   it makes of the bridge's two-level current.
 //! - [`sim`]: the QEMU board's simulated plant, as numbers (run length,
 //!   load-cell offset and noise, the injected fault).
 //! - [`watermark`]: the stack high-water mark's paint pattern and scan.
@@ -37,6 +39,7 @@ pub mod model_store;
 pub mod pins;
 pub mod record_log;
 pub mod reset;
+pub mod shunt_filter;
 pub mod sim;
 pub mod supply;
 pub mod sync;

@@ -23,6 +23,13 @@ pub const LOAD_CELL_NOISE_COUNTS: f32 = 2.0;
 /// fit of the currents saw that pattern as an electrochemical nonlinearity.
 pub const SHUNT_NOISE_COUNTS: f32 = 1.0;
 
+/// Where in its PWM period each segment's shunt is converted, a fraction
+/// of the period after its timer's update: fixed, since 1 ms is 25
+/// periods of the same clock, and on the board set by when each timer and
+/// TIM5 started, so arbitrary; the QEMU board's plant spreads them. Read
+/// through the shunt's filter ([`crate::config::SHUNT_FILTER`]).
+pub const SHUNT_SAMPLE_PHASE: [f32; 8] = [0.05, 0.18, 0.31, 0.44, 0.57, 0.70, 0.83, 0.96];
+
 /// The modal damping ratio of the plant built with `plant-damping`: the
 /// virtual bench's hidden effect, within the 0.02 to 0.1 of real strips.
 pub const PLANT_DAMPING_RATIO: f64 = 0.05;

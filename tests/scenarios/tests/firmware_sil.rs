@@ -23,7 +23,8 @@
 //!   the force's range covers a legitimate difference in instruction choice.
 //! - Currents: before the fault, each logged segment current is the host
 //!   plant's current under the voltage applied since the previous tick,
-//!   within `SHUNT_NOISE_COUNTS` and half a count of the shunt's scale (the
+//!   as a bridge's two levels through the shunt's filter read it at the
+//!   segment's phase (`sim::SHUNT_SAMPLE_PHASE`), within `SHUNT_NOISE_COUNTS` and half a count of the shunt's scale (the
 //!   input's noise and the ADC's rounding).
 //! - Fault: the overcurrent injected on segment `INJECT_SEGMENT` from tick
 //!   `INJECT_TICK` on is reported in exactly one Fault frame naming it, no
@@ -530,7 +531,16 @@ fn check_run<const N: usize, const S: usize>() {
     let mut worst_a = 0.0f32;
     for s in &samples {
         if (s.seq as usize) < fault_at {
-            let currents = plant.currents_a(&x, &applied);
+            // A bridge's two levels through the shunt's filter, as the
+            // QEMU board's plant reads them (their mean is the current
+            // under `applied`).
+            let phase: [f32; N] = std::array::from_fn(|i| sim::SHUNT_SAMPLE_PHASE[i]);
+            let currents = config::SHUNT_FILTER.bridge_readings_a(
+                &applied,
+                config::BRIDGE_SUPPLY_V,
+                &phase,
+                |u| plant.currents_a(&x, u),
+            );
             for (i, (&got, want)) in s.currents().iter().zip(currents).enumerate() {
                 let err = (got - want).abs();
                 worst_a = worst_a.max(err);
