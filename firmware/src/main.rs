@@ -54,7 +54,8 @@ mod app {
     use super::*;
     use crate::board::{self, CommandIn, FrameOut, Housekeeping, Io};
     use crate::config::{self, N};
-    use finrs_controller::shaper::{self, Shaper, ELEMENTS};
+    use finrs_controller::model_holder::{Fits, HoldsModel, Pick};
+    use finrs_controller::shaper::{self, ELEMENTS, MAX_SHAPED_SEGMENTS};
     use finrs_controller::{Controller, FaultCode, Identity};
     use finrs_frames::{Command, CommandDecoder, CommandEvent};
     use model_core::state_len;
@@ -63,6 +64,9 @@ mod app {
     const S: usize = state_len(N, ELEMENTS);
     /// The sample time the model's strip is discretised at, s.
     const DT_S: f64 = 1.0 / config::SAMPLE_HZ as f64;
+    /// What this build holds a model in: a shaper, or above
+    /// `MAX_SHAPED_SEGMENTS` nothing that takes RAM for a strip.
+    type Models = <Fits<{ N <= MAX_SHAPED_SEGMENTS }> as Pick<N, ELEMENTS, S>>::Holder;
 
     #[shared]
     struct Shared {
@@ -75,7 +79,7 @@ mod app {
         frames: FrameOut,
         commands: CommandIn,
         housekeeping: Housekeeping,
-        shaper: Shaper<N, ELEMENTS, S>,
+        shaper: Models,
         stored_model: Option<finrs_frames::ModelRecord>,
     }
 
@@ -128,7 +132,7 @@ mod app {
                 frames: parts.frames,
                 commands: parts.commands,
                 housekeeping: parts.housekeeping,
-                shaper: Shaper::new(),
+                shaper: Models::empty(),
                 stored_model: parts.stored_model,
             },
         )
@@ -223,7 +227,7 @@ mod app {
         // lowest priority, not in `init`, where building its strip would
         // hold the first samples back.
         if let Some(record) = cx.local.stored_model.take() {
-            match Shaper::check(&record, DT_S) {
+            match Models::check(&record, DT_S) {
                 Ok(model) => {
                     cx.shared.controller.lock(|c| c.use_stored_model(&record));
                     cx.local.shaper.install(model);

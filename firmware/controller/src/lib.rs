@@ -151,6 +151,7 @@
 
 mod config;
 mod controller;
+pub mod model_holder;
 mod output;
 pub mod shaper;
 pub mod tracker;

@@ -75,6 +75,7 @@ use model_core::{Fixture, HarmonicError, ParamError, StepError, Strip};
 pub use rtic_core::{Exclusive, Mutex};
 
 use crate::controller::{CommandRefused, Controller};
+use crate::model_holder::HoldsModel;
 use crate::tracker::{Drying, HeldStep, Shape, Sine, Target, STEP_UPDATE_S};
 
 /// Elements per segment of the board's model: one, whose cubic shape
@@ -747,15 +748,15 @@ pub enum Shaped {
 /// Hands `c` to the controller behind `lock`, shaping a SetModel or a
 /// SetMotion with `shaper` first, outside the lock (`dt_s` the sample
 /// time). A refused command changes nothing.
-pub fn command<const N: usize, const E: usize, const S: usize>(
+pub fn command<const N: usize, H: HoldsModel<N>>(
     c: Command,
-    shaper: &mut Shaper<N, E, S>,
+    shaper: &mut H,
     dt_s: f64,
     lock: &mut impl Mutex<T = Controller<N>>,
 ) -> Result<Shaped, ShapeRefused> {
     match c {
         Command::SetModel(record) => {
-            let model = Shaper::check(&record, dt_s)?;
+            let model = H::check(&record, dt_s)?;
             lock.lock(|ctl| ctl.model_set(&record))
                 .map_err(ShapeRefused::Controller)?;
             shaper.install(model);
