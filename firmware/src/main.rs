@@ -85,7 +85,9 @@ mod app {
 
     #[init]
     fn init(cx: init::Context) -> (Shared, Local) {
-        // First thing: init's stack use is measured from here.
+        // First thing: the stack's guard, then init's stack use is
+        // measured from here.
+        stack::guard();
         stack::paint_init();
         let mut parts = board::init(cx.core, cx.device);
         let mut controller = match config::controller_config()

@@ -13,11 +13,25 @@
 //!   low-priority housekeeping task, so the second scan sees the running
 //!   tasks alone (with the idle frames below which they run).
 //!
-//! All unsafe code of the measurement is in this file.
+//! The stack's lowest
+//! [`GUARD_BYTES`](finrs_firmware_support::stack_guard::GUARD_BYTES) are its guard
+//! ([`finrs_firmware_support::stack_guard`]), set first thing in `init`
+//! ([`guard`]): an MPU region nothing may access, so that an overflow is a
+//! MemManage fault while there is still RAM to stack it on, and the
+//! fault's handler zeroes the outputs (`board::stack_overflow_stop`)
+//! instead of the core locking up. Painting and scans start above it.
+//!
+//! All unsafe code of the measurement and the guard is in this file.
 
 use core::sync::atomic::{AtomicUsize, Ordering};
 
+use finrs_firmware_support::stack_guard::{
+    mpu_registers, MpuRegisters, MPU_CTRL, SHCSR_MEMFAULTENA,
+};
+
 use crate::watermark::{self, PAINT};
+
+finrs_firmware_support::stack_guard_handler!(crate::board::stack_overflow_stop);
 
 extern "C" {
     /// Top of the stack (initial SP), from cortex-m-rt's link.x or flip-link.
@@ -38,13 +52,49 @@ const CHUNK_WORDS: usize = 256;
 /// Stack use at the end of `init`, bytes (0 until measured).
 static INIT_USED_B: AtomicUsize = AtomicUsize::new(0);
 
-/// The stack's bounds, `(bottom, top)` addresses, 4-aligned.
+/// The guard's MPU registers, for the stack's lowest address.
+fn guard_registers() -> Option<MpuRegisters> {
+    // Only the symbol's address is taken (safe), never its contents.
+    mpu_registers(core::ptr::addr_of!(_stack_end) as u32).ok()
+}
+
+/// The usable stack's bounds, `(bottom, top)` addresses, 4-aligned: from
+/// the guard's top (the stack's bottom if it has none) to the initial SP.
 fn bounds() -> (usize, usize) {
     // Only the symbols' addresses are taken (safe), never their contents.
-    (
-        core::ptr::addr_of!(_stack_end) as usize,
-        core::ptr::addr_of!(_stack_start) as usize,
-    )
+    let bottom = match guard_registers() {
+        Some(r) => r.guard_top as usize,
+        None => core::ptr::addr_of!(_stack_end) as usize,
+    };
+    (bottom, core::ptr::addr_of!(_stack_start) as usize)
+}
+
+/// Makes the stack's lowest guard bytes the MPU's region 0, no access,
+/// enables the MPU (the default map elsewhere, off in HardFault and NMI)
+/// and the MemManage fault; call first thing in `init`, while the SP is
+/// far above the guard. A stack too close to the address space's end for
+/// a guard (not one the link makes) is left without.
+pub fn guard() {
+    let Some(r) = guard_registers() else {
+        return;
+    };
+    // SAFETY: the MPU and SCB registers are written once, in `init`, with
+    // interrupts disabled, before anything else uses them; the region
+    // covers only the stack's lowest bytes, below the SP (the initial SP
+    // is at least 25 % of RAM above them, `scripts/check-stack`).
+    #[allow(unsafe_code)]
+    unsafe {
+        let mpu = &*cortex_m::peripheral::MPU::PTR;
+        let scb = &*cortex_m::peripheral::SCB::PTR;
+        mpu.rnr.write(0);
+        mpu.rbar.write(r.rbar);
+        mpu.rasr.write(r.rasr);
+        mpu.ctrl.write(MPU_CTRL);
+        scb.shcsr.modify(|v| v | SHCSR_MEMFAULTENA);
+    }
+    // The new map applies to the accesses after these.
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
 }
 
 /// The stack's size, bytes.

@@ -593,6 +593,13 @@ fn write_host(fd: usize, mut bytes: &[u8]) -> bool {
     true
 }
 
+/// What the stack guard's MemManage handler calls
+/// (`finrs_firmware_support::stack_guard`): the run ends with a failure
+/// code, as a HardFault's does.
+pub extern "C" fn stack_overflow_stop() -> ! {
+    exit(false)
+}
+
 fn exit(ok: bool) -> ! {
     debug::exit(if ok {
         debug::EXIT_SUCCESS

@@ -1103,6 +1103,17 @@ unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
     }
 }
 
+/// What the stack guard's MemManage handler calls, on the stack's top
+/// again (`finrs_firmware_support::stack_guard`): an overflow, so outputs
+/// to zero, then wait for the watchdog; nothing is logged, for the
+/// HardFault's reason.
+pub extern "C" fn stack_overflow_stop() -> ! {
+    zero_outputs_now();
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
 /// The non-maskable interrupt (on this part the clock security system, if
 /// enabled, or a debugger's request): nothing here expects one, so it is a
 /// fault. Outputs to zero, then wait for the watchdog; nothing is logged,

@@ -16,6 +16,8 @@
 //! - [`pins`]: the analogue inputs' pins, ADCs and channels, checked
 //!   against the datasheet.
 //! - [`reset`]: why the core last reset, from RCC_CSR's flags.
+//! - [`stack_guard`]: the MPU region at the stack's bottom that turns an
+//!   overflow into a fault whose handler can still run.
 //! - [`supply`]: VDDA and the bridge supply, measured at boot and
 //!   checked before anything drives.
 //! - [`sync`]: the camera's sync mark, lit when a drive starts after a
@@ -41,6 +43,7 @@ pub mod record_log;
 pub mod reset;
 pub mod shunt_filter;
 pub mod sim;
+pub mod stack_guard;
 pub mod supply;
 pub mod sync;
 pub mod watermark;

@@ -1,6 +1,7 @@
 //! What every QEMU test program shares: the end of a run (semihosting's
 //! exit code), and a fault or panic that ends QEMU with a failure code (a
-//! panic's message on the host's stderr) instead of hanging it.
+//! panic's message, or `HardFault`, on the host's stderr) instead of
+//! hanging it.
 #![no_std]
 #![deny(missing_docs)]
 
@@ -25,6 +26,9 @@ pub fn exit(ok: bool) -> ! {
 #[exception]
 #[allow(unsafe_code)] // cortex-m-rt requires the HardFault handler to be `unsafe fn`
 unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
+    if let Ok(mut err) = hio::hstderr() {
+        let _ = writeln!(err, "HardFault");
+    }
     exit(false)
 }
 

@@ -90,8 +90,33 @@ fn a_store_costs_the_same_however_full_the_log() {
     }
 }
 
-/// Runs `elf` in QEMU, under `-icount shift=S` if given; its stdout.
+/// Runs `elf` in QEMU, under `-icount shift=S` if given; its stdout, the
+/// run having succeeded.
 fn run_qemu(elf: &Path, icount_shift: Option<u32>) -> String {
+    let run = qemu(elf, icount_shift, &[], Duration::from_secs(300));
+    let status = run
+        .status
+        .unwrap_or_else(|| panic!("QEMU did not finish in 300 s"));
+    assert!(
+        status.success(),
+        "QEMU run failed ({status}): {}",
+        run.stderr
+    );
+    run.stdout
+}
+
+/// How a QEMU run ended.
+struct Run {
+    /// `None` if it was stopped at the time limit.
+    status: Option<std::process::ExitStatus>,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `elf` in QEMU, under `-icount shift=S` if given, with `args` on
+/// its semihosting command line after the program's name, for at most
+/// `limit`.
+fn qemu(elf: &Path, icount_shift: Option<u32>, args: &[&str], limit: Duration) -> Run {
     let mut qemu = Command::new("qemu-system-arm");
     qemu.args([
         "-cpu",
@@ -103,30 +128,95 @@ fn run_qemu(elf: &Path, icount_shift: Option<u32>) -> String {
     if let Some(shift) = icount_shift {
         qemu.args(["-icount", &format!("shift={shift},align=off,sleep=off")]);
     }
+    let mut semihosting = "enable=on,target=native,arg=program".to_string();
+    for a in args {
+        semihosting += &format!(",arg={a}");
+    }
     let mut child = qemu
-        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .args(["-semihosting-config", &semihosting, "-kernel"])
         .arg(elf)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("qemu-system-arm is installed (run scripts/setup)");
     let start = Instant::now();
-    loop {
+    let status = loop {
         if let Some(status) = child.try_wait().unwrap() {
-            let out = child.wait_with_output().unwrap();
-            assert!(
-                status.success(),
-                "QEMU run failed ({status}): {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            return String::from_utf8(out.stdout).expect("the program prints UTF-8");
+            break Some(status);
         }
-        if start.elapsed() > Duration::from_secs(300) {
+        if start.elapsed() > limit {
             child.kill().unwrap();
-            panic!("QEMU did not finish in 300 s");
+            break None;
         }
         std::thread::sleep(Duration::from_millis(50));
+    };
+    let out = child.wait_with_output().unwrap();
+    Run {
+        status,
+        stdout: String::from_utf8(out.stdout).expect("the program prints UTF-8"),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
     }
+}
+
+/// A stack overflow on the Cortex-M4F (#50, part 3), `stack_guard`'s
+/// recursion of 1 KiB frames. With the board's guard and handler
+/// (`finrs_firmware_support::stack_guard`), in thread mode as an RTIC
+/// task runs, the MemManage handler is reached on the stack's top again
+/// (where the firmware zeroes the outputs), the fault a data access or
+/// a stacking error in the guard, after tens of KiB of recursion; with
+/// interrupts masked (init, a critical section) the fault escalates to
+/// HardFault, whose handler runs (the MPU is off for it, so the guard is
+/// RAM to stack on). Without the guard, as the board was, the core locks
+/// up (QEMU stops with `Lockup`, or runs on, stopped here after 20 s).
+#[test]
+fn a_stack_overflow_reaches_the_guards_handler() {
+    let elf = build_dir().join("stack_guard");
+    let limit = Duration::from_secs(20);
+
+    let guarded = qemu(&elf, None, &["guarded"], limit);
+    let status = guarded.status.expect("the guarded run ends");
+    assert!(status.success(), "guarded: {status}: {}", guarded.stderr);
+    let f: Vec<u64> = guarded
+        .stdout
+        .trim()
+        .strip_prefix("reached ")
+        .unwrap_or_else(|| panic!("guarded: no handler line in `{}`", guarded.stdout))
+        .split(' ')
+        .map(|w| {
+            let w = w.trim_start_matches("0x");
+            u64::from_str_radix(w, if w.len() == 8 { 16 } else { 10 }).unwrap()
+        })
+        .collect();
+    let (mstkerr, daccviol, depth) = (f[0], f[1], f[3]);
+    eprintln!("guarded: {}", guarded.stdout.trim());
+    assert!(
+        mstkerr == 1 || daccviol == 1,
+        "a MemManage fault of the guard: {f:?}"
+    );
+    assert!(depth > 32, "the recursion used the stack first: {f:?}");
+
+    let masked = qemu(&elf, None, &["masked"], limit);
+    eprintln!("masked: {:?} {}", masked.status, masked.stderr.trim());
+    assert_eq!(
+        masked.status.and_then(|s| s.code()),
+        Some(1),
+        "{}",
+        masked.stderr
+    );
+    assert!(masked.stderr.contains("HardFault"), "{}", masked.stderr);
+    assert!(!masked.stderr.contains("Lockup"), "{}", masked.stderr);
+
+    let unguarded = qemu(&elf, None, &["unguarded"], limit);
+    let first = unguarded.stderr.lines().next().unwrap_or("");
+    eprintln!("unguarded: {:?} {first}", unguarded.status);
+    assert!(
+        unguarded.stdout.is_empty()
+            && (unguarded.status.is_none() || unguarded.stderr.contains("Lockup")),
+        "unguarded: {:?} {} {}",
+        unguarded.status,
+        unguarded.stdout,
+        unguarded.stderr
+    );
 }
 
 /// A line: scenario, sample index, numbers.
