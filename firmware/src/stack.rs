@@ -25,9 +25,7 @@
 
 use core::sync::atomic::{AtomicUsize, Ordering};
 
-use finrs_firmware_support::stack_guard::{
-    mpu_registers, MpuRegisters, MPU_CTRL, SHCSR_MEMFAULTENA,
-};
+use finrs_firmware_support::stack_guard::{self, mpu_registers, MpuRegisters};
 
 use crate::watermark::{self, PAINT};
 
@@ -78,23 +76,13 @@ pub fn guard() {
     let Some(r) = guard_registers() else {
         return;
     };
-    // SAFETY: the MPU and SCB registers are written once, in `init`, with
-    // interrupts disabled, before anything else uses them; the region
-    // covers only the stack's lowest bytes, below the SP (the initial SP
-    // is at least 25 % of RAM above them, `scripts/check-stack`).
+    // SAFETY: called once, in `init`, with interrupts disabled, before
+    // anything else uses the MPU; the initial SP is at least 25 % of RAM
+    // above the guard (`scripts/check-stack`).
     #[allow(unsafe_code)]
     unsafe {
-        let mpu = &*cortex_m::peripheral::MPU::PTR;
-        let scb = &*cortex_m::peripheral::SCB::PTR;
-        mpu.rnr.write(0);
-        mpu.rbar.write(r.rbar);
-        mpu.rasr.write(r.rasr);
-        mpu.ctrl.write(MPU_CTRL);
-        scb.shcsr.modify(|v| v | SHCSR_MEMFAULTENA);
-    }
-    // The new map applies to the accesses after these.
-    cortex_m::asm::dsb();
-    cortex_m::asm::isb();
+        stack_guard::enable(&r)
+    };
 }
 
 /// The stack's size, bytes.

@@ -19,7 +19,6 @@
 //! ```
 
 use core::convert::Infallible;
-use core::marker::PhantomData;
 
 use finrs_drive::Envelope;
 use finrs_frames::{ModelRecord, Motion};
@@ -113,7 +112,7 @@ impl<const N: usize> HoldsModel<N> for Unshaped<N> {
 
 /// Whether a build's segment count is one a model is checked for:
 /// `Fits<{ N <= MAX_SHAPED_SEGMENTS }>`.
-pub struct Fits<const SHAPED: bool>(PhantomData<()>);
+pub struct Fits<const SHAPED: bool>;
 
 /// The holder [`Fits`] picks, for `N` segments of `E` elements (`S` the
 /// strip's state length).

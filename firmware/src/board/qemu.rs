@@ -429,9 +429,11 @@ impl Io {
         let currents_a = |u: &[f32; N]| self.plant.currents_a(&self.x, &u.map(|u| dry * u));
         let v = self.segments.map(|s| s.v);
         let mut read = SHUNT_FILTER.bridge_readings_a(&v, BRIDGE_SUPPLY_V, &phase, currents_a);
-        let held = currents_a(&v);
-        for i in DAC_SEGMENTS.into_iter().flatten() {
-            read[i] = held[i];
+        if DAC_SEGMENTS.iter().any(Option::is_some) {
+            let held = currents_a(&v);
+            for i in DAC_SEGMENTS.into_iter().flatten() {
+                read[i] = held[i];
+            }
         }
         read
     }

@@ -166,8 +166,8 @@ pub const PWM_HZ: u32 = 25_000;
 /// and 100 nF (corner 995 Hz, 1 kHz here): the bridge's two-level current
 /// reaches the ADC as its mean within 0.16 % of the jump between its
 /// levels at any phase (0.06 mA on the seed's strip, a quarter of a
-/// count), and a current that moves slowly reads 0.32 ms late
-/// ([`ShuntFilter::lag_s`]). See [`crate::shunt_filter`].
+/// count), and a current that moves slowly reads `2τ` = 0.32 ms late.
+/// See [`crate::shunt_filter`].
 pub const SHUNT_FILTER: ShuntFilter = ShuntFilter {
     corner_hz: 1_000.0,
     pwm_hz: PWM_HZ as f32,

@@ -48,12 +48,6 @@ impl ShuntFilter {
         1.0 / (2.0 * core::f32::consts::PI * self.corner_hz)
     }
 
-    /// The filter's delay on a signal slow against `f_c`: `2τ`, s. A
-    /// current that relaxes with time constant `τ1` reads `2τ/τ1` low.
-    pub fn lag_s(&self) -> f32 {
-        2.0 * self.tau_s()
-    }
-
     /// The filter's settled output, A, at `phase` (0..1, a fraction of the
     /// PWM period after the timer's update event) when the bridge brakes
     /// (`brake_a`) for the first `1 − duty` of every period and drives

@@ -5,8 +5,8 @@
 //! Without it a stack overflow on the board (flip-link puts the stack at
 //! the bottom of RAM) first touches the reserved addresses below
 //! 0x2000_0000: a BusFault, escalated to HardFault, whose own stacking
-//! faults again, and a fault while entering or running HardFault locks the
-//! core up (ARMv7-M ARM, B1.5.15 "Unrecoverable exception cases"), the
+//! faults again, and a fault while running HardFault locks the core up
+//! (PM0214, 2.4 "Fault handling", "Lockup"), the
 //! outputs driving until the keep-alive lets the bridges sleep. With the
 //! guard an overflow is a MemManage fault (a data access violation, or a
 //! stacking error, MSTKERR, when the exception entry itself ran into the
@@ -87,6 +87,32 @@ pub const fn mpu_registers(stack_bottom: u32) -> Result<MpuRegisters, GuardError
         guard_bottom: bottom,
         guard_top,
     })
+}
+
+/// Makes `r` the MPU's region 0, enables the MPU ([`MPU_CTRL`]) and the
+/// MemManage fault ([`SHCSR_MEMFAULTENA`]), and waits until the new map
+/// applies.
+///
+/// # Safety
+///
+/// Call once, with interrupts disabled, before anything else uses the MPU,
+/// and with the stack pointer above `r.guard_top`: every access to the
+/// guard faults from here on.
+#[cfg(all(target_arch = "arm", target_os = "none"))]
+#[allow(unsafe_code)]
+pub unsafe fn enable(r: &MpuRegisters) {
+    // SAFETY: the caller's contract; the registers are the core's own.
+    unsafe {
+        let mpu = &*cortex_m::peripheral::MPU::PTR;
+        let scb = &*cortex_m::peripheral::SCB::PTR;
+        mpu.rnr.write(0);
+        mpu.rbar.write(r.rbar);
+        mpu.rasr.write(r.rasr);
+        mpu.ctrl.write(MPU_CTRL);
+        scb.shcsr.modify(|v| v | SHCSR_MEMFAULTENA);
+    }
+    cortex_m::asm::dsb();
+    cortex_m::asm::isb();
 }
 
 /// Defines the MemManage handler (the `MemoryManagement` vector

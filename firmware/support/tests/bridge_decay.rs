@@ -23,12 +23,14 @@ use std::rc::Rc;
 
 use embedded_hal::pwm::{ErrorType, SetDutyCycle};
 use finrs_controller::{HBridge, SegmentOutput};
-use finrs_firmware_support::config::{AMPS_PER_COUNT, PWM_HZ, SHUNT_FILTER};
+use finrs_firmware_support::config::{
+    AMPS_PER_COUNT, BRIDGE_SUPPLY_V, MAX_ABS_V, PWM_HZ, SHUNT_FILTER,
+};
 use model_core::Params;
 
-/// The board's bridge supply and limit (firmware/support/src/config.rs).
-const SUPPLY_V: f64 = 5.0;
-const LIMIT_V: f64 = 4.0;
+/// The board's bridge supply and limit, V.
+const SUPPLY_V: f64 = BRIDGE_SUPPLY_V as f64;
+const LIMIT_V: f64 = MAX_ABS_V as f64;
 /// TIM1 at 168 MHz counting to 25 kHz: 6720 steps a period.
 const PWM_STEPS: u16 = (168_000_000 / PWM_HZ) as u16;
 const PERIOD_S: f64 = 1.0 / PWM_HZ as f64;
@@ -157,14 +159,21 @@ fn settle(p: &Params, inputs: Inputs) -> Settled {
     settle_on(p, inputs, SUPPLY_V)
 }
 
-/// [`settle`] behind a driver on `supply_v`.
-fn settle_on(p: &Params, inputs: Inputs, supply_v: f64) -> Settled {
+/// The strip behind a driver on `supply_v`, run from rest under `inputs`
+/// for ten of its slowest time constants.
+fn settled_strip(p: &Params, inputs: Inputs, supply_v: f64) -> Strip {
     let mut strip = Strip::new(p, supply_v);
     let slowest_s = (p.r1_ohm + p.r2_ohm) * p.c_f;
     let periods = (10.0 * slowest_s / PERIOD_S).ceil() as usize;
     for _ in 0..periods {
         strip.period(inputs);
     }
+    strip
+}
+
+/// [`settle`] behind a driver on `supply_v`.
+fn settle_on(p: &Params, inputs: Inputs, supply_v: f64) -> Settled {
+    let mut strip = settled_strip(p, inputs, supply_v);
     let (mut terminal, mut c_sum, mut c_peak) = (0.0, 0.0, 0.0f64);
     let n = 1000;
     for _ in 0..n {
@@ -417,11 +426,7 @@ fn the_shunts_read_the_period_mean_through_the_filter_and_not_without_it() {
     for (name, p) in strips() {
         for v in [0.1f32, 0.5, 1.0, 2.0, -2.0, 3.0, 4.0, -4.0] {
             let inputs = slow_decay(v);
-            let mut strip = Strip::new(&p, SUPPLY_V);
-            let slowest_s = (p.r1_ohm + p.r2_ohm) * p.c_f;
-            for _ in 0..(10.0 * slowest_s / PERIOD_S).ceil() as usize {
-                strip.period(inputs);
-            }
+            let mut strip = settled_strip(&p, inputs, SUPPLY_V);
             // 25 periods: 1 ms, 6 τ of the filter.
             let r = strip.readings(inputs, 25);
             let mut worst_raw_counts = 0.0f64;

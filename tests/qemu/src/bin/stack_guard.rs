@@ -26,7 +26,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::hio;
-use finrs_firmware_support::stack_guard::{mpu_registers, MPU_CTRL, SHCSR_MEMFAULTENA};
+use finrs_firmware_support::stack_guard::{self, mpu_registers};
 use finrs_qemu_tests::exit;
 
 finrs_firmware_support::stack_guard_handler!(overflowed);
@@ -97,20 +97,12 @@ fn main() -> ! {
         let Ok(regs) = mpu_registers(bottom) else {
             exit(false)
         };
-        // SAFETY: region 0 made the guard, then the MPU and the MemManage
-        // fault enabled, as the board's init does; nothing runs on the
-        // guard's addresses (the stack is far above it here).
+        // SAFETY: as the board's init calls it, first and with the stack
+        // far above the guard.
         #[allow(unsafe_code)]
         unsafe {
-            let p = cortex_m::Peripherals::steal();
-            p.MPU.rnr.write(0);
-            p.MPU.rbar.write(regs.rbar);
-            p.MPU.rasr.write(regs.rasr);
-            p.MPU.ctrl.write(MPU_CTRL);
-            p.SCB.shcsr.modify(|v| v | SHCSR_MEMFAULTENA);
-        }
-        cortex_m::asm::dsb();
-        cortex_m::asm::isb();
+            stack_guard::enable(&regs)
+        };
     }
     let r = if mode(b"masked") {
         cortex_m::interrupt::free(|_| recurse(0))
