@@ -1,6 +1,8 @@
 //! `_SEGGER_RTT` is found in an ELF that defines it: this test program
 //! defines one, as a firmware built with RTT does.
 
+#![cfg(feature = "probe")]
+
 /// Stands in for the firmware's RTT control block.
 #[no_mangle]
 #[used]

@@ -36,6 +36,9 @@ impl TargetError {
 /// Why finding the probe, attaching, or a bounded call failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ProbeError {
+    /// This `finrs` was built without the probe-rs library.
+    #[error("this finrs was built without its `probe` feature (`--no-default-features`), so it cannot open a debug probe: build it with its default features, `cargo build --release -p finrs`")]
+    NotBuilt,
     /// A probe selector that is not `VID:PID[:SERIAL]` in hex.
     #[error("{text:?}: expected VID:PID[:SERIAL] in hex")]
     Selector {

@@ -10,6 +10,16 @@ use std::time::{Duration, Instant};
 use super::*;
 use crate::link::causes::with_causes;
 
+/// The ID at the start of an RTT control block, as the firmware's RTT
+/// writes it once running.
+const RTT_ID: [u8; RTT_ID_LEN] = *b"SEGGER RTT\0\0\0\0\0\0";
+
+#[cfg(feature = "probe")]
+#[test]
+fn the_fakes_rtt_id_is_probe_rs_s() {
+    assert_eq!(RTT_ID, probe_rs::rtt::Rtt::RTT_ID);
+}
+
 /// Where the fake firmware's `_SEGGER_RTT` is (the real release build's).
 pub(crate) const RTT_AT: u64 = 0x2001_d970;
 
@@ -68,7 +78,7 @@ impl FakeTarget {
             write: Act::Answer,
             room: usize::MAX,
             received: Arc::default(),
-            id: probe_rs::rtt::Rtt::RTT_ID,
+            id: RTT_ID,
             init_after: Some(0),
             running: true,
             attempts: 0,
@@ -126,10 +136,10 @@ impl Target for FakeTarget {
             Act::Fail => return Err(TargetError::new("probe error")),
         }
         if self.running && self.init_after.is_some_and(|k| self.attempts >= k) {
-            self.id = probe_rs::rtt::Rtt::RTT_ID;
+            self.id = RTT_ID;
         }
         self.attempts += 1;
-        if address != Some(RTT_AT) || self.id != probe_rs::rtt::Rtt::RTT_ID {
+        if address != Some(RTT_AT) || self.id != RTT_ID {
             return Err(TargetError::new("control block not found"));
         }
         let new = self.init_after.is_some_and(|k| self.attempts > k);
