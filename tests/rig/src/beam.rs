@@ -250,6 +250,11 @@ impl Beam {
         (w, theta)
     }
 
+    /// Slope `θ` at arc length `s` of the small-deflection field.
+    pub fn slope(&self, q: &DVector<f64>, s_m: f64) -> f64 {
+        self.field(q, s_m).1
+    }
+
     /// Position of the point at arc length `s` relative to where it rests:
     /// `(along, across)`. Small deflection: `(0, w)`. Arcs: the slope field
     /// integrated as `x' = cos θ`, `y' = sin θ` (Simpson, 16 panels an

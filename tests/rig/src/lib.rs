@@ -29,9 +29,10 @@
 //!
 //! The *literature* strip ([`literature`]) is the one the fit does not
 //! share: electrodes as resistive lines, electrolysis above its onset, a
-//! viscoelastic relaxation spectrum, drying by water content, metadata
-//! measured a few percent off; with a protocol drawn per session
-//! ([`protocols`]) and each departure over a range of strengths.
+//! viscoelastic relaxation spectrum, drying by water content, a free strip
+//! of large rotation ([`rotation`]), metadata measured a few percent off;
+//! with a protocol drawn per session ([`protocols`]) and each departure
+//! over a range of strengths.
 //!
 //! ```no_run
 //! use rand::SeedableRng;
@@ -55,6 +56,7 @@ pub mod lab;
 pub mod lab_session;
 pub mod literature;
 pub mod protocols;
+pub mod rotation;
 pub mod runner;
 pub mod sample;
 pub mod session;

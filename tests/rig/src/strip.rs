@@ -16,6 +16,7 @@ use nalgebra::{DVector, Matrix4};
 
 use crate::beam::{Beam, Tip};
 use crate::literature::{Lines, ViscoStep};
+use crate::rotation::{Rotation, MAX_OMEGA_H};
 use crate::sample::{Hidden, Sample, WATER_KG_M3};
 
 /// Sub-steps per DAQ row.
@@ -340,6 +341,14 @@ impl Stepper {
         }
     }
 
+    /// `η̈` at `[η, η̇/ω, s..]` under modal force `f`, unit mass.
+    fn acceleration(&self, x: &[f64], f: f64, omega: f64, zeta: f64) -> f64 {
+        match self {
+            Stepper::Modal(_) => f - omega * omega * x[0] - 2.0 * zeta * omega * omega * x[1],
+            Stepper::Visco(v) => f - omega * omega * v.elastic(x),
+        }
+    }
+
     fn advance(&self, x: &mut [f64], f0: f64, slope: f64) {
         match self {
             Stepper::Modal(s) => {
@@ -578,6 +587,23 @@ fn run_with<E: Electrical>(
             .map(|j| c * if j + 1 == beam.elements { 0.5 } else { 1.0 } * beam.le_m)
             .collect::<Vec<f64>>()
     });
+    // The literature strip's large deflection, free: its low modes'
+    // inertia with the slope field taken whole (`rotation`); the modes
+    // quick for the sub-step keep the linear inertia.
+    let rotation = (!held && hidden.arcs && hidden.literature.is_some()).then(|| {
+        let slow = dynamic
+            .iter()
+            .take_while(|&&k| beam.omega[k] * h <= MAX_OMEGA_H)
+            .count();
+        Rotation::new(&beam, &dynamic[..slow], mass)
+    });
+    let turning = rotation.as_ref().map_or(0, Rotation::modes);
+    let (mut eta, mut eta_d, mut a_lin, mut turn) = (
+        vec![0.0; turning],
+        vec![0.0; turning],
+        vec![0.0; turning],
+        vec![0.0; turning],
+    );
     let carried = start.is_some();
     let mut x = start.unwrap_or_else(|| elec.rest(n));
     // Each dynamic mode's `[η, η̇/ω]` and its spectrum's terms.
@@ -700,13 +726,24 @@ fn run_with<E: Electrical>(
             // The curl at the sub-step's ends, linear between them as the
             // electrics' moment is.
             let curl = lab.curl_nm.map(|_| (curl_at(t0), curl_at(t0 + h)));
-            for (j, &k) in dynamic.iter().enumerate() {
-                let mut f0 = gain * modal_force(&u0, k) + drag_modal[j];
-                let mut f1 = gain * modal_force(&u1, k) + drag_modal[j];
-                if let Some((c0, c1)) = curl {
-                    f0 += c0 * curl_forcing[j];
-                    f1 += c1 * curl_forcing[j];
+            let force = |j: usize, k: usize, u: &[f64], c: Option<f64>| -> f64 {
+                gain * modal_force(u, k) + drag_modal[j] + c.map_or(0.0, |c| c * curl_forcing[j])
+            };
+            if let Some(rot) = &rotation {
+                // The inertia's share, held over the sub-step as the drag is.
+                for (j, &k) in dynamic[..turning].iter().enumerate() {
+                    let w = beam.omega[k];
+                    eta[j] = xs[j][0];
+                    eta_d[j] = xs[j][1] * w;
+                    let f0 = force(j, k, &u0, curl.map(|c| c.0));
+                    a_lin[j] = steps[j].acceleration(&xs[j], f0, w, zeta(k));
                 }
+                rot.forces(&eta, &eta_d, &a_lin, &mut turn);
+            }
+            for (j, &k) in dynamic.iter().enumerate() {
+                let extra = turn.get(j).copied().unwrap_or(0.0);
+                let f0 = force(j, k, &u0, curl.map(|c| c.0)) + extra;
+                let f1 = force(j, k, &u1, curl.map(|c| c.1)) + extra;
                 steps[j].advance(&mut xs[j], f0, f1 - f0);
             }
         }
