@@ -595,7 +595,10 @@ fn run_with<E: Electrical>(
             .iter()
             .take_while(|&&k| beam.omega[k] * h <= MAX_OMEGA_H)
             .count();
-        Rotation::new(&beam, &dynamic[..slow], mass)
+        let drag = hidden
+            .water
+            .map(|w| 0.5 * WATER_KG_M3 * w.drag_coefficient * width);
+        Rotation::new(&beam, &dynamic[..slow], mass, drag)
     });
     let turning = rotation.as_ref().map_or(0, Rotation::modes);
     let (mut eta, mut eta_d, mut a_lin, mut turn) = (
@@ -701,7 +704,8 @@ fn run_with<E: Electrical>(
             elec.moments(&x, t0, &mut u0);
             elec.step(&mut x, v_row, open, t0, h);
             elec.moments(&x, t0 + h, &mut u1);
-            if let Some(d) = &drag {
+            // A turning strip's drag is the rotation's, normal to it.
+            if let (Some(d), None) = (&drag, &rotation) {
                 // Node velocities from the dynamic modes; drag held over the sub-step.
                 let vel = &shapes_drag
                     * DVector::from_iterator(
