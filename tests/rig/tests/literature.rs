@@ -51,7 +51,15 @@ fn blocked(sample: &Sample, hidden: &Hidden, volts: &Voltages) -> Truth {
     )
 }
 
-fn free_tip(sample: &Sample, hidden: &Hidden, volts: &Voltages, t0_s: f64) -> Vec<f64> {
+/// The free strip's point at arc length `s_m`, `(along, across)` from
+/// where it rests, at every row.
+fn free_point(
+    sample: &Sample,
+    hidden: &Hidden,
+    volts: &Voltages,
+    t0_s: f64,
+    s_m: f64,
+) -> Vec<(f64, f64)> {
     let camera = vec![true; volts.len()];
     let t = run(
         sample,
@@ -62,9 +70,16 @@ fn free_tip(sample: &Sample, hidden: &Hidden, volts: &Voltages, t0_s: f64) -> Ve
         1e-3,
         t0_s,
         &camera,
-        &[0.05],
+        &[s_m],
     );
-    t.points_m[0].iter().map(|p| p.1).collect()
+    t.points_m.into_iter().next().expect("one point asked for")
+}
+
+fn free_tip(sample: &Sample, hidden: &Hidden, volts: &Voltages, t0_s: f64) -> Vec<f64> {
+    free_point(sample, hidden, volts, t0_s, 0.05)
+        .iter()
+        .map(|p| p.1)
+        .collect()
 }
 
 fn last_current(t: &Truth) -> f64 {
@@ -276,19 +291,7 @@ fn a_back_relaxing_strip_ends_bent_the_other_way() {
 /// comes to rest, s (1 kHz rows).
 fn ring_period_s(sample: &Sample, hidden: &Hidden, volts: f64) -> f64 {
     let v = step(volts, 0.1, 1.5);
-    let camera = vec![true; v.len()];
-    let t = run(
-        sample,
-        hidden,
-        MESH,
-        Tip::Free,
-        &v,
-        1e-3,
-        0.0,
-        &camera,
-        &[sample.length_m],
-    );
-    let tip = &t.points_m[0];
+    let tip = free_point(sample, hidden, &v, 0.0, sample.length_m);
     let rest = tip[tip.len() - 10];
     let d: Vec<f64> = tip
         .iter()
@@ -296,12 +299,9 @@ fn ring_period_s(sample: &Sample, hidden: &Hidden, volts: f64) -> f64 {
         .collect();
     // Peaks of the distance from rest are the swing's turning points, each
     // half a period apart; the first is the step's own overshoot.
+    let floor = 1e-3 * d[100..].iter().fold(0.0, |a, &b| f64::max(a, b));
     let peaks: Vec<usize> = (101..v.len() - 1)
-        .filter(|&i| {
-            d[i] > d[i - 1]
-                && d[i] >= d[i + 1]
-                && d[i] > 1e-3 * d[100..].iter().fold(0.0, |a, &b| f64::max(a, b))
-        })
+        .filter(|&i| d[i] > d[i - 1] && d[i] >= d[i + 1] && d[i] > floor)
         .take(4)
         .collect();
     assert_eq!(
