@@ -10,10 +10,11 @@ use probe_rs::probe::{DebugProbeInfo, DebugProbeSelector, Probe};
 use probe_rs::rtt::find_rtt_control_block_in_raw_file;
 use probe_rs::{Permissions, Session};
 
-use super::{
-    attach_rtt, read_elf, write_all, Bounded, ProbeError, ProbeOptions, ProbeTarget, Timeouts,
-    COMMAND_DOWN_CHANNEL,
-};
+use super::error::ProbeError;
+use super::options::{read_elf, ProbeOptions, COMMAND_DOWN_CHANNEL};
+use super::probe_rs_target::ProbeTarget;
+use super::steps::{attach_rtt, write_all};
+use super::worker::{Bounded, Timeouts};
 
 /// Runs `f` on its own thread and waits at most `timeout` for it: the USB
 /// search can block (`probe-rs list` hung in this project's container).

@@ -24,12 +24,10 @@
 //! [`ProbeTarget`] is its probe-rs implementation, and the tests use a fake
 //! target that hangs or fails (no probe is attached where they run).
 
-use std::path::Path;
-use std::time::Duration;
-
 mod error;
 #[cfg(feature = "probe")]
 mod glue;
+mod options;
 #[cfg(feature = "probe")]
 mod probe_rs_target;
 mod steps;
@@ -41,6 +39,10 @@ mod worker;
 pub use error::{ProbeError, TargetError};
 #[cfg(feature = "probe")]
 pub use glue::{attach, connect, open_probe, parse_selector, rtt_address, send};
+pub use options::{
+    read_elf, ProbeOptions, COMMAND_DOWN_CHANNEL, DEFAULT_CHIP, DEFAULT_FLASH_TIMEOUT,
+    DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL,
+};
 #[cfg(feature = "probe")]
 pub use probe_rs_target::ProbeTarget;
 pub use steps::{attach_rtt, flash_and_run, write_all, RTT_ID_LEN};
@@ -48,48 +50,6 @@ pub use target::Target;
 #[cfg(not(feature = "probe"))]
 pub use unbuilt::{attach, connect, parse_selector, rtt_address, send, ProbeTarget, Session};
 pub use worker::{Bounded, Timeouts};
-
-/// The chip on the fin's board.
-pub const DEFAULT_CHIP: &str = "STM32F407VGTx";
-
-/// The up channel of the firmware's force stream (channel 0 is defmt).
-pub const FORCE_UP_CHANNEL: usize = 1;
-
-/// The up channel of the firmware's defmt log.
-pub const DEFMT_UP_CHANNEL: usize = 0;
-
-/// The down channel the firmware reads commands from.
-pub const COMMAND_DOWN_CHANNEL: usize = 0;
-
-/// Which probe and chip, and how long to wait for them.
-#[derive(Clone, Debug)]
-pub struct ProbeOptions {
-    /// probe-rs target name, e.g. `STM32F407VGTx`.
-    pub chip: String,
-    /// `VID:PID[:SERIAL]`, when more than one probe is attached.
-    pub probe: Option<String>,
-    /// Longest wait for the probe search, the attach, and each later call
-    /// (reset, RTT attach attempt, read, write).
-    pub timeout: Duration,
-    /// Longest wait for flashing an ELF image.
-    pub flash_timeout: Duration,
-    /// The SWD clock to ask the probe for, kHz (`None`: the probe's
-    /// default). RTT is read through it: a faster clock carries more
-    /// frames per second, a slower one suits long wires.
-    pub speed_khz: Option<u32>,
-}
-
-/// The default bound on flashing: generous, since it only has to catch a
-/// stalled probe, not time a slow erase.
-pub const DEFAULT_FLASH_TIMEOUT: Duration = Duration::from_secs(60);
-
-/// Reads the ELF image at `path`.
-pub fn read_elf(path: &Path) -> Result<Vec<u8>, ProbeError> {
-    std::fs::read(path).map_err(|source| ProbeError::ReadElf {
-        path: path.to_path_buf(),
-        source,
-    })
-}
 
 #[cfg(test)]
 pub(crate) mod tests;

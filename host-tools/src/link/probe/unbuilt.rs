@@ -6,7 +6,10 @@
 use std::convert::Infallible;
 use std::path::Path;
 
-use super::{Bounded, ProbeError, ProbeOptions, Target, TargetError};
+use super::error::{ProbeError, TargetError};
+use super::options::ProbeOptions;
+use super::target::Target;
+use super::worker::Bounded;
 
 /// A probe session, of which this build has none.
 pub enum Session {}
@@ -70,10 +73,10 @@ mod tests {
     #[test]
     fn every_probe_call_says_how_to_build_a_finrs_that_has_one() {
         let opts = ProbeOptions {
-            chip: super::super::DEFAULT_CHIP.to_string(),
+            chip: crate::link::probe::DEFAULT_CHIP.to_string(),
             probe: None,
             timeout: std::time::Duration::from_secs(1),
-            flash_timeout: super::super::DEFAULT_FLASH_TIMEOUT,
+            flash_timeout: crate::link::probe::DEFAULT_FLASH_TIMEOUT,
             speed_khz: None,
         };
         let said = [
