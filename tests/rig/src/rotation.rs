@@ -52,12 +52,16 @@ pub struct Rotation {
     mass_kg_per_m: f64,
     /// `M(0)` on this grid, what stands for the identity.
     m0: DMatrix<f64>,
+    /// The kinematics of the last call, their buffers reused: [`Rotation::forces`]
+    /// runs on every sub-step.
+    scratch: Kinematics,
     /// `½ ρ C_d b` of the fluid's drag, N·s²/m³ (`None`: in air).
     drag: Option<f64>,
 }
 
 /// Kinematics at one configuration: positions' sensitivities and the
 /// velocity term, per grid point.
+#[derive(Default)]
 struct Kinematics {
     /// `J_k(s_g)`, `[k][g]`.
     j: Vec<Vec<(f64, f64)>>,
@@ -77,13 +81,9 @@ impl Rotation {
         let theta = modes
             .iter()
             .map(|&k| {
-                let q = beam.nodal(&DVector::from_fn(beam.omega.len(), |i, _| {
-                    if i == k {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                }));
+                let mut unit = DVector::zeros(beam.omega.len());
+                unit[k] = 1.0;
+                let q = beam.nodal(&unit);
                 (0..points)
                     .map(|g| beam.slope(&q, (g as f64 + 0.5) * ds_m))
                     .collect()
@@ -94,6 +94,7 @@ impl Rotation {
             ds_m,
             mass_kg_per_m,
             m0: DMatrix::zeros(0, 0),
+            scratch: Kinematics::default(),
             drag,
         };
         let rest = r.kinematics(&vec![0.0; modes.len()], &vec![0.0; modes.len()]);
@@ -108,11 +109,22 @@ impl Rotation {
 
     /// `J` and `C` at modal coordinates `eta` and velocities `eta_d`.
     fn kinematics(&self, eta: &[f64], eta_d: &[f64]) -> Kinematics {
+        let mut kin = Kinematics::default();
+        self.fill(eta, eta_d, &mut kin);
+        kin
+    }
+
+    /// [`Rotation::kinematics`] into `kin`'s buffers.
+    fn fill(&self, eta: &[f64], eta_d: &[f64], kin: &mut Kinematics) {
         let (n, points) = (self.theta.len(), self.theta.first().map_or(0, Vec::len));
         let h = self.ds_m;
-        let mut j = vec![vec![(0.0, 0.0); points]; n];
-        let mut c = vec![(0.0, 0.0); points];
-        let mut normal = vec![(0.0, 0.0); points];
+        kin.j.resize_with(n, Vec::new);
+        for row in &mut kin.j {
+            row.resize(points, (0.0, 0.0));
+        }
+        kin.c.resize(points, (0.0, 0.0));
+        kin.n.resize(points, (0.0, 0.0));
+        let Kinematics { j, c, n: normal } = kin;
         // Running integrals to the grid point's start; each point's value
         // adds half its own cell (midpoint rule for the cumulative sums).
         let mut acc_j = vec![(0.0, 0.0); n];
@@ -137,7 +149,12 @@ impl Rotation {
             acc_c.0 += w * cos;
             acc_c.1 += w * sin;
         }
-        Kinematics { j, c, n: normal }
+    }
+
+    /// The mass matrix the forces solve with, `I + M(η) − M(0)`.
+    fn effective_mass(&self, kin: &Kinematics) -> DMatrix<f64> {
+        let n = self.modes();
+        DMatrix::identity(n, n) + self.mass(kin) - &self.m0
     }
 
     /// `M_kl = ∫ μ J_k · J_l ds`.
@@ -157,12 +174,13 @@ impl Rotation {
     /// the linear model's accelerations `a_lin` (unit mass, every force
     /// but the inertia's) into the large-rotation strip's, at coordinates
     /// `eta` and velocities `eta_d`.
-    pub fn forces(&self, eta: &[f64], eta_d: &[f64], a_lin: &[f64], out: &mut [f64]) {
-        let kin = self.kinematics(eta, eta_d);
+    pub fn forces(&mut self, eta: &[f64], eta_d: &[f64], a_lin: &[f64], out: &mut [f64]) {
+        let mut kin = std::mem::take(&mut self.scratch);
+        self.fill(eta, eta_d, &mut kin);
         let n = self.modes();
-        let m = DMatrix::identity(n, n) + self.mass(&kin) - &self.m0;
+        let m = self.effective_mass(&kin);
         let w = self.mass_kg_per_m * self.ds_m;
-        let rhs = DVector::from_fn(n, |k, _| {
+        let mut rhs = DVector::from_fn(n, |k, _| {
             a_lin[k]
                 + w * kin.j[k]
                     .iter()
@@ -170,7 +188,6 @@ impl Rotation {
                     .map(|(a, b)| a.0 * b.0 + a.1 * b.1)
                     .sum::<f64>()
         });
-        let mut rhs = rhs;
         if let Some(drag) = self.drag {
             self.drag_forces(&kin, eta_d, drag, rhs.as_mut_slice());
         }
@@ -181,6 +198,7 @@ impl Rotation {
         for k in 0..n {
             out[k] = acc[k] - a_lin[k];
         }
+        self.scratch = kin;
     }
 
     /// Adds the modal forces of the drag `½ ρ C_d b |v_n| v_n` (its
@@ -225,9 +243,7 @@ impl Rotation {
     /// Kinetic energy `½ η̇ᵀ (I + M(η) − M(0)) η̇`, J: the energy the
     /// forces keep with the modes' own.
     pub fn kinetic_j(&self, eta: &[f64], eta_d: &[f64]) -> f64 {
-        let kin = self.kinematics(eta, eta_d);
-        let n = self.modes();
-        let m = DMatrix::identity(n, n) + self.mass(&kin) - &self.m0;
+        let m = self.effective_mass(&self.kinematics(eta, eta_d));
         let v = DVector::from_column_slice(eta_d);
         0.5 * v.dot(&(m * &v))
     }
@@ -311,7 +327,7 @@ mod tests {
     #[test]
     fn a_strip_that_bends_little_moves_as_the_linear_beam() {
         let (beam, mass, tip_slope) = beam();
-        let rot = Rotation::new(&beam, &[0, 1], mass, None);
+        let mut rot = Rotation::new(&beam, &[0, 1], mass, None);
         // A tip slope of a microradian, moving at a milliradian a second.
         let eta = [1e-6 / tip_slope, 0.0];
         let eta_d = [1e-3 / tip_slope, 0.0];
@@ -330,18 +346,18 @@ mod tests {
     /// the swing's largest distance from the linear beam's first mode.
     fn swing(drag: Option<f64>) -> (f64, f64, f64) {
         let (beam, mass, tip_slope) = beam();
-        let rot = Rotation::new(&beam, &[0, 1, 2], mass, drag);
+        let rot = std::cell::RefCell::new(Rotation::new(&beam, &[0, 1, 2], mass, drag));
         let w = [beam.omega[0], beam.omega[1], beam.omega[2]];
         let energy = |x: &[f64; 6]| -> f64 {
-            rot.kinetic_j(&x[..3], &x[3..])
+            rot.borrow().kinetic_j(&x[..3], &x[3..])
                 + (0..3).map(|k| 0.5 * w[k] * w[k] * x[k] * x[k]).sum::<f64>()
         };
         // The state and the drag's work so far.
         let deriv = |x: &[f64; 7]| -> [f64; 7] {
             let a_lin: Vec<f64> = (0..3).map(|k| -w[k] * w[k] * x[k]).collect();
             let mut f = [0.0; 3];
-            rot.forces(&x[..3], &x[3..6], &a_lin, &mut f);
-            let p = rot.drag_power_w(&x[..3], &x[3..6]);
+            rot.borrow_mut().forces(&x[..3], &x[3..6], &a_lin, &mut f);
+            let p = rot.borrow().drag_power_w(&x[..3], &x[3..6]);
             [
                 x[3],
                 x[4],

@@ -590,7 +590,7 @@ fn run_with<E: Electrical>(
     // The literature strip's large deflection, free: its low modes'
     // inertia with the slope field taken whole (`rotation`); the modes
     // quick for the sub-step keep the linear inertia.
-    let rotation = (!held && hidden.arcs && hidden.literature.is_some()).then(|| {
+    let mut rotation = (!held && hidden.arcs && hidden.literature.is_some()).then(|| {
         let slow = dynamic
             .iter()
             .take_while(|&&k| beam.omega[k] * h <= MAX_OMEGA_H)
@@ -628,6 +628,8 @@ fn run_with<E: Electrical>(
     let modal_force =
         |u: &[f64], k: usize| -> f64 { (0..loads).map(|i| beam.forcing[(k, i)] * u[i]).sum() };
     let mut drag_modal = vec![0.0; dynamic.len()];
+    // Each dynamic mode's force at the sub-step's start.
+    let mut f_start = vec![0.0; dynamic.len()];
     // The curl's modal force per unit moment on every segment.
     let curl_forcing: Vec<f64> = dynamic
         .iter()
@@ -684,9 +686,12 @@ fn run_with<E: Electrical>(
                 for (j, &k) in dynamic.iter().enumerate() {
                     let w = beam.omega[k];
                     full[k] = steps[j].elastic(&xs[j]);
-                    acc[k] = modal_force(&u0, k) + drag_modal[j]
-                        - w * w * full[k]
-                        - 2.0 * zeta(k) * w * w * xs[j][1];
+                    acc[k] = steps[j].acceleration(
+                        &xs[j],
+                        modal_force(&u0, k) + drag_modal[j],
+                        w,
+                        zeta(k),
+                    );
                 }
                 truth.force_n.push(beam.reaction_n(&full, &acc, &u0));
             } else if let Some(k_s) = beam.spring_n_per_m {
@@ -733,20 +738,22 @@ fn run_with<E: Electrical>(
             let force = |j: usize, k: usize, u: &[f64], c: Option<f64>| -> f64 {
                 gain * modal_force(u, k) + drag_modal[j] + c.map_or(0.0, |c| c * curl_forcing[j])
             };
-            if let Some(rot) = &rotation {
+            for (j, &k) in dynamic.iter().enumerate() {
+                f_start[j] = force(j, k, &u0, curl.map(|c| c.0));
+            }
+            if let Some(rot) = &mut rotation {
                 // The inertia's share, held over the sub-step as the drag is.
                 for (j, &k) in dynamic[..turning].iter().enumerate() {
                     let w = beam.omega[k];
                     eta[j] = xs[j][0];
                     eta_d[j] = xs[j][1] * w;
-                    let f0 = force(j, k, &u0, curl.map(|c| c.0));
-                    a_lin[j] = steps[j].acceleration(&xs[j], f0, w, zeta(k));
+                    a_lin[j] = steps[j].acceleration(&xs[j], f_start[j], w, zeta(k));
                 }
                 rot.forces(&eta, &eta_d, &a_lin, &mut turn);
             }
             for (j, &k) in dynamic.iter().enumerate() {
                 let extra = turn.get(j).copied().unwrap_or(0.0);
-                let f0 = force(j, k, &u0, curl.map(|c| c.0)) + extra;
+                let f0 = f_start[j] + extra;
                 let f1 = force(j, k, &u1, curl.map(|c| c.1)) + extra;
                 steps[j].advance(&mut xs[j], f0, f1 - f0);
             }
