@@ -1,7 +1,6 @@
 //! The probe-rs library's side of the link (the `probe` feature): find
 //! and open the probe, attach to the chip, find `_SEGGER_RTT` in an ELF.
 
-use std::path::Path;
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -11,9 +10,8 @@ use probe_rs::rtt::find_rtt_control_block_in_raw_file;
 use probe_rs::{Permissions, Session};
 
 use super::error::ProbeError;
-use super::options::{read_elf, ProbeOptions, COMMAND_DOWN_CHANNEL};
+use super::options::ProbeOptions;
 use super::probe_rs_target::ProbeTarget;
-use super::steps::{attach_rtt, write_all};
 use super::worker::{Bounded, Timeouts};
 
 /// Runs `f` on its own thread and waits at most `timeout` for it: the USB
@@ -162,21 +160,6 @@ pub fn rtt_address(elf_name: &str, elf: &[u8]) -> Result<u64, ProbeError> {
             source: Box::new(e),
         }),
     }
-}
-
-/// Sends `bytes` (encoded commands) to the running firmware's command down
-/// channel: attach without reset, find RTT (at the ELF's `_SEGGER_RTT` if
-/// `elf` is given, else by scanning RAM), write.
-pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> Result<(), ProbeError> {
-    // Read the file first so that a wrong path fails before any USB work.
-    let image = elf.map(read_elf).transpose()?;
-    let address = match (elf, &image) {
-        (Some(p), Some(image)) => Some(rtt_address(&p.display().to_string(), image)?),
-        _ => None,
-    };
-    let mut link = connect(attach(opts)?, opts)?;
-    attach_rtt(&mut link, address, opts.timeout)?;
-    write_all(&mut link, COMMAND_DOWN_CHANNEL, bytes, opts.timeout)
 }
 
 #[cfg(test)]

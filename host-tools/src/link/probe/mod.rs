@@ -38,17 +38,17 @@ mod worker;
 
 pub use error::{ProbeError, TargetError};
 #[cfg(feature = "probe")]
-pub use glue::{attach, connect, open_probe, parse_selector, rtt_address, send};
+pub use glue::{attach, connect, open_probe, parse_selector, rtt_address};
 pub use options::{
     read_elf, ProbeOptions, COMMAND_DOWN_CHANNEL, DEFAULT_CHIP, DEFAULT_FLASH_TIMEOUT,
     DEFMT_UP_CHANNEL, FORCE_UP_CHANNEL,
 };
 #[cfg(feature = "probe")]
 pub use probe_rs_target::ProbeTarget;
-pub use steps::{attach_rtt, flash_and_run, write_all, RTT_ID_LEN};
+pub use steps::{attach_rtt, flash_and_run, send, write_all, RTT_ID_LEN};
 pub use target::Target;
 #[cfg(not(feature = "probe"))]
-pub use unbuilt::{attach, connect, parse_selector, rtt_address, send, ProbeTarget, Session};
+pub use unbuilt::{attach, connect, parse_selector, rtt_address, ProbeTarget, Session};
 pub use worker::{Bounded, Timeouts};
 
 #[cfg(test)]

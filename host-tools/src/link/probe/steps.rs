@@ -1,11 +1,12 @@
 //! Sequences of bounded calls: flash and run without a stale RTT control
 //! block, attach to RTT once the firmware has set it up, write a whole
-//! command to the down channel.
+//! command to the down channel, and send one to a running firmware.
 
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use super::{Bounded, ProbeError, Target};
+use super::options::{read_elf, ProbeOptions, COMMAND_DOWN_CHANNEL};
+use super::{attach, connect, rtt_address, Bounded, ProbeError, Target};
 
 /// Length of the RTT control block's ID (`"SEGGER RTT"` and NULs), bytes.
 pub const RTT_ID_LEN: usize = 16;
@@ -90,4 +91,19 @@ pub fn write_all<T: Target>(
         }
     }
     Ok(())
+}
+
+/// Sends `bytes` (encoded commands) to the running firmware's command down
+/// channel: attach without reset, find RTT (at the ELF's `_SEGGER_RTT` if
+/// `elf` is given, else by scanning RAM), write.
+pub fn send(opts: &ProbeOptions, elf: Option<&Path>, bytes: &[u8]) -> Result<(), ProbeError> {
+    // Read the file first so that a wrong path fails before any USB work.
+    let image = elf.map(read_elf).transpose()?;
+    let address = match (elf, &image) {
+        (Some(p), Some(image)) => Some(rtt_address(&p.display().to_string(), image)?),
+        _ => None,
+    };
+    let mut link = connect(attach(opts)?, opts)?;
+    attach_rtt(&mut link, address, opts.timeout)?;
+    write_all(&mut link, COMMAND_DOWN_CHANNEL, bytes, opts.timeout)
 }

@@ -37,11 +37,6 @@ pub fn rtt_address(_elf_name: &str, _elf: &[u8]) -> Result<u64, ProbeError> {
     Err(ProbeError::NotBuilt)
 }
 
-/// Refuses: this build opens no probe.
-pub fn send(_opts: &ProbeOptions, _elf: Option<&Path>, _bytes: &[u8]) -> Result<(), ProbeError> {
-    Err(ProbeError::NotBuilt)
-}
-
 impl Target for ProbeTarget {
     fn flash(&mut self, _elf: &Path) -> Result<(), TargetError> {
         match self.0 {}
@@ -83,7 +78,9 @@ mod tests {
             attach(&opts).err().map(|e| e.to_string()),
             parse_selector("0483:374b").err().map(|e| e.to_string()),
             rtt_address("fw.elf", b"").err().map(|e| e.to_string()),
-            send(&opts, None, b"x").err().map(|e| e.to_string()),
+            crate::link::probe::send(&opts, None, b"x")
+                .err()
+                .map(|e| e.to_string()),
         ];
         for e in said {
             let e = e.expect("refused");
