@@ -205,7 +205,7 @@ fn beam_stiffness_is_named() {
 fn hydrodynamic_loading_is_named() {
     let spec = sample(Extensions {
         added_mass_kg_per_m: 0.03,
-        drag_n_s_per_m2: 0.05,
+        drag_quadratic_n_s2_per_m3: 10.0,
         ..Extensions::NONE
     });
     let v = verdict_for("water", &spec, 29);

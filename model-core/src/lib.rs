@@ -43,4 +43,6 @@ pub use params::{Laminate, ParamError, Params};
 pub use phasor::Phasor;
 pub use real::Real;
 pub use shape::Shape;
-pub use strip::{state_len, Fixture, Harmonic, HarmonicError, StepError, Strip, TipStep};
+pub use strip::{
+    state_len, Fixture, Harmonic, HarmonicError, StepError, Strip, TipStep, DRAGGED_MODES,
+};

@@ -108,7 +108,18 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     crosstalk: T,
     /// Scale of every moment (1 unless dehydration lowers it).
     moment_gain: T,
+    /// The quadratic drag's `c₂ ℓ h` (N·s³/m²): an interior node's share
+    /// of it over one step (the tip's is half); 0 when off.
+    drag_per_node: T,
+    /// `ωₖ` of the modes the drag acts on, rad/s (0 past them).
+    drag_omega: [T; DRAGGED_MODES],
 }
+
+/// Modes the quadratic drag acts on: the lowest, which carry a swinging
+/// strip's speed. A mode above them is stiff enough that the drag moves
+/// it by next to nothing, and a fixed count keeps the step's solve small
+/// (`4 × 4`) and its stack fixed.
+pub const DRAGGED_MODES: usize = 4;
 
 /// What the modal analysis of the beam gives, in `f64`: only what the
 /// discretisation and the outputs need, so that the beam's matrices do not
@@ -274,6 +285,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             lag: segments.map(|seg| T::from_f64(seg.moment(params).1)),
             crosstalk: T::from_f64(ext.crosstalk),
             moment_gain: T::from_f64(1.0),
+            drag_per_node: T::from_f64(ext.drag_quadratic_n_s2_per_m3 * an.element_m * dt_s),
+            drag_omega: core::array::from_fn(|k| {
+                T::from_f64(if k < an.modes { an.omega[k] } else { 0.0 })
+            }),
         }
     }
 
@@ -460,8 +475,9 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// which [`Strip::new`] discretises: for checks and for export to other
     /// tools. Builds `S × S` arrays, so it is meant for the host.
     ///
-    /// The electrochemical input nonlinearity and the moment gain are not
-    /// part of it (they act on `v` and on the moments).
+    /// The electrochemical input nonlinearity, the moment gain and the
+    /// quadratic drag are not part of it (they act on `v`, on the moments
+    /// and on the velocities after each step).
     pub fn continuous(
         params: &Params,
         ext: &Extensions,
@@ -502,7 +518,8 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     }
 
     /// Advances one sample: `x ← Φ x + Γ v`, with `v` (V per segment) held
-    /// over the step.
+    /// over the step, then (when on) the quadratic drag's implicit step on
+    /// the lowest modes' velocities.
     ///
     /// `Φ` is sparse in a fixed pattern: a mode sees its own pair and the
     /// electrical states; electrical states see only their own segment's.
@@ -548,6 +565,77 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         for (i, (e, &vi)) in elec.chunks_exact_mut(2).zip(v.iter()).enumerate() {
             let next = self.circuit.next(i, [e[0], e[1]], vi);
             e.copy_from_slice(&next);
+        }
+        if self.drag_per_node != T::ZERO {
+            self.quadratic_drag(x);
+        }
+    }
+
+    /// The quadratic drag over the step just taken: `c₂ |vₙ| vₙ` at every
+    /// node, linearly implicit in the speed. With `η̇` the lowest
+    /// [`DRAGGED_MODES`] modes' velocities after the exact linear step and
+    /// `D = Σₙ cₙ |vₙ| ψₙ ψₙᵀ` (`ψₙ` node `n`'s row of the mass-normalised
+    /// modes, `cₙ` its share of `c₂ ℓ h`), the velocities become
+    /// `(I + D)⁻¹ η̇`. `I + D` is symmetric positive definite, so the step
+    /// only ever takes energy out, however fast the strip swings (an
+    /// explicit drag would overshoot and reverse a fast node), and it
+    /// tends to the continuous drag as `h` falls (first order: the drag is
+    /// split from the exact linear step). The held tip's force leaves the
+    /// drag's share out: at a held strip's micrometres per second the
+    /// drag, quadratic in them, is far below the load cell's noise.
+    #[inline(never)]
+    fn quadratic_drag(&self, x: &mut [T; S]) {
+        let m = self.modes.min(DRAGGED_MODES);
+        let dof = Self::DOF;
+        let mut vel = [T::ZERO; DRAGGED_MODES];
+        for k in 0..m {
+            vel[k] = self.drag_omega[k] * x[dof + k];
+        }
+        let mut a = [[T::ZERO; DRAGGED_MODES]; DRAGGED_MODES];
+        for k in 0..m {
+            a[k][k] = T::from_f64(1.0);
+        }
+        let nodes = N * E;
+        let half = T::from_f64(0.5);
+        for (n, row) in rows(&self.dof_from_modal).iter().step_by(2).enumerate() {
+            let psi = &row[..m];
+            let mut v_n = T::ZERO;
+            for k in 0..m {
+                v_n += psi[k] * vel[k];
+            }
+            let speed = if v_n < T::ZERO { -v_n } else { v_n };
+            let mut c = self.drag_per_node * speed;
+            if n + 1 == nodes {
+                c *= half;
+            }
+            for k in 0..m {
+                for l in 0..m {
+                    a[k][l] += c * psi[k] * psi[l];
+                }
+            }
+        }
+        // Gaussian elimination without pivots: `I + D` is symmetric
+        // positive definite, so every pivot is at least 1.
+        for k in 0..m {
+            for r in k + 1..m {
+                let f = a[r][k] / a[k][k];
+                for c in k..m {
+                    let akc = a[k][c];
+                    a[r][c] -= f * akc;
+                }
+                let vk = vel[k];
+                vel[r] -= f * vk;
+            }
+        }
+        for k in (0..m).rev() {
+            let mut sum = vel[k];
+            for c in k + 1..m {
+                sum -= a[k][c] * vel[c];
+            }
+            vel[k] = sum / a[k][k];
+        }
+        for k in 0..m {
+            x[dof + k] = vel[k] / self.drag_omega[k];
         }
     }
 

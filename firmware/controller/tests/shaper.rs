@@ -234,6 +234,22 @@ fn bad_models_and_motions_are_refused_with_their_reason() {
         Err(ShapeRefused::NotInvertible(HarmonicError::Nonlinear { .. }))
     ));
     assert_eq!(shaper.record(), None, "nothing refused is held");
+    // So has one whose water drags as the speed squared, by its field.
+    let mut dragged = model();
+    dragged.extensions.drag_quadratic_n_s2_per_m3 = 10.0;
+    assert_eq!(
+        command(
+            Command::SetModel(ModelRecord::encode(&dragged)),
+            &mut shaper,
+            DT_S,
+            &mut lock
+        )
+        .map(|_| ()),
+        Err(ShapeRefused::NotInvertible(HarmonicError::Nonlinear {
+            field: "drag_quadratic_n_s2_per_m3"
+        }))
+    );
+    assert_eq!(shaper.record(), None, "nothing refused is held");
     command(
         Command::SetModel(ModelRecord::encode(&model())),
         &mut shaper,

@@ -31,12 +31,15 @@ use model_core::{Extensions, ModalDamping, Params, SegmentVariation};
 
 use crate::crc16;
 
-/// The record's layout version, its first byte.
-pub const MODEL_FORMAT: u8 = 1;
+/// The record's layout version, its first byte: 2 since the quadratic
+/// drag's value was appended (a layout-1 record, stored by an older
+/// firmware, is refused by its version, not read with a value missing).
+pub const MODEL_FORMAT: u8 = 2;
 
 /// Values in a record (each an `f32`): the strip's 9 parameters, the
-/// extensions' 48 and the drying's 2, in [`MODEL_FIELD_NAMES`]' order.
-pub const MODEL_FIELDS: usize = 59;
+/// extensions' 48, the drying's 2 and the quadratic drag, in
+/// [`MODEL_FIELD_NAMES`]' order.
+pub const MODEL_FIELDS: usize = 60;
 
 /// Bytes of a [`ModelRecord`]: the layout version u8, the flags u8
 /// (bit 0 back-relaxation, bit 1 large deflection), then
@@ -108,6 +111,7 @@ pub const MODEL_FIELD_NAMES: [&str; MODEL_FIELDS] = [
     "segment_variation.k_deviation[7]",
     "dehydration_per_s",
     "dehydration_curvature",
+    "drag_quadratic_n_s2_per_m3",
 ];
 
 /// A fitted strip: the seed's parameters, the extensions the diagnosis
@@ -244,6 +248,7 @@ fn values(m: &StripModel) -> [f64; MODEL_FIELDS] {
     v[49..57].copy_from_slice(&sv.k_deviation);
     v[57] = m.dehydration_per_s;
     v[58] = m.dehydration_curvature;
+    v[59] = e.drag_quadratic_n_s2_per_m3;
     v
 }
 
@@ -276,6 +281,7 @@ fn from_values(
             },
             added_mass_kg_per_m: v[28],
             drag_n_s_per_m2: v[29],
+            drag_quadratic_n_s2_per_m3: v[59],
             charge_cubic_per_v2: v[30],
             leak_cubic_per_v2: v[31],
             crosstalk: v[32],

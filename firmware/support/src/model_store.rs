@@ -1,7 +1,7 @@
 //! The fitted model's records in flash (`finrs tune`): the same
 //! append-only log as the calibration's ([`crate::record_log`]), in two
 //! sectors of its own, with 256-byte records: `FMOD`, a sequence number,
-//! the [`ModelRecord`] (238 bytes), a CRC-16, zero bytes.
+//! the [`ModelRecord`] (242 bytes), a CRC-16, zero bytes.
 //!
 //! ```
 //! # use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};

@@ -73,6 +73,8 @@ pub struct ExtensionsFile {
     pub added_mass_kg_per_m: f64,
     /// Linear fluid drag per length, N·s/m².
     pub drag_n_s_per_m2: f64,
+    /// Quadratic fluid drag per length, `c₂` in `c₂ |v| v`, N·s²/m³.
+    pub drag_quadratic_n_s2_per_m3: f64,
     /// `a` of the double layer's `v (1 + a v²)`, 1/V².
     pub charge_cubic_per_v2: f64,
     /// `b` of the leak's `v/R2 (1 + b v²)`, 1/V².
@@ -167,6 +169,7 @@ impl ExtensionsFile {
             modal_damping: modal,
             added_mass_kg_per_m: self.added_mass_kg_per_m,
             drag_n_s_per_m2: self.drag_n_s_per_m2,
+            drag_quadratic_n_s2_per_m3: self.drag_quadratic_n_s2_per_m3,
             charge_cubic_per_v2: self.charge_cubic_per_v2,
             leak_cubic_per_v2: self.leak_cubic_per_v2,
             crosstalk: self.crosstalk,
@@ -190,6 +193,7 @@ impl ExtensionsFile {
             modal_damping_blocked: modal_listed(&ext.modal_damping.blocked),
             added_mass_kg_per_m: ext.added_mass_kg_per_m,
             drag_n_s_per_m2: ext.drag_n_s_per_m2,
+            drag_quadratic_n_s2_per_m3: ext.drag_quadratic_n_s2_per_m3,
             charge_cubic_per_v2: ext.charge_cubic_per_v2,
             leak_cubic_per_v2: ext.leak_cubic_per_v2,
             crosstalk: ext.crosstalk,

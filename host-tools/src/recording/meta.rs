@@ -24,6 +24,17 @@ pub enum Medium {
     Water,
 }
 
+impl Medium {
+    /// Density of the medium, kg/m³ (fresh water at room temperature;
+    /// dry air at sea level).
+    pub fn density_kg_per_m3(self) -> f64 {
+        match self {
+            Medium::Air => 1.2,
+            Medium::Water => 1000.0,
+        }
+    }
+}
+
 impl Fixture {
     /// As the format writes it: `free` or `blocked`.
     pub fn name(self) -> &'static str {

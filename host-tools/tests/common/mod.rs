@@ -145,7 +145,11 @@ pub fn write_session_edited(
         let mut rec = drive_recording(&wave, &drive).unwrap();
         rec.meta.dots_s_m = Some(vec![0.01, 0.02, 0.03, 0.04, 0.05]);
         // Only water shows added mass and drag (docs/FORMAT.md).
-        if spec.ext.added_mass_kg_per_m > 0.0 || spec.ext.drag_n_s_per_m2 > 0.0 {
+        let ext = &spec.ext;
+        if ext.added_mass_kg_per_m > 0.0
+            || ext.drag_n_s_per_m2 > 0.0
+            || ext.drag_quadratic_n_s2_per_m3 > 0.0
+        {
             rec.meta.medium = finrs::recording::Medium::Water;
         }
         rec.meta.notes = Some(format!("t_session_start_s = {t_session:.3}; {}", run.name));

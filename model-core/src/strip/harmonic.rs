@@ -332,13 +332,18 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     }
 
     /// Whether the strip has one steady sine at `hz`: a frequency inside
-    /// `(0, Nyquist)` and no electrochemical cubic.
+    /// `(0, Nyquist)`, no electrochemical cubic and no quadratic drag.
     pub(super) fn has_sine_response(&self, hz: f64) -> Result<(), HarmonicError> {
         let nyquist_hz = 0.5 / self.dt_s;
         if !(hz.is_finite() && hz > 0.0 && hz < nyquist_hz) {
             return Err(HarmonicError::Frequency { hz, nyquist_hz });
         }
-        match self.nonlinear_field() {
+        // The quadratic drag damps a large sine more than a small one: no
+        // one transfer function (the held step's static inverse does not
+        // see it).
+        let drag =
+            (self.ext.drag_quadratic_n_s2_per_m3 != 0.0).then_some("drag_quadratic_n_s2_per_m3");
+        match self.nonlinear_field().or(drag) {
             Some(field) => Err(HarmonicError::Nonlinear { field }),
             None => Ok(()),
         }

@@ -9,17 +9,19 @@
 //!   as `K (s + z)/(s + p)` on the charge), unless a back-relaxation branch
 //!   adds a second network that the fitted term only approximates;
 //! - `EI`, the laminate's times the strip's factor;
-//! - each segment's deviations from the first, `factor − 1`.
+//! - each segment's deviations from the first, `factor − 1`;
+//! - in water, the quadratic drag `c₂ = ½ ρ C_d b` (the rig's drag and
+//!   the model's are both `c₂ |v| v` at the nodes).
 //!
 //! Damping is not scored: the off-class strip gives each mode a ratio of
 //! its own, which no single `ζ` of the model is. Nor are the terms whose
-//! rig forms differ from the fitted ones (drag, crosstalk through a lag,
-//! the drying's rate against its own session clock).
+//! rig forms differ from the fitted ones (crosstalk through a lag, the
+//! drying's rate against its own session clock).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::sample::{Hidden, Sample};
+use crate::sample::{Hidden, Sample, WATER_KG_M3};
 
 /// The rig's true value of each knob (named as `finrs fit --json` names
 /// it) that means the same in the rig and in the fitted model.
@@ -40,6 +42,12 @@ pub fn truth(sample: &Sample, hidden: &Hidden) -> BTreeMap<String, f64> {
         "ei_nm2".to_string(),
         sample.laminate_ei_nm2() * hidden.ei_factor.unwrap_or(1.0),
     );
+    if let Some(w) = &hidden.water {
+        t.insert(
+            "drag_quadratic_n_s2_per_m3".to_string(),
+            0.5 * WATER_KG_M3 * w.drag_coefficient * sample.width_m,
+        );
+    }
     if let Some(factors) = &hidden.segment_factors {
         // The first segment is the reference the others deviate from.
         for (i, f) in factors.iter().enumerate().skip(1) {
@@ -275,6 +283,14 @@ mod tests {
         assert!((t["segment_2_r1_deviation"] - 0.1).abs() < 1e-12);
         assert!((t["segment_2_c_deviation"] + 0.1).abs() < 1e-12);
         assert!(!t.contains_key("segment_1_r1_deviation"));
+        assert!(!t.contains_key("drag_quadratic_n_s2_per_m3"), "in air");
+        // In water: ½ ρ C_d b, 10 N·s²/m³ for C_d 2 and 10 mm.
+        hidden.water = Some(crate::sample::Water {
+            added_mass_factor: 1.0,
+            drag_coefficient: 2.0,
+        });
+        let t = truth(&sample(), &hidden);
+        assert!((t["drag_quadratic_n_s2_per_m3"] - 10.0).abs() < 1e-12);
         // A second branch: the network is no longer the model's a, b, p.
         hidden.back_branch = Some((1.5, 3.0));
         let t = truth(&sample(), &hidden);

@@ -31,15 +31,12 @@ use crate::analysis::fit::{
     difference_step, normal, Effect, FitError, FitResult, Fitter, Knob, Space,
 };
 use crate::model::predict::ModelSpec;
-use crate::recording::Channel;
+use crate::recording::{Channel, Medium};
 use crate::session::Session;
 
 /// Share of one effect's remaining signature another's explains above
 /// which the two are reported as confounded.
 pub const CONFOUNDED_SHARE: f64 = 0.5;
-
-/// Water's density, kg/m³.
-const WATER_KG_PER_M3: f64 = 1000.0;
 
 /// What the session could show of one effect.
 #[derive(Clone, Debug, Serialize)]
@@ -158,7 +155,10 @@ impl Probe {
             Effect::BeamStiffness => out.params.ei_nm2 *= 1.0 - s,
             Effect::Damping => out.ext.damping_ratio += s,
             Effect::HydrodynamicLoading => {
-                let plate = WATER_KG_PER_M3 * std::f64::consts::PI * scales.width_m.powi(2) / 4.0;
+                let plate = Medium::Water.density_kg_per_m3()
+                    * std::f64::consts::PI
+                    * scales.width_m.powi(2)
+                    / 4.0;
                 out.ext.added_mass_kg_per_m += s * plate;
             }
             Effect::ElectrochemicalNonlinearity => {

@@ -37,10 +37,10 @@ fn reads_the_mode(e: Effect) -> bool {
 
 /// Where a candidate that moves or damps the beam's first mode starts:
 /// where the model's mode rings at the measured frequency (`EI` for
-/// beam-stiffness, added mass for hydrodynamic loading) and decays at the
-/// measured rate (the constant damping ratio takes all of the missing
-/// ratio; the water's linear drag). Others start at the current
-/// model, their own terms off.
+/// beam-stiffness, added mass for hydrodynamic loading) and, for damping,
+/// decays at the measured rate (the constant damping ratio takes all of
+/// the missing ratio). Others, and the water's quadratic drag, start at
+/// the current model, their own terms off.
 pub fn start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) -> ModelSpec {
     let mut start = *current;
     if !reads_the_mode(e) {
@@ -51,19 +51,21 @@ pub fn start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) 
     };
     // f ∝ √(EI / mass per length).
     let ratio2 = (data.hz / model.hz).powi(2);
-    let missing = (data.damping_ratio - model.damping_ratio).max(0.0);
     match e {
         Effect::BeamStiffness => start.params.ei_nm2 *= ratio2,
         // The constant ratio is the measured ratio itself, at every mode.
-        Effect::Damping => start.ext.damping_ratio += missing,
+        Effect::Damping => {
+            start.ext.damping_ratio += (data.damping_ratio - model.damping_ratio).max(0.0)
+        }
         _ => {
             let mass = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
             start.ext.added_mass_kg_per_m =
                 (mass / ratio2 - start.params.mass_per_length_kg_per_m).max(0.0);
-            // Linear drag d damps as 2ζω = d / (mass with the water's).
-            let w = 2.0 * std::f64::consts::PI * data.hz;
-            let wet = start.params.mass_per_length_kg_per_m + start.ext.added_mass_kg_per_m;
-            start.ext.drag_n_s_per_m2 += 2.0 * missing * w * wet;
+            // The quadratic drag starts off: the held ring moves
+            // micrometres, where it does nothing, so the ring cannot set
+            // it, and started at a plate's of this added mass (c₂ = ½ ρ
+            // C_d b, b from m_a = ρ π b²/4) the fit of a development
+            // session ended with no added mass at 8 times the cost.
         }
     }
     start

@@ -34,8 +34,9 @@ pub enum Knob {
     Beta,
     /// Added mass per length, kg/m (hydrodynamic loading).
     AddedMass,
-    /// Linear drag per length, N·s/m² (hydrodynamic loading).
-    Drag,
+    /// Quadratic drag per length, `c₂` in `c₂ |v| v`, N·s²/m³
+    /// (hydrodynamic loading). The water's linear part is a damping's.
+    QuadraticDrag,
     /// `a` of `v (1 + a v²)`, 1/V² (electrochemical nonlinearity).
     ChargeCubic,
     /// `b` of `v/R2 (1 + b v²)`, 1/V² (electrochemical nonlinearity).
@@ -132,7 +133,7 @@ impl Knob {
             Knob::Zeta
                 | Knob::Beta
                 | Knob::AddedMass
-                | Knob::Drag
+                | Knob::QuadraticDrag
                 | Knob::Dehydration
                 | Knob::DryingCurvature
                 | Knob::FreeMode(_)
@@ -153,7 +154,7 @@ impl Knob {
             Knob::Zeta => "damping_ratio",
             Knob::Beta => "damping_stiffness_s",
             Knob::AddedMass => "added_mass_kg_per_m",
-            Knob::Drag => "drag_n_s_per_m2",
+            Knob::QuadraticDrag => "drag_quadratic_n_s2_per_m3",
             Knob::ChargeCubic => "charge_cubic_per_v2",
             Knob::LeakCubic => "leak_cubic_per_v2",
             Knob::Crosstalk => "crosstalk",
@@ -211,8 +212,9 @@ const ZETA_MAX: f64 = 0.9;
 const BETA_SCALE: f64 = 1e-6;
 /// Added mass, kg/m (the strip itself is about 8e-3).
 const ADDED_MASS_SCALE: f64 = 1e-2;
-/// Drag, N·s/m².
-const DRAG_SCALE: f64 = 1e-2;
+/// Quadratic drag, N·s²/m³ (`½ ρ C_d b`: about 10 for a 10 mm strip in
+/// water).
+const QUADRATIC_DRAG_SCALE: f64 = 10.0;
 /// Cubic electrochemical terms, 1/V².
 const CUBIC_SCALE: f64 = 1e-2;
 /// Crosstalk fraction.
@@ -324,7 +326,7 @@ impl Space {
                 Effect::LargeDeflection | Effect::BackRelaxation => &[],
                 Effect::BeamStiffness => &[Knob::Ei],
                 Effect::Damping => &[Knob::Zeta, Knob::Beta],
-                Effect::HydrodynamicLoading => &[Knob::AddedMass, Knob::Drag],
+                Effect::HydrodynamicLoading => &[Knob::AddedMass, Knob::QuadraticDrag],
                 Effect::ElectrochemicalNonlinearity => &[Knob::ChargeCubic, Knob::LeakCubic],
                 Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
                 Effect::SegmentCrosstalk => &[Knob::Crosstalk],
@@ -408,7 +410,9 @@ impl Space {
                 Knob::Zeta => spec.ext.damping_ratio = damping_ratio(t),
                 Knob::Beta => spec.ext.damping_stiffness_s = ramp(t, BETA_SCALE),
                 Knob::AddedMass => spec.ext.added_mass_kg_per_m = ramp(t, ADDED_MASS_SCALE),
-                Knob::Drag => spec.ext.drag_n_s_per_m2 = ramp(t, DRAG_SCALE),
+                Knob::QuadraticDrag => {
+                    spec.ext.drag_quadratic_n_s2_per_m3 = ramp(t, QUADRATIC_DRAG_SCALE)
+                }
                 Knob::ChargeCubic => {
                     spec.ext.charge_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
                 }
@@ -517,7 +521,7 @@ impl Space {
                 Knob::Zeta => spec.ext.damping_ratio / ZETA_SCALE,
                 Knob::Beta => spec.ext.damping_stiffness_s / BETA_SCALE,
                 Knob::AddedMass => spec.ext.added_mass_kg_per_m / ADDED_MASS_SCALE,
-                Knob::Drag => spec.ext.drag_n_s_per_m2 / DRAG_SCALE,
+                Knob::QuadraticDrag => spec.ext.drag_quadratic_n_s2_per_m3 / QUADRATIC_DRAG_SCALE,
                 Knob::ChargeCubic => spec.ext.charge_cubic_per_v2 / CUBIC_SCALE,
                 Knob::LeakCubic => spec.ext.leak_cubic_per_v2 / CUBIC_SCALE,
                 Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
@@ -545,7 +549,7 @@ impl Space {
             Knob::Zeta => spec.ext.damping_ratio,
             Knob::Beta => spec.ext.damping_stiffness_s,
             Knob::AddedMass => spec.ext.added_mass_kg_per_m,
-            Knob::Drag => spec.ext.drag_n_s_per_m2,
+            Knob::QuadraticDrag => spec.ext.drag_quadratic_n_s2_per_m3,
             Knob::ChargeCubic => spec.ext.charge_cubic_per_v2,
             Knob::LeakCubic => spec.ext.leak_cubic_per_v2,
             Knob::Crosstalk => spec.ext.crosstalk,
