@@ -7,7 +7,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use model_core::{state_len, Fixture, Params, Real, Strip};
+use model_core::{state_len, Extensions, Fixture, Params, Real, Strip};
 
 fn step_one<T: Real, const N: usize, const S: usize>(c: &mut Criterion, label: &str) {
     let strip = Strip::<T, N, 1, S>::new(&Params::main_m_2006(), Fixture::Free, 1e-3).unwrap();
@@ -25,6 +25,33 @@ fn steps(c: &mut Criterion) {
     step_one::<f64, 3, { state_len(3, 1) }>(c, "N=3 f64");
     step_one::<f32, 8, { state_len(8, 1) }>(c, "N=8 f32");
     step_one::<f64, 8, { state_len(8, 1) }>(c, "N=8 f64");
+}
+
+/// One step of the fit's mesh (`E = 4`) in water, without and with the
+/// quadratic drag (its implicit step on the lowest four modes), from a
+/// swinging state.
+fn step_in_water(c: &mut Criterion) {
+    const S: usize = state_len(3, 4);
+    let p = Params::main_m_2006();
+    for (label, c2) in [
+        ("N=3 E=4 f64 water", 0.0),
+        ("N=3 E=4 f64 water, drag", 10.0),
+    ] {
+        let ext = Extensions {
+            added_mass_kg_per_m: 0.06,
+            drag_quadratic_n_s2_per_m3: c2,
+            ..Extensions::NONE
+        };
+        let strip = Strip::<f64, 3, 4, S>::with_extensions(&p, &ext, Fixture::Free, 1e-3).unwrap();
+        let mut x = strip.rest();
+        for _ in 0..50 {
+            strip.step(&mut x, &[2.5; 3]);
+        }
+        let v = [2.5; 3];
+        c.bench_with_input(BenchmarkId::new("step", label), &v, |b, v| {
+            b.iter(|| strip.step(black_box(&mut x), black_box(v)))
+        });
+    }
 }
 
 /// The 1 Hz travelling sine of the example session, 20 s at 1 kHz.
@@ -77,6 +104,6 @@ criterion_group! {
     config = Criterion::default()
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3));
-    targets = steps, run_20s, discretise
+    targets = steps, step_in_water, run_20s, discretise
 }
 criterion_main!(benches);

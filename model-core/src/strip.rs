@@ -113,6 +113,8 @@ pub struct Strip<T, const N: usize, const E: usize, const S: usize> {
     drag_per_node: T,
     /// `ωₖ` of the modes the drag acts on, rad/s (0 past them).
     drag_omega: [T; DRAGGED_MODES],
+    /// `1/ωₖ` of the same, s (0 past them).
+    drag_inv_omega: [T; DRAGGED_MODES],
 }
 
 /// Modes the quadratic drag acts on: the lowest, which carry a swinging
@@ -288,6 +290,9 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
             drag_per_node: T::from_f64(ext.drag_quadratic_n_s2_per_m3 * an.element_m * dt_s),
             drag_omega: core::array::from_fn(|k| {
                 T::from_f64(if k < an.modes { an.omega[k] } else { 0.0 })
+            }),
+            drag_inv_omega: core::array::from_fn(|k| {
+                T::from_f64(if k < an.modes { 1.0 / an.omega[k] } else { 0.0 })
             }),
         }
     }
@@ -585,41 +590,48 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// drag, quadratic in them, is far below the load cell's noise.
     #[inline(never)]
     fn quadratic_drag(&self, x: &mut [T; S]) {
-        let m = self.modes.min(DRAGGED_MODES);
+        const M: usize = DRAGGED_MODES;
         let dof = Self::DOF;
-        let mut vel = [T::ZERO; DRAGGED_MODES];
+        let m = self.modes.min(M);
+        // Every loop runs over all four modes, so that it unrolls: a mode
+        // past the strip's has `ω` 0 here and zero rows, so it reads a
+        // velocity of 0 and adds nothing; only the strip's are written.
+        let mut vel = [T::ZERO; M];
         for k in 0..m {
             vel[k] = self.drag_omega[k] * x[dof + k];
         }
-        let mut a = [[T::ZERO; DRAGGED_MODES]; DRAGGED_MODES];
-        for k in 0..m {
-            a[k][k] = T::from_f64(1.0);
+        let mut a = [[T::ZERO; M]; M];
+        for (k, row) in a.iter_mut().enumerate() {
+            row[k] = T::from_f64(1.0);
         }
         let nodes = N * E;
-        let half = T::from_f64(0.5);
         for (n, row) in rows(&self.dof_from_modal).iter().step_by(2).enumerate() {
-            let psi = &row[..m];
+            let psi: [T; M] = core::array::from_fn(|k| row[k]);
             let mut v_n = T::ZERO;
-            for k in 0..m {
+            for k in 0..M {
                 v_n += psi[k] * vel[k];
             }
             let speed = if v_n < T::ZERO { -v_n } else { v_n };
             let mut c = self.drag_per_node * speed;
             if n + 1 == nodes {
-                c *= half;
+                c *= T::from_f64(0.5);
             }
-            for k in 0..m {
-                for l in 0..m {
-                    a[k][l] += c * psi[k] * psi[l];
+            for k in 0..M {
+                let ck = c * psi[k];
+                for l in 0..M {
+                    a[k][l] += ck * psi[l];
                 }
             }
         }
         // Gaussian elimination without pivots: `I + D` is symmetric
         // positive definite, so every pivot is at least 1.
-        for k in 0..m {
-            for r in k + 1..m {
-                let f = a[r][k] / a[k][k];
-                for c in k..m {
+        // One division per pivot, its reciprocal used after.
+        let mut inv_pivot = [T::ZERO; M];
+        for k in 0..M {
+            inv_pivot[k] = T::from_f64(1.0) / a[k][k];
+            for r in k + 1..M {
+                let f = a[r][k] * inv_pivot[k];
+                for c in k..M {
                     let akc = a[k][c];
                     a[r][c] -= f * akc;
                 }
@@ -627,15 +639,15 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
                 vel[r] -= f * vk;
             }
         }
-        for k in (0..m).rev() {
+        for k in (0..M).rev() {
             let mut sum = vel[k];
-            for c in k + 1..m {
+            for c in k + 1..M {
                 sum -= a[k][c] * vel[c];
             }
-            vel[k] = sum / a[k][k];
+            vel[k] = sum * inv_pivot[k];
         }
         for k in 0..m {
-            x[dof + k] = vel[k] / self.drag_omega[k];
+            x[dof + k] = vel[k] * self.drag_inv_omega[k];
         }
     }
 
