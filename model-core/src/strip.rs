@@ -588,7 +588,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
     /// split from the exact linear step). The held tip's force leaves the
     /// drag's share out: at a held strip's micrometres per second the
     /// drag, quadratic in them, is far below the load cell's noise.
-    #[inline(never)]
+    // Inlined: as a call, the board's step spilled registers around it
+    // even untaken (512 to 568 instructions, `scripts/count-step-cycles`);
+    // inlined, 522.
+    #[inline(always)]
     fn quadratic_drag(&self, x: &mut [T; S]) {
         const M: usize = DRAGGED_MODES;
         let dof = Self::DOF;
