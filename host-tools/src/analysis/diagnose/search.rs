@@ -511,9 +511,24 @@ impl Search<'_> {
                 let start = m
                     .iter()
                     .fold(current.spec, |spec, &e| starts::start(e, &spec, modes));
-                let fit = self
+                let mut fit = self
                     .fitter
                     .fit(self.train, &effects, Some(&start), self.fixed)?;
+                if let Some(bare) =
+                    starts::fluid_without_stand_ins(m, &current.effects, &current.spec, &self.fixed)
+                {
+                    let modes =
+                        starts::modes(self.session, self.train, &bare, std::slice::from_ref(m));
+                    let start = m
+                        .iter()
+                        .fold(bare, |spec, &e| starts::start(e, &spec, modes));
+                    let other = self
+                        .fitter
+                        .fit(self.train, &effects, Some(&start), self.fixed)?;
+                    if other.bic < fit.bic {
+                        fit = other;
+                    }
+                }
                 let score = self.fitter.score(self.hold, &fit.spec)?;
                 Ok((m.clone(), fit, score))
             })
