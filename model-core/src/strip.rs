@@ -596,9 +596,10 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         const M: usize = DRAGGED_MODES;
         let dof = Self::DOF;
         let m = self.modes.min(M);
-        // Every loop runs over all four modes, so that it unrolls: a mode
-        // past the strip's has `ω` 0 here and zero rows, so it reads a
-        // velocity of 0 and adds nothing; only the strip's are written.
+        // The solve runs over all four modes, so that it unrolls: a mode
+        // past the strip's has zero rows and a velocity of 0, so it adds
+        // nothing; only the strip's modes are read from and written to
+        // the state (past them, `x` holds other states).
         let mut vel = [T::ZERO; M];
         for k in 0..m {
             vel[k] = self.drag_omega[k] * x[dof + k];

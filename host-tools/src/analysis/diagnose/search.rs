@@ -508,23 +508,21 @@ impl Search<'_> {
             .map(|m| {
                 let mut effects = current.effects.clone();
                 effects.extend(m);
-                let start = m
-                    .iter()
-                    .fold(current.spec, |spec, &e| starts::start(e, &spec, modes));
-                let mut fit = self
-                    .fitter
-                    .fit(self.train, &effects, Some(&start), self.fixed)?;
+                // The move's terms started on `from` (each by the modes).
+                let fit_from = |from: ModelSpec, modes| {
+                    let start = m
+                        .iter()
+                        .fold(from, |spec, &e| starts::start(e, &spec, modes));
+                    self.fitter
+                        .fit(self.train, &effects, Some(&start), self.fixed)
+                };
+                let mut fit = fit_from(current.spec, modes)?;
                 if let Some(bare) =
                     starts::fluid_without_stand_ins(m, &current.effects, &current.spec, &self.fixed)
                 {
                     let modes =
                         starts::modes(self.session, self.train, &bare, std::slice::from_ref(m));
-                    let start = m
-                        .iter()
-                        .fold(bare, |spec, &e| starts::start(e, &spec, modes));
-                    let other = self
-                        .fitter
-                        .fit(self.train, &effects, Some(&start), self.fixed)?;
+                    let other = fit_from(bare, modes)?;
                     if other.bic < fit.bic {
                         fit = other;
                     }
