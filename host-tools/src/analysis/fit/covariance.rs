@@ -116,16 +116,33 @@ struct Conditional {
     cov: DMatrix<f64>,
 }
 
-/// Of a stage's knobs, those its residuals move (a knob held at its floor
-/// of zero has a zero column: it is left out of the inverse, so the others
-/// keep their variance), and their covariance given the stage's other
-/// inputs, if it inverts.
+/// Standard error, in a knob's own units of `θ` (its term's typical size,
+/// or a factor `e` for a positive value), past which a stage's residuals
+/// do not resolve the knob: moved over a thousand of its typical sizes,
+/// the fit would change by less than the noise.
+const UNRESOLVED_SE: f64 = 1e3;
+
+/// Of a stage's knobs, those its residuals resolve, and their covariance
+/// given the stage's other inputs, if it inverts. A knob held at its floor
+/// of zero has a zero column, and one the residuals barely move (its
+/// standard error past [`UNRESOLVED_SE`]) a column at the forward
+/// difference's rounding: each is left out of the inverse, so that the
+/// others keep their variance. Kept, four held modes' own damping ratios
+/// at their floor, whose columns were one rounding pattern 1e-10 of the
+/// largest, made the beam's information singular and every beam knob's
+/// interval infinite (literature development seed 50065), so that no
+/// beam term could show.
 fn conditional(b: &Block) -> (Vec<usize>, Option<Conditional>) {
     let jac = &b.jacobian;
     let norms: Vec<f64> = (0..jac.ncols()).map(|j| jac.column(j).norm()).collect();
     let top = norms.iter().fold(0.0f64, |m, &x| m.max(x));
-    let on: Vec<usize> = (0..jac.ncols())
+    let moved: Vec<usize> = (0..jac.ncols())
         .filter(|&j| norms[j] > 1e-12 * top)
+        .collect();
+    let s = variance(b, moved.len()).sqrt();
+    let on: Vec<usize> = moved
+        .into_iter()
+        .filter(|&j| s < UNRESOLVED_SE * norms[j])
         .collect();
     let sub = columns(jac, &on);
     let s2 = variance(b, on.len());
@@ -235,5 +252,40 @@ mod tests {
             .collect();
         let run_var = variance_of_mean(&runs, 100);
         assert!(run_var > 50.0 * s2 / n as f64, "{run_var}");
+    }
+
+    /// Two knobs the residuals resolve beside two whose columns are one
+    /// rounding pattern, equal, far below the noise: the two keep their
+    /// variance (left out, the pair would make the information singular);
+    /// a column the noise does resolve stays in, and two equal ones of
+    /// that size leave nothing to invert.
+    #[test]
+    fn unresolved_columns_are_left_out_and_the_others_keep_their_variance() {
+        let n = 400;
+        let r: Vec<f64> = (0..n)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let block = |tiny: f64| {
+            let jacobian = DMatrix::from_fn(n, 4, |i, j| match j {
+                0 => 1.0,
+                1 => i as f64 / n as f64,
+                _ => tiny * ((i % 7) as f64 - 3.0),
+            });
+            Block {
+                knobs: vec![0, 1, 2, 3],
+                jacobian,
+                residuals: r.clone(),
+                clusters: (0..n).collect(),
+            }
+        };
+        let (on, cov) = conditional(&block(1e-9));
+        assert_eq!(on, vec![0, 1]);
+        let cov = cov.unwrap().cov;
+        assert!(cov[(0, 0)].is_finite() && cov[(1, 1)] > 0.0, "{cov}");
+        // Resolved (a standard error of a few units), the equal pair is
+        // kept: the information then does not invert.
+        let (on, cov) = conditional(&block(1.0));
+        assert_eq!(on, vec![0, 1, 2, 3]);
+        assert!(cov.is_none());
     }
 }
