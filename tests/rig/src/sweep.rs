@@ -428,6 +428,19 @@ pub fn strip_of(s: &Scenario) -> anyhow::Result<(Sample, Hidden)> {
     Ok((d.sample, d.hidden))
 }
 
+/// Diagnoses the session in `dir` with the library, around the seed's
+/// laminate fitted to the session's geometry, as `finrs diagnose` does:
+/// the tests' way to the whole result (the final fit beside the verdict).
+pub fn diagnose_dir(dir: &Path) -> anyhow::Result<finrs::analysis::diagnose::Diagnosis> {
+    let session = finrs::session::Session::read(dir)?;
+    let fixed = finrs::model::params::ModelFile::main_m_2006().spec_for(&session.geometry())?;
+    Ok(finrs::analysis::diagnose::diagnose(
+        &session,
+        fixed,
+        &|_| {},
+    )?)
+}
+
 /// Writes the scenario's session into `dir` and says what a right
 /// diagnosis of it names.
 pub fn write_scenario(s: &Scenario, dir: &Path) -> anyhow::Result<Expected> {

@@ -6,9 +6,8 @@
 //! Seeds are fixed so that CI is repeatable; `FINRS_RIG_SEED=n` draws
 //! other strips and strengths (`scripts/rig-sweep-ideal` runs many).
 
-use finrs::analysis::diagnose::{diagnose, Verdict};
-use finrs::model::params::ModelFile;
-use finrs::session::Session;
+use finrs::analysis::diagnose::Verdict;
+use finrs_rig::sweep::diagnose_dir;
 use finrs_rig::{
     short_protocol, write_session, Bench, Hidden, Sample, Sensors, CATALOGUE, OUTSIDE,
     SEGMENT_VARIATION,
@@ -42,13 +41,8 @@ fn hide(names: &[&str], default_seed: u64) -> Verdict {
         &mut rng,
     )
     .unwrap();
-    let session = Session::read(&dir).unwrap();
-    let fixed = ModelFile::main_m_2006()
-        .spec_for(&session.geometry())
-        .unwrap();
-    let d = diagnose(&session, fixed, &|_| {}).unwrap();
+    let v = diagnose_dir(&dir).unwrap().verdict;
     std::fs::remove_dir_all(&dir).ok();
-    let v = d.verdict;
     // docs/rig.md's table quotes these lines (`-- --nocapture`).
     eprintln!(
         "hidden {names:?} (seed {seed}): verdict {}, causes {:?}, held-out NRMSE {:.4} -> {:.4} ({:.1} % gain), RSS/m {:.3} -> {:.3}\n  {hidden:?}",

@@ -6,11 +6,9 @@
 //! statistics; these seeds (500 on) were fixed before they were run, and
 //! no other seed was tried in their place.
 
-use finrs::analysis::diagnose::{diagnose, Verdict};
-use finrs::model::params::ModelFile;
-use finrs::session::Session;
+use finrs::analysis::diagnose::Verdict;
 use finrs_rig::expect::names_given;
-use finrs_rig::sweep::{write_scenario, Scenario};
+use finrs_rig::sweep::{diagnose_dir, write_scenario, Scenario};
 use finrs_rig::{score, Expected};
 
 /// Writes the scenario's session, diagnoses it with the library, and
@@ -30,11 +28,7 @@ fn run(
     };
     let dir = std::env::temp_dir().join(format!("finrs-off-class-{seed}-{}", std::process::id()));
     let expected = write_scenario(&s, &dir).unwrap();
-    let session = Session::read(&dir).unwrap();
-    let fixed = ModelFile::main_m_2006()
-        .spec_for(&session.geometry())
-        .unwrap();
-    let v = diagnose(&session, fixed, &|_| {}).unwrap().verdict;
+    let v = diagnose_dir(&dir).unwrap().verdict;
     std::fs::remove_dir_all(&dir).ok();
     let names = names_given(&v.causes, v.rest.bench.iter().map(|b| &b.what));
     eprintln!(

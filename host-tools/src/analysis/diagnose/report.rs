@@ -313,6 +313,8 @@ fn candidates(s: &mut String, v: &Verdict) {
             "| {} | {} | {:.1} | {:.2} | {:.2} | {:.2} | {} | {} |",
             if c.backward {
                 "check".to_string()
+            } else if c.lone_drives {
+                "lone drives".to_string()
             } else {
                 (c.round + 1).to_string()
             },

@@ -48,6 +48,11 @@ pub struct Candidate {
     /// the model, tested as if it joined the model of all the others last
     /// (they refitted without it). `passed` then says it stays.
     pub backward: bool,
+    /// Judged on the training recordings that drive one segment alone,
+    /// after the search (`segment-crosstalk`, where the search did not
+    /// name it): its held-out gains are the held-out lone drives', `NaN`
+    /// where none is held out.
+    pub lone_drives: bool,
     /// Its fitted extra parameters.
     pub params: std::collections::BTreeMap<String, f64>,
 }
@@ -177,6 +182,8 @@ impl std::fmt::Display for Verdict {
                 "  {} {:<30} dBIC {:>12.1}  held-out RSS gain {:>8.2} %  (NRMSE {:>8.2} %)  {}",
                 if c.backward {
                     "  check".to_string()
+                } else if c.lone_drives {
+                    "   lone".to_string()
                 } else {
                     format!("round {}", c.round + 1)
                 },

@@ -99,6 +99,26 @@ pub struct FormCheck {
 }
 
 impl FitResult {
+    /// The fit with `est` beside its own estimates: a knob measured apart
+    /// and held in this fit's model (the diagnosis's crosstalk on the lone
+    /// drives). Counted by AIC and BIC as the parameter it is, its variance
+    /// its interval's, uncorrelated with the others, which it was held
+    /// apart from.
+    pub fn with_held(mut self, est: Estimate) -> FitResult {
+        let n = self.estimates.len();
+        let se = 0.5 * (est.high - est.low) / super::stats::Z95;
+        let mut cov = nalgebra::DMatrix::zeros(n + 1, n + 1);
+        cov.view_mut((0, 0), (n, n))
+            .copy_from(&self.value_covariance);
+        cov[(n, n)] = se * se;
+        self.value_covariance = cov;
+        self.estimates.push(est);
+        self.parameters += 1;
+        self.aic += 2.0;
+        self.bic += (self.score.m.max(1) as f64).ln();
+        self
+    }
+
     /// Whether the knobs in `off` differ from their "off" values jointly
     /// at the level `1 − tail` (see [`stats::wald_excludes`]): those of
     /// them the fit had and bounded (a knob with an unbounded interval says

@@ -309,7 +309,8 @@ pub struct Space {
     pub knobs: Vec<Knob>,
     /// The effects on top of the baseline.
     pub effects: Vec<Effect>,
-    /// Parameters held fixed (geometry, beam unless freed).
+    /// Parameters held fixed (geometry, beam unless freed, a crosstalk
+    /// measured apart).
     pub fixed: ModelSpec,
 }
 
@@ -391,6 +392,9 @@ impl Space {
         spec.ext = Extensions {
             back_relaxation: self.has(Effect::BackRelaxation),
             large_deflection: self.has(Effect::LargeDeflection),
+            // A crosstalk measured where it shows apart (the diagnosis's
+            // lone drives) is held, not fitted, unless it is a knob here.
+            crosstalk: self.fixed.ext.crosstalk,
             ..Extensions::NONE
         };
         spec.dehydration_per_s = 0.0;

@@ -380,7 +380,7 @@ fn quadratic(g: &[f64], cov: &DMatrix<f64>, h: &[f64]) -> f64 {
 }
 
 /// The normal deviate of the fit's two-sided 95 % intervals.
-const Z95: f64 = 1.96;
+pub(super) const Z95: f64 = 1.96;
 
 /// Whether `est`'s interval, widened from 95 % to `z` standard errors (in
 /// the space it is symmetric in), excludes `off`.
