@@ -553,10 +553,14 @@ impl Search<'_> {
     /// (development seed 50065; docs/rig.md). Alone, a segment bends its
     /// neighbours only by crosstalk or by that form.
     ///
-    /// The final model's effects (less `segment-variation`: an undriven
-    /// segment's gain is seen only through its neighbour's share, and the
-    /// two trade) are fitted on the lone drives with and without `κ`.
-    /// Named where `κ` lies beyond [`CROSSTALK_ALIKE`] at the share of `α`
+    /// The final model's effects are fitted on the lone drives with and
+    /// without `κ`, its segments' deviations held at the final fit's (not
+    /// fitted: a segment never driven alone is seen there only through
+    /// its neighbour's share, and its gain and `κ` trade; not dropped:
+    /// lone drives of segments that differ then bend by `κ` instead,
+    /// off-class rig seed 10047).
+    /// Not tried where [`MAX_CAUSES`] are in. Named where `κ` lies beyond
+    /// [`CROSSTALK_ALIKE`] at the share of `α`
     /// after the search's rounds (one test), BIC gains on the lone drives,
     /// and, where a lone drive is held out, the held-out one gains too.
     /// Then `κ` is held at the lone drives' value and the model fitted
@@ -579,9 +583,11 @@ impl Search<'_> {
             .recordings
             .first()
             .map_or(0, |r| r.rec.meta.segments);
+        let named = found.accepted();
         if segments < 2
             || lone_train.is_empty()
-            || found.accepted().contains(&Effect::SegmentCrosstalk)
+            || named.contains(&Effect::SegmentCrosstalk)
+            || named.len() >= MAX_CAUSES
         {
             return Ok((self.fixed, None));
         }
@@ -598,11 +604,13 @@ impl Search<'_> {
             .chain([Effect::SegmentCrosstalk])
             .collect();
         let start = Some(&found.fit.spec);
+        let mut lone_fixed = self.fixed;
+        lone_fixed.ext.segment_variation = found.fit.spec.ext.segment_variation;
         let (without, with) = rayon::join(
-            || self.fitter.fit(&lone_train, &effects, start, self.fixed),
+            || self.fitter.fit(&lone_train, &effects, start, lone_fixed),
             || {
                 self.fitter
-                    .fit(&lone_train, &with_effects, start, self.fixed)
+                    .fit(&lone_train, &with_effects, start, lone_fixed)
             },
         );
         let (without, with) = (without?, with?);

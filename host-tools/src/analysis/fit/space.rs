@@ -310,7 +310,7 @@ pub struct Space {
     /// The effects on top of the baseline.
     pub effects: Vec<Effect>,
     /// Parameters held fixed (geometry, beam unless freed, a crosstalk
-    /// measured apart).
+    /// or segments' deviations measured apart).
     pub fixed: ModelSpec,
 }
 
@@ -392,9 +392,11 @@ impl Space {
         spec.ext = Extensions {
             back_relaxation: self.has(Effect::BackRelaxation),
             large_deflection: self.has(Effect::LargeDeflection),
-            // A crosstalk measured where it shows apart (the diagnosis's
-            // lone drives) is held, not fitted, unless it is a knob here.
+            // Held, not fitted, unless knobs here: a crosstalk measured
+            // where it shows apart (the diagnosis's lone drives), and the
+            // segments' deviations while that is measured.
             crosstalk: self.fixed.ext.crosstalk,
+            segment_variation: self.fixed.ext.segment_variation,
             ..Extensions::NONE
         };
         spec.dehydration_per_s = 0.0;
