@@ -97,10 +97,9 @@ fn put(cov: &mut DMatrix<f64>, rows: &[usize], cols: &[usize], m: &DMatrix<f64>)
     }
 }
 
-/// `s² = RSS/(m − k)` of a stage with `k` active knobs.
-fn variance(b: &Block, k: usize) -> f64 {
-    let rss: f64 = b.residuals.iter().map(|r| r * r).sum();
-    rss / (b.jacobian.nrows().saturating_sub(k).max(1)) as f64
+/// `s² = RSS/(m − k)` of a stage's `m` residuals with `k` active knobs.
+fn variance(rss: f64, m: usize, k: usize) -> f64 {
+    rss / (m.saturating_sub(k).max(1)) as f64
 }
 
 /// The columns `on` of `jac`.
@@ -139,13 +138,15 @@ fn conditional(b: &Block) -> (Vec<usize>, Option<Conditional>) {
     let moved: Vec<usize> = (0..jac.ncols())
         .filter(|&j| norms[j] > 1e-12 * top)
         .collect();
-    let s = variance(b, moved.len()).sqrt();
+    // One pass over the residuals for both degrees of freedom.
+    let rss: f64 = b.residuals.iter().map(|r| r * r).sum();
+    let s = variance(rss, jac.nrows(), moved.len()).sqrt();
     let on: Vec<usize> = moved
         .into_iter()
         .filter(|&j| s < UNRESOLVED_SE * norms[j])
         .collect();
     let sub = columns(jac, &on);
-    let s2 = variance(b, on.len());
+    let s2 = variance(rss, jac.nrows(), on.len());
     let Some(inv) = (sub.transpose() * &sub).try_inverse() else {
         return (on, None);
     };
