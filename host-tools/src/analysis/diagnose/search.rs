@@ -27,9 +27,10 @@ use crate::session::Session;
 /// what a session hides (the literature rig draws up to three departures
 /// beside the base's two; at four, development seed 50091's drying
 /// passed its round beside the reaction's and was left out when the
-/// reaction took the fourth place). The rounds' shares of `α` sum to
-/// `α` however many run ([`super::gates::round_alpha`]), so a fifth round adds no
-/// false name's chance beyond it.
+/// reaction took the fourth place). The rounds' shares of `α` halve and
+/// stay below `α` in sum however many run
+/// ([`super::gates::round_alpha`]), so a fifth round keeps the search's
+/// chance of a false name below `α`.
 pub const MAX_CAUSES: usize = 5;
 /// The effects the blocked mode's frequency and decay speak to, tried
 /// together as well as apart.
