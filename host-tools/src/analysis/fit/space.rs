@@ -362,6 +362,17 @@ impl Space {
         self
     }
 
+    /// The index in `θ` of the charge's cubic term where `theta` holds it
+    /// at its floor (`v (1 + a v²)` barely rising at 4 V): there it may be
+    /// the currents leaning on the bound for a current the circuit's form
+    /// lacks, at the moment's expense, so the fit also tries it held
+    /// ([`super::Fitter`]'s descents).
+    pub fn charge_cubic_at_floor(&self, theta: &[f64]) -> Option<usize> {
+        let j = self.knobs.iter().position(|k| *k == Knob::ChargeCubic)?;
+        // A hair above the floor still counts: θ comes back from it scaled.
+        (theta[j] * CUBIC_SCALE <= CUBIC_MIN * 0.99 * (1.0 - 1e-9)).then_some(j)
+    }
+
     /// Whether the structure includes `e`.
     pub fn has(&self, e: Effect) -> bool {
         self.effects.contains(&e)
@@ -616,5 +627,31 @@ mod tests {
         assert_eq!(at(-1.0), 0.0);
         assert_eq!(at(2.0), 2.0);
         assert_eq!(at(300.0), DRYING_CURVATURE_MAX);
+    }
+
+    #[test]
+    fn the_charge_cubic_is_at_its_floor_only_where_the_spec_clamps_it() {
+        let fixed = ModelSpec::baseline(Params::main_m_2006());
+        let space = Space::new(&[Effect::ElectrochemicalNonlinearity], 3, fixed);
+        let j = space
+            .knobs
+            .iter()
+            .position(|&k| k == Knob::ChargeCubic)
+            .unwrap();
+        let mut theta = space.theta(&fixed);
+        assert_eq!(space.charge_cubic_at_floor(&theta), None);
+        // Just above the floor: an estimate.
+        theta[j] = CUBIC_MIN * 0.98 / CUBIC_SCALE;
+        assert_eq!(space.charge_cubic_at_floor(&theta), None);
+        // At it, and below (where the spec clamps it to the floor).
+        for below in [0.99, 1.5] {
+            theta[j] = CUBIC_MIN * below / CUBIC_SCALE;
+            assert_eq!(space.charge_cubic_at_floor(&theta), Some(j));
+            let spec = space.spec(&theta);
+            assert!((spec.ext.charge_cubic_per_v2 - CUBIC_MIN * 0.99).abs() < 1e-15);
+        }
+        // Without the effect there is no such term.
+        let bare = Space::new(&[], 3, fixed);
+        assert_eq!(bare.charge_cubic_at_floor(&bare.theta(&fixed)), None);
     }
 }
