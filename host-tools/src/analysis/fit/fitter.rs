@@ -604,10 +604,10 @@ impl<'a> Fitter<'a> {
     /// the stages run again with it held at its start, and the lower cost
     /// ([`profile_cost`]) is kept: on the literature rig's electrolysis (a
     /// Tafel current behind `R1`) the floor's moment fitted the camera and
-    /// the load cell worse than the model without the effect (training
-    /// ΔBIC +24,000 where the leak alone gave −54,000: development seed
-    /// 52127), and on others it fitted them far better (52086: −143,000
-    /// against −4,000 held).
+    /// the load cell worse than the model without the effect (`finrs fit`
+    /// on development seed 52127's training recordings: BIC +22,000, the
+    /// leak alone −54,000), and on others far better (52086: the
+    /// reaction's ΔBIC in the search −143,000, −4,000 held).
     fn descend_space_here(
         &self,
         recordings: &[usize],
@@ -617,8 +617,7 @@ impl<'a> Fitter<'a> {
         lane: Option<&Lane<'_>>,
     ) -> Result<Descended, FitError> {
         let free = self.descend_stages(recordings, space.clone(), start, patience, lane, false)?;
-        let at_floor = space.charge_cubic_at_floor(&free.circuit_theta).is_some();
-        if !at_floor || free.given_up {
+        if !space.charge_cubic_at_floor(&free.circuit_theta) || free.given_up {
             return Ok(free);
         }
         let held = self.descend_stages(recordings, space, start, patience, lane, true)?;

@@ -105,7 +105,7 @@ pub fn fluid_without_stand_ins(
 /// term: on development sessions in water, `EI` alone stayed at its start
 /// or ended at a third of the pair's, with training costs above the
 /// model's without it, where the pair (its damping terms ending at zero
-/// beside the fluid's drag) gained 5-80 % of the held-out RSS. `None`
+/// beside the fluid's drag) gained on held-out data. `None`
 /// for any other move.
 pub fn member_from_pair(m: &[Effect], pair: &ModelSpec, current: &ModelSpec) -> Option<ModelSpec> {
     let mut start = *pair;

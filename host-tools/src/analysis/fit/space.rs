@@ -197,6 +197,8 @@ pub const BASELINE: [Knob; 6] = [Knob::R1, Knob::R2, Knob::C, Knob::A, Knob::B, 
 
 /// Lowest value of the cubic terms: `v (1 + a v²)` must rise up to 4 V.
 const CUBIC_MIN: f64 = -1.0 / 48.0;
+/// The floor the fit's cubic terms are held to, just inside [`CUBIC_MIN`].
+const CUBIC_FLOOR: f64 = CUBIC_MIN * 0.99;
 
 // The effects' knobs are linear in θ, with θ = 0 the term switched off, so
 // that an extended fit starts exactly where the model it extends stands
@@ -362,15 +364,17 @@ impl Space {
         self
     }
 
-    /// The index in `θ` of the charge's cubic term where `theta` holds it
-    /// at its floor (`v (1 + a v²)` barely rising at 4 V): there it may be
-    /// the currents leaning on the bound for a current the circuit's form
-    /// lacks, at the moment's expense, so the fit also tries it held
-    /// ([`super::Fitter`]'s descents).
-    pub fn charge_cubic_at_floor(&self, theta: &[f64]) -> Option<usize> {
-        let j = self.knobs.iter().position(|k| *k == Knob::ChargeCubic)?;
+    /// Whether `theta` holds the charge's cubic term at its floor
+    /// (`v (1 + a v²)` barely rising at 4 V): there it may be the currents
+    /// leaning on the bound for a current the circuit's form lacks, at the
+    /// moment's expense, so the fit also tries it held
+    /// ([`super::Fitter`]'s descents). False without the term.
+    pub fn charge_cubic_at_floor(&self, theta: &[f64]) -> bool {
         // A hair above the floor still counts: θ comes back from it scaled.
-        (theta[j] * CUBIC_SCALE <= CUBIC_MIN * 0.99 * (1.0 - 1e-9)).then_some(j)
+        self.knobs
+            .iter()
+            .position(|k| *k == Knob::ChargeCubic)
+            .is_some_and(|j| theta[j] * CUBIC_SCALE <= CUBIC_FLOOR * (1.0 - 1e-9))
     }
 
     /// Whether the structure includes `e`.
@@ -431,11 +435,9 @@ impl Space {
                     spec.ext.drag_quadratic_n_s2_per_m3 = ramp(t, QUADRATIC_DRAG_SCALE)
                 }
                 Knob::ChargeCubic => {
-                    spec.ext.charge_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
+                    spec.ext.charge_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_FLOOR)
                 }
-                Knob::LeakCubic => {
-                    spec.ext.leak_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_MIN * 0.99)
-                }
+                Knob::LeakCubic => spec.ext.leak_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_FLOOR),
                 Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
                 Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
                 Knob::DryingCurvature => {
@@ -639,19 +641,19 @@ mod tests {
             .position(|&k| k == Knob::ChargeCubic)
             .unwrap();
         let mut theta = space.theta(&fixed);
-        assert_eq!(space.charge_cubic_at_floor(&theta), None);
+        assert!(!space.charge_cubic_at_floor(&theta));
         // Just above the floor: an estimate.
         theta[j] = CUBIC_MIN * 0.98 / CUBIC_SCALE;
-        assert_eq!(space.charge_cubic_at_floor(&theta), None);
+        assert!(!space.charge_cubic_at_floor(&theta));
         // At it, and below (where the spec clamps it to the floor).
         for below in [0.99, 1.5] {
             theta[j] = CUBIC_MIN * below / CUBIC_SCALE;
-            assert_eq!(space.charge_cubic_at_floor(&theta), Some(j));
+            assert!(space.charge_cubic_at_floor(&theta));
             let spec = space.spec(&theta);
-            assert!((spec.ext.charge_cubic_per_v2 - CUBIC_MIN * 0.99).abs() < 1e-15);
+            assert!((spec.ext.charge_cubic_per_v2 - CUBIC_FLOOR).abs() < 1e-15);
         }
         // Without the effect there is no such term.
         let bare = Space::new(&[], 3, fixed);
-        assert_eq!(bare.charge_cubic_at_floor(&bare.theta(&fixed)), None);
+        assert!(!bare.charge_cubic_at_floor(&bare.theta(&fixed)));
     }
 }
