@@ -30,6 +30,7 @@
 
 use crate::extensions::Extensions;
 use crate::params::{ParamError, Params};
+use crate::reaction::Reaction;
 use crate::real::Real;
 use crate::strip::check_sample_time;
 use crate::zoh::discretise;
@@ -48,6 +49,8 @@ pub struct Circuit<T, const N: usize> {
     charge_cubic: T,
     /// `b` of the leak's `v/R2 (1 + b v²)`.
     leak_cubic: T,
+    /// The reaction behind each double layer, where it is on.
+    reaction: Option<Reaction>,
 }
 
 impl<T: Real, const N: usize> Circuit<T, N> {
@@ -77,6 +80,14 @@ impl<T: Real, const N: usize> Circuit<T, N> {
             inv_r2: T::from_f64(1.0 / params.r2_ohm),
             charge_cubic: T::from_f64(ext.charge_cubic_per_v2),
             leak_cubic: T::from_f64(ext.leak_cubic_per_v2),
+            reaction: (ext.reaction_ratio > 0.0).then(|| {
+                Reaction::new(
+                    ext.reaction_ratio,
+                    ext.reaction_ref_v,
+                    ext.reaction_tafel_v,
+                    params.r2_ohm,
+                )
+            }),
         }
     }
 
@@ -114,19 +125,37 @@ impl<T: Real, const N: usize> Circuit<T, N> {
         core::array::from_fn(|i| v[i] + self.charge_cubic * v[i] * v[i] * v[i])
     }
 
-    /// Segment `i`'s state after one step from `e` under the double layer's
-    /// voltage `v_dl` (see [`Circuit::double_layer_v`]).
+    /// The drive each segment's double layer takes over the step from
+    /// capacitor voltages `v_c(i)` under the layer's voltage `v_dl` (see
+    /// [`Circuit::double_layer_v`]): `v_dl` itself, less `R1` times the
+    /// reaction's current where one is on ([`Reaction::drive_v`]). The
+    /// step's every input column (the electrics', the beam's) takes it.
     #[inline(always)]
-    pub(crate) fn next(&self, i: usize, e: [T; 2], v_dl: T) -> [T; 2] {
+    pub(crate) fn drive(&self, v_dl: [T; N], v_c: impl Fn(usize) -> T) -> [T; N] {
+        let Some(reaction) = &self.reaction else {
+            return v_dl;
+        };
+        core::array::from_fn(|i| {
+            let [a, _, _, g0, _] = self.elec[i].map(T::to_f64);
+            let (v, r1) = (v_dl[i].to_f64(), 1.0 / self.inv_r1[i].to_f64());
+            let v_lin = a * v_c(i).to_f64() + g0 * v;
+            T::from_f64(reaction.drive_v(v, v_lin, g0 * r1, r1))
+        })
+    }
+
+    /// Segment `i`'s state after one step from `e` under the drive `u`
+    /// (see [`Circuit::drive`]).
+    #[inline(always)]
+    pub(crate) fn next(&self, i: usize, e: [T; 2], u: T) -> [T; 2] {
         let [a, b, c, g0, g1] = self.elec[i];
-        [a * e[0] + g0 * v_dl, b * e[0] + c * e[1] + g1 * v_dl]
+        [a * e[0] + g0 * u, b * e[0] + c * e[1] + g1 * u]
     }
 
     /// Advances one sample with `v` (V per segment) held over the step.
     pub fn step(&self, x: &mut [[T; 2]; N], v: &[T; N]) {
-        let v = self.double_layer_v(v);
+        let u = self.drive(self.double_layer_v(v), |i| x[i][0]);
         for (i, e) in x.iter_mut().enumerate() {
-            *e = self.next(i, *e, v[i]);
+            *e = self.next(i, *e, u[i]);
         }
     }
 

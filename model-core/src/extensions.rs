@@ -68,6 +68,23 @@ pub struct Extensions {
     pub charge_cubic_per_v2: f64,
     /// Cubic term of the leakage, `b` in `v/R2 (1 + b v²)`, 1/V² (`> −1/48`).
     pub leak_cubic_per_v2: f64,
+    /// An electrochemical reaction behind each double layer (Randles'
+    /// charge-transfer branch, beside the capacitance): its current at
+    /// the double layer's voltage [`reaction_ref_v`](Self::reaction_ref_v)
+    /// as a fraction of the linear leak's there (`v_ref / R2`), `≥ 0`,
+    /// 0 off. Unlike the leak's cubic, which the thesis's `R2` puts across
+    /// the terminals, it drains the double layer: a strong reaction holds
+    /// the layer's voltage, and with it the charge and the moment, below
+    /// what a linear strip reaches at a high drive.
+    pub reaction_ratio: f64,
+    /// The double layer's voltage at which
+    /// [`reaction_ratio`](Self::reaction_ratio) is stated, V (`> 0` where
+    /// the reaction is on).
+    pub reaction_ref_v: f64,
+    /// The reaction's Tafel voltage `b` in `i ∝ sinh(v/b)` (Butler–Volmer,
+    /// symmetric), V (`0.005–10` where the reaction is on): the current
+    /// grows `e`-fold every `b` of the double layer's voltage.
+    pub reaction_tafel_v: f64,
     /// Fraction `κ` of a segment's moment that acts on each neighbour
     /// (`|κ| < 1`).
     pub crosstalk: f64,
@@ -276,6 +293,9 @@ impl Extensions {
         drag_quadratic_n_s2_per_m3: 0.0,
         charge_cubic_per_v2: 0.0,
         leak_cubic_per_v2: 0.0,
+        reaction_ratio: 0.0,
+        reaction_ref_v: 0.0,
+        reaction_tafel_v: 0.0,
         crosstalk: 0.0,
         back_relaxation: false,
         large_deflection: false,
@@ -306,6 +326,11 @@ impl Extensions {
             -1.0 / 48.0,
             f64::INFINITY,
         )?;
+        non_negative("reaction_ratio", self.reaction_ratio)?;
+        if self.reaction_ratio > 0.0 {
+            within("reaction_ref_v", self.reaction_ref_v, 1e-3, 10.0)?;
+            within("reaction_tafel_v", self.reaction_tafel_v, 5e-3, 10.0)?;
+        }
         within("crosstalk", self.crosstalk, -1.0, 1.0)?;
         self.segment_variation.validate()
     }

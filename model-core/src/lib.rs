@@ -29,6 +29,7 @@ mod extensions;
 pub mod matrix;
 mod params;
 mod phasor;
+mod reaction;
 mod real;
 mod rounding;
 mod shape;
@@ -41,6 +42,7 @@ pub use drying::drying_gain;
 pub use extensions::{Extensions, ModalDamping, SegmentVariation, DAMPED_MODES, MAX_SEGMENTS};
 pub use params::{Laminate, ParamError, Params};
 pub use phasor::Phasor;
+pub use reaction::Reaction;
 pub use real::Real;
 pub use shape::Shape;
 pub use strip::{

@@ -547,6 +547,9 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         // state, with no state copied back: a memcpy per step was 7 % of a
         // fit (perf 2026-11-27).
         let (beam, elec) = x.split_at_mut(Self::ELEC);
+        // A reaction behind the layer takes its share of the drive over the
+        // step (off: the layer's voltage itself).
+        let v = self.circuit.drive(v, |i| elec[2 * i]);
         {
             let (eta, zeta) = beam.split_at_mut(dof);
             let [r0, r1, r2, r3] = &self.rot;

@@ -14,6 +14,9 @@ fn every_term() -> Extensions {
     Extensions {
         charge_cubic_per_v2: 0.01,
         leak_cubic_per_v2: -0.004,
+        reaction_ratio: 0.8,
+        reaction_ref_v: 2.0,
+        reaction_tafel_v: 0.08,
         damping_mass_per_s: 2.0,
         crosstalk: 0.1,
         segment_variation: var,
@@ -57,4 +60,38 @@ fn the_circuit_refuses_what_the_strip_refuses() {
     let mut ext = Extensions::NONE;
     ext.segment_variation.r1_deviation[4] = 0.1;
     assert!(Circuit::<f64, 3>::new(&p, &ext, 1e-3).is_err());
+}
+
+#[test]
+fn a_reaction_holds_the_layer_and_the_moment_down_at_a_high_drive_only() {
+    // Held at 3 V and at 1 V until settled: the reaction, 2 V/R2 at 2 V on
+    // the layer and e-fold every 60 mV, draws a steady current through R1
+    // that a linear strip does not, and the moment (the layer's charge)
+    // falls with the layer's voltage; at 1 V it is all but absent.
+    let p = Params::table_4_2_2006();
+    let ext = Extensions {
+        reaction_ratio: 1.0,
+        reaction_ref_v: 2.0,
+        reaction_tafel_v: 0.06,
+        ..Extensions::NONE
+    };
+    let settled = |ext: &Extensions, v: f64| {
+        let strip =
+            Strip::<f64, 3, 2, 30>::with_extensions(&p, ext, Fixture::Blocked, 1e-3).unwrap();
+        let mut x = strip.rest();
+        for _ in 0..20_000 {
+            strip.step(&mut x, &[v; 3]);
+        }
+        (strip.currents_a(&x, &[v; 3])[0], strip.moments_nm(&x)[0])
+    };
+    let (i_lin, m_lin) = settled(&Extensions::NONE, 3.0);
+    let (i, m) = settled(&ext, 3.0);
+    assert!(i > 1.5 * i_lin, "{i} {i_lin}");
+    assert!(m < 0.95 * m_lin && m > 0.0, "{m} {m_lin}");
+    let (i_lin, m_lin) = settled(&Extensions::NONE, 1.0);
+    let (i, m) = settled(&ext, 1.0);
+    assert!(
+        (i / i_lin - 1.0).abs() < 1e-3 && (m / m_lin - 1.0).abs() < 1e-3,
+        "{i} {m}"
+    );
 }

@@ -32,7 +32,7 @@ enum Sink {
     RefuseFirst(usize),
 }
 
-// A Command carries a SetModel's 242-byte record by value.
+// A Command carries a SetModel's 254-byte record by value.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Op {

@@ -267,7 +267,7 @@ impl fmt::Display for CommandError {
 impl core::error::Error for CommandError {}
 
 /// What the command decoder found.
-// A SetModel's record (242 bytes) is carried by value: there is no heap,
+// A SetModel's record (254 bytes) is carried by value: there is no heap,
 // and an event is handed over once, not stored.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]

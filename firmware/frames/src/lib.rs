@@ -66,7 +66,7 @@
 //! | 0x85 | ClearFault | 0 | |
 //! | 0x86 | RequestInfo | 0 | |
 //! | 0x87 | SetCalibration | 20 | [`Calibration`]: `newtons_per_count` f32, 8 shunt zeros u16 (counts); the board stores it in flash |
-//! | 0x88 | SetModel | 242 | [`ModelRecord`]: layout version u8 (2), flags u8, 60 f32 (the fitted [`StripModel`]); the board stores it and shapes motions with it |
+//! | 0x88 | SetModel | 254 | [`ModelRecord`]: layout version u8 (3), flags u8, 63 f32 (the fitted [`StripModel`]); the board stores it and shapes motions with it |
 //! | 0x89 | SetMotion | 30 | motion kind u8 (1 Travelling: `tip_amp_m`, `frequency_hz`, `lag_deg_per_segment` f32; 2 Step: `tip_m` f32, then 8 zero bytes; 3 Force: `force_amp_n`, `frequency_hz`, `lag_deg_per_segment` f32), then the envelope's three f32, `t_session_s` f32 (the motion's start on the drying law's clock; NaN unknown), then tracked u8 (0 feed-forward only, 1 held by the gain tracker) |
 //!
 //! SetWave's length is fixed per program kind: Travelling (`amplitude_v`,

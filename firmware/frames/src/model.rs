@@ -31,15 +31,16 @@ use model_core::{Extensions, ModalDamping, Params, SegmentVariation};
 
 use crate::crc16;
 
-/// The record's layout version, its first byte: 2 since the quadratic
-/// drag's value was appended (a layout-1 record, stored by an older
-/// firmware, is refused by its version, not read with a value missing).
-pub const MODEL_FORMAT: u8 = 2;
+/// The record's layout version, its first byte: 3 since the reaction's
+/// three values were appended (2 added the quadratic drag; a record of an
+/// older layout, stored by an older firmware, is refused by its version,
+/// not read with values missing).
+pub const MODEL_FORMAT: u8 = 3;
 
 /// Values in a record (each an `f32`): the strip's 9 parameters, the
-/// extensions' 48, the drying's 2 and the quadratic drag, in
-/// [`MODEL_FIELD_NAMES`]' order.
-pub const MODEL_FIELDS: usize = 60;
+/// extensions' 48, the drying's 2, the quadratic drag and the reaction's
+/// 3, in [`MODEL_FIELD_NAMES`]' order.
+pub const MODEL_FIELDS: usize = 63;
 
 /// Bytes of a [`ModelRecord`]: the layout version u8, the flags u8
 /// (bit 0 back-relaxation, bit 1 large deflection), then
@@ -112,6 +113,9 @@ pub const MODEL_FIELD_NAMES: [&str; MODEL_FIELDS] = [
     "dehydration_per_s",
     "dehydration_curvature",
     "drag_quadratic_n_s2_per_m3",
+    "reaction_ratio",
+    "reaction_ref_v",
+    "reaction_tafel_v",
 ];
 
 /// A fitted strip: the seed's parameters, the extensions the diagnosis
@@ -249,6 +253,7 @@ fn values(m: &StripModel) -> [f64; MODEL_FIELDS] {
     v[57] = m.dehydration_per_s;
     v[58] = m.dehydration_curvature;
     v[59] = e.drag_quadratic_n_s2_per_m3;
+    v[60..63].copy_from_slice(&[e.reaction_ratio, e.reaction_ref_v, e.reaction_tafel_v]);
     v
 }
 
@@ -284,6 +289,9 @@ fn from_values(
             drag_quadratic_n_s2_per_m3: v[59],
             charge_cubic_per_v2: v[30],
             leak_cubic_per_v2: v[31],
+            reaction_ratio: v[60],
+            reaction_ref_v: v[61],
+            reaction_tafel_v: v[62],
             crosstalk: v[32],
             back_relaxation,
             large_deflection,

@@ -91,7 +91,7 @@ fn travelling() -> Command {
 
 #[test]
 fn layout_is_as_documented() {
-    assert_eq!(MAX_COMMAND_LEN, 4 + 242 + 2);
+    assert_eq!(MAX_COMMAND_LEN, 4 + 254 + 2);
     assert_eq!(frame(&Command::Tare), framed(0x82, &[]));
     assert_eq!(frame(&Command::Stop), framed(0x83, &[]));
     assert_eq!(frame(&Command::ClearFault), framed(0x85, &[]));

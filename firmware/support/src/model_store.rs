@@ -1,13 +1,13 @@
 //! The fitted model's records in flash (`finrs tune`): the same
 //! append-only log as the calibration's ([`crate::record_log`]), in two
-//! sectors of its own, with 256-byte records: `FMOD`, a sequence number,
-//! the [`ModelRecord`] (242 bytes), a CRC-16, zero bytes.
+//! sectors of its own, with 512-byte records: `FMOD`, a sequence number,
+//! the [`ModelRecord`] (254 bytes), a CRC-16, zero bytes.
 //!
 //! ```
 //! # use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 //! use finrs_firmware_support::model_store::{load, save, Region};
 //! use finrs_frames::{ModelRecord, MODEL_RECORD_LEN};
-//! # struct Ram([u8; 2048]);
+//! # struct Ram([u8; 4096]);
 //! # impl ErrorType for Ram {
 //! #     type Error = NorFlashErrorKind;
 //! # }
@@ -23,7 +23,7 @@
 //! # }
 //! # impl NorFlash for Ram {
 //! #     const WRITE_SIZE: usize = 1;
-//! #     const ERASE_SIZE: usize = 1024;
+//! #     const ERASE_SIZE: usize = 2048;
 //! #     fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
 //! #         self.0[from as usize..to as usize].fill(0xFF);
 //! #         Ok(())
@@ -36,8 +36,8 @@
 //! #     }
 //! # }
 //!
-//! let mut flash = Ram([0xFF; 2048]);
-//! let region = Region { offset: 0, sector_len: 1024 };
+//! let mut flash = Ram([0xFF; 4096]);
+//! let region = Region { offset: 0, sector_len: 2048 };
 //! let (none, mut cursor) = load(&mut flash, region).unwrap();
 //! assert_eq!(none, None);
 //! let record = ModelRecord([7; MODEL_RECORD_LEN]);
@@ -55,7 +55,7 @@ use crate::record_log::Log;
 pub use crate::record_log::{Cursor, Region, StoreError, Work};
 
 /// Bytes per record.
-pub const RECORD_LEN: usize = 256;
+pub const RECORD_LEN: usize = 512;
 
 const LOG: Log<RECORD_LEN> = Log::new(*b"FMOD", MODEL_RECORD_LEN);
 

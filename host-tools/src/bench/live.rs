@@ -51,7 +51,7 @@ pub enum Key {
 }
 
 /// What a key asks of the loop.
-// A Command carries a SetModel's 242-byte record by value (it is
+// A Command carries a SetModel's 254-byte record by value (it is
 // `no_std`); an action is handed over once, not stored.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -79,6 +79,17 @@ pub struct ExtensionsFile {
     pub charge_cubic_per_v2: f64,
     /// `b` of the leak's `v/R2 (1 + b v²)`, 1/V².
     pub leak_cubic_per_v2: f64,
+    /// A reaction behind the double layer: its current at
+    /// `reaction_ref_v` over the linear leak's there (0, omitted: off;
+    /// [`model_core::Extensions::reaction_ratio`]).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub reaction_ratio: f64,
+    /// The double layer's voltage at which `reaction_ratio` is stated, V.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub reaction_ref_v: f64,
+    /// The reaction's Tafel voltage `b` in `sinh(v/b)`, V.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub reaction_tafel_v: f64,
     /// Fraction of a segment's moment on each neighbour.
     pub crosstalk: f64,
     /// Lets the relaxation's `b = K z` lie at or below 0 (`z ≤ 0`).
@@ -172,6 +183,9 @@ impl ExtensionsFile {
             drag_quadratic_n_s2_per_m3: self.drag_quadratic_n_s2_per_m3,
             charge_cubic_per_v2: self.charge_cubic_per_v2,
             leak_cubic_per_v2: self.leak_cubic_per_v2,
+            reaction_ratio: self.reaction_ratio,
+            reaction_ref_v: self.reaction_ref_v,
+            reaction_tafel_v: self.reaction_tafel_v,
             crosstalk: self.crosstalk,
             back_relaxation: self.back_relaxation,
             large_deflection: self.large_deflection,
@@ -196,6 +210,9 @@ impl ExtensionsFile {
             drag_quadratic_n_s2_per_m3: ext.drag_quadratic_n_s2_per_m3,
             charge_cubic_per_v2: ext.charge_cubic_per_v2,
             leak_cubic_per_v2: ext.leak_cubic_per_v2,
+            reaction_ratio: ext.reaction_ratio,
+            reaction_ref_v: ext.reaction_ref_v,
+            reaction_tafel_v: ext.reaction_tafel_v,
             crosstalk: ext.crosstalk,
             back_relaxation: ext.back_relaxation,
             large_deflection: ext.large_deflection,
@@ -518,6 +535,12 @@ impl ModelFile {
     }
 }
 
+/// A term left out of a written file where it is off (files written before
+/// it existed read the same).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -679,6 +702,27 @@ mod tests {
         let err = ModelFile::parse("p.toml", &text.replace("0.05]", "-0.05]")).unwrap_err();
         let err = said(&err);
         assert!(err.contains("modal_damping.blocked"), "{err}");
+    }
+
+    #[test]
+    fn the_reaction_round_trips_and_an_out_of_range_tafel_voltage_is_refused() {
+        let mut ext = model_core::Extensions::NONE;
+        // Off, a written file says nothing of it.
+        let mut f = ModelFile::main_m_2006();
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        assert!(!f.to_toml().contains("reaction"), "{}", f.to_toml());
+        ext.reaction_ratio = 0.5;
+        ext.reaction_ref_v = 1.6;
+        ext.reaction_tafel_v = 0.05;
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        let text = f.to_toml();
+        let back = ModelFile::parse("p.toml", &text).unwrap();
+        assert_eq!(back.spec_for(&Geometry::THESIS_2006).unwrap().ext, ext);
+        let steep = text.replace("reaction_tafel_v = 0.05", "reaction_tafel_v = 0.001");
+        let err = ModelFile::parse("p.toml", &steep)
+            .and_then(|f| f.spec_for(&Geometry::THESIS_2006).map(|_| ()));
+        let err = said(&err.unwrap_err());
+        assert!(err.contains("reaction_tafel_v"), "{err}");
     }
 
     #[test]

@@ -349,13 +349,15 @@ impl<T: Real, const N: usize, const E: usize, const S: usize> Strip<T, N, E, S> 
         }
     }
 
-    /// The electrochemical cubic that is on, if one is: the response to a
+    /// The electrochemical term that is on, if one is: the response to a
     /// voltage then is not linear in it.
     pub(super) fn nonlinear_field(&self) -> Option<&'static str> {
         if self.ext.charge_cubic_per_v2 != 0.0 {
             Some("charge_cubic_per_v2")
         } else if self.ext.leak_cubic_per_v2 != 0.0 {
             Some("leak_cubic_per_v2")
+        } else if self.ext.reaction_ratio != 0.0 {
+            Some("reaction_ratio")
         } else {
             None
         }
