@@ -100,14 +100,19 @@ impl Reaction {
         };
         let (mut lo, mut hi) = (0.0, t);
         let mut w = t;
-        let (i_t, _) = self.current_a(t);
+        // The current at the start serves the test below and the first
+        // step (h(t), as h computes it): a layer far below the reaction's
+        // voltage, as most steps are, then costs one evaluation of it.
+        let (i_t, slope_t) = self.current_a(t);
+        let mut at_w = (t + k * i_t - t, 1.0 + k * slope_t);
         if k * i_t > t && self.ref_a > 0.0 && k > 0.0 {
             // i ≈ i_ref e^{(w − v_ref)/b} / norm there.
             let at = self.ref_v + self.tafel_v * libm::log(t * self.ref_norm / (k * self.ref_a));
             w = at.clamp(0.0, t);
+            at_w = h(w);
         }
         for _ in 0..MAX_NEWTON {
-            let (f, df) = h(w);
+            let (f, df) = at_w;
             if f > 0.0 {
                 hi = w;
             } else {
@@ -122,6 +127,7 @@ impl Reaction {
             if step <= 1e-12 * (1.0 + w) || hi - lo <= 1e-12 * (1.0 + w) {
                 break;
             }
+            at_w = h(w);
         }
         if v_lin < 0.0 {
             -w
