@@ -50,6 +50,7 @@ pub mod faults;
 pub mod floors;
 mod gates;
 pub mod identify;
+mod reaction;
 pub mod report;
 pub mod rests;
 mod search;

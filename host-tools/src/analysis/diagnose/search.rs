@@ -10,13 +10,15 @@ use super::faults;
 use super::floors::sensor_floors;
 use super::gates::{each_mode_damping_kept, holdout_gain, holdout_gain_passes, Bar, DELTA_BIC};
 use super::identify;
+use super::reaction;
 use super::rests::{rest_structure, BenchFinding};
 use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
 use crate::analysis::fit::{above_zero_at, below_zero_at, beyond_at, excludes_at, Estimate};
 use crate::analysis::fit::{
-    form, profile_cost, ChannelFit, Effect, FitError, FitResult, Fitter, Knob, Score,
+    form, peak_drive_v, profile_cost, session_peak_v, with_session_peak, ChannelFit, Effect,
+    FitError, FitResult, Fitter, Knob, Score,
 };
 use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
@@ -166,7 +168,8 @@ pub fn diagnose(
         fitter: &fitter,
         train: &train,
         hold: &hold,
-        fixed,
+        // Carrying the session's highest drive: a reaction shows below it.
+        fixed: with_session_peak(fixed, peak_drive_v(session)),
         alone: driven_alone(session, &train),
         span_s: span_s(session, &train),
     };
@@ -927,10 +930,15 @@ fn signature_is_significant(
         Effect::Damping => either_or_both(&[(Knob::Zeta, 0.0), (Knob::Beta, 0.0)]),
         // Added mass is what water adds; its drag alone is damping.
         Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
-        Effect::ElectrochemicalNonlinearity => match electrochemistry_alone(&fit.estimates, z) {
-            Some(shows) => shows,
-            None => fit.jointly_excludes(&[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)], tail),
-        },
+        Effect::ElectrochemicalNonlinearity => {
+            let reaction = reaction::departure_at(fit, session_peak_v(fixed));
+            match electrochemistry_alone(&fit.estimates, z, reaction) {
+                Some(shows) => shows,
+                None => {
+                    fit.jointly_excludes(&[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)], tail)
+                }
+            }
+        }
         // b = K z below zero is what makes the bending relax past the
         // start; any z > 0 (a creep too) is the baseline's.
         Effect::BackRelaxation => fit
@@ -1019,12 +1027,14 @@ fn shows_apart(knob: Knob, alone: &[usize]) -> bool {
 /// How many tests may show `e`'s signature, any one of them passing it:
 /// each is a chance for the noise, and they share the candidate's level
 /// ([`Bar::split`]). The damping's `ζ₀`, its `β`, or the two jointly; the
-/// electrochemistry's leak, its charge, or the two jointly; each knob of a
+/// electrochemistry's leak, its reaction, its charge, or the leak and the
+/// charge jointly; each knob of a
 /// `segment-variation` that can show it ([`shows_apart`]). Every other
 /// effect's is one term.
 fn signature_tests(e: Effect, fit: &FitResult, alone: &[usize]) -> usize {
     match e {
-        Effect::Damping | Effect::ElectrochemicalNonlinearity => 3,
+        Effect::Damping => 3,
+        Effect::ElectrochemicalNonlinearity => 4,
         Effect::SegmentVariation => fit
             .estimates
             .iter()
@@ -1036,18 +1046,28 @@ fn signature_tests(e: Effect, fit: &FitResult, alone: &[usize]) -> usize {
 
 /// Whether the electrochemical terms alone show
 /// `electrochemical-nonlinearity` at `z`: yes where the leak grows faster
-/// than the voltage or the charge departs from linear, each beyond its
-/// interval; no where the leak bends below linear; `None` where the joint
+/// than the voltage, the steady current of the leak and a reaction behind
+/// the double layer departs from linear by more than
+/// [`reaction::REACTION_ALIKE`] up to the session's highest drive
+/// (`reaction`: the departure and its standard error,
+/// [`reaction::departure_at`]), or the charge departs from linear, each beyond
+/// its interval; no where the leak bends below linear; `None` where the joint
 /// test of the two decides. Electrolysis adds a current that grows faster
 /// than the voltage (Butler–Volmer's `sinh`; docs/FORMAT.md's note on the
 /// catalogue): a leak bending the other way is some other slow current (a
 /// current zero wandering between rests: lab rig seed 20024, a
 /// back-relaxing strip, was named so at 1.05 % held out). The charge may
 /// bend either way.
-fn electrochemistry_alone(estimates: &[Estimate], z: f64) -> Option<bool> {
+fn electrochemistry_alone(
+    estimates: &[Estimate],
+    z: f64,
+    reaction: Option<(f64, f64)>,
+) -> Option<bool> {
     let find = |knob: Knob| estimates.iter().find(|est| est.knob == knob);
     let leak = find(Knob::LeakCubic);
+    let reacts = reaction.is_some_and(|(d, se)| d - z * se > reaction::REACTION_ALIKE);
     if leak.is_some_and(|est| above_zero_at(est, z))
+        || reacts
         || find(Knob::ChargeCubic).is_some_and(|est| excludes_at(est, 0.0, z))
     {
         Some(true)
@@ -1101,20 +1121,33 @@ mod tests {
             est(Knob::ChargeCubic, 0.0, 1e-3),
             est(Knob::LeakCubic, -2e-2, 1e-3),
         ];
-        assert_eq!(electrochemistry_alone(&up, z), Some(true));
-        assert_eq!(electrochemistry_alone(&down, z), Some(false));
+        assert_eq!(electrochemistry_alone(&up, z, None), Some(true));
+        assert_eq!(electrochemistry_alone(&down, z, None), Some(false));
         // A charge off linear shows it whichever way the leak bends.
         let charge = [
             est(Knob::ChargeCubic, -2e-2, 1e-3),
             est(Knob::LeakCubic, -2e-2, 1e-3),
         ];
-        assert_eq!(electrochemistry_alone(&charge, z), Some(true));
+        assert_eq!(electrochemistry_alone(&charge, z, None), Some(true));
         // Within their intervals, the joint test decides.
         let unsure = [
             est(Knob::ChargeCubic, 1e-4, 1e-3),
             est(Knob::LeakCubic, 1e-4, 1e-3),
         ];
-        assert_eq!(electrochemistry_alone(&unsure, z), None);
+        assert_eq!(electrochemistry_alone(&unsure, z, None), None);
+        // A steady current half again over linear at the highest drive,
+        // sure to a hundredth, whichever way the leak's cubic bends;
+        // one within its interval of the margin is no evidence.
+        assert_eq!(
+            electrochemistry_alone(&down, z, Some((0.5, 0.01))),
+            Some(true)
+        );
+        let unsure_reaction = Some((super::reaction::REACTION_ALIKE + 0.1, 0.1));
+        assert_eq!(
+            electrochemistry_alone(&down, z, unsure_reaction),
+            Some(false)
+        );
+        assert_eq!(electrochemistry_alone(&unsure, z, unsure_reaction), None);
     }
 
     #[test]

@@ -16,7 +16,7 @@ use super::inflation::{profile_cost, Inflation};
 use super::mode_start;
 use super::race::{Lane, Progress};
 use super::sampling::Sampling;
-use super::space::{Knob, Space};
+use super::space::{self, Knob, Space};
 use super::stage::{descend, Problem, Stage, PATIENCE};
 use super::start;
 use super::stats::{self, ChannelFit, Estimate, Score};
@@ -446,6 +446,12 @@ impl<'a> Fitter<'a> {
         Ok(Score::new(channels))
     }
 
+    /// `fixed` carrying the session's highest drive, over all its
+    /// recordings ([`space::with_session_peak`]).
+    fn with_reaction_ref(&self, fixed: ModelSpec) -> ModelSpec {
+        space::with_session_peak(fixed, peak_drive_v(self.session))
+    }
+
     /// Fits the baseline plus `effects` on `recordings`, from `start` (or
     /// from estimates read off the data when `None`).
     pub fn fit(
@@ -566,7 +572,7 @@ impl<'a> Fitter<'a> {
     ) -> Result<Descended, FitError> {
         self.data_to_fit(recordings)?;
         let segments = self.session.recordings[0].rec.meta.segments;
-        let space = Space::new(effects, segments, fixed);
+        let space = Space::new(effects, segments, self.with_reaction_ref(fixed));
         let start = match start {
             Some(s) => *s,
             None => start::from_data(
@@ -592,6 +598,8 @@ impl<'a> Fitter<'a> {
         patience: usize,
     ) -> Result<FitResult, FitError> {
         self.data_to_fit(recordings)?;
+        let mut space = space;
+        space.fixed = self.with_reaction_ref(space.fixed);
         pool().install(|| {
             let d = self.descend_space_here(recordings, space, start, patience, None)?;
             self.finish(recordings, d)
@@ -674,6 +682,9 @@ impl<'a> Fitter<'a> {
                 .filter(|&j| !(hold_charge && space.knobs[j] == Knob::ChargeCubic))
                 .collect();
             let free = &free;
+            if !beam {
+                theta = self.best_reaction_start(recordings, &space, theta, &inflation);
+            }
             for round in 0..=INFLATION_ROUNDS {
                 let run =
                     |spec: &ModelSpec| self.stage_residuals(*stage, recordings, spec, &inflation);
@@ -718,6 +729,37 @@ impl<'a> Fitter<'a> {
             termination,
             given_up,
         })
+    }
+
+    /// Of `theta` and the reaction's grid of starts around it
+    /// ([`Space::reaction_starts`]), the one whose currents fit best:
+    /// sixteen runs of the circuit alone, against a Jacobian's one per
+    /// knob at every step of the descent. A start the model refuses is
+    /// passed over (the descent from `theta` reports its own errors).
+    fn best_reaction_start(
+        &self,
+        recordings: &[usize],
+        space: &Space,
+        theta: Vec<f64>,
+        inflation: &Inflation,
+    ) -> Vec<f64> {
+        let cost = |t: &[f64]| {
+            self.stage_residuals(Stage::Circuit, recordings, &space.spec(t), inflation)
+                .map(|r| r.iter().map(|x| x * x).sum::<f64>())
+                .ok()
+                .filter(|c| c.is_finite())
+        };
+        let starts = space.reaction_starts(&theta);
+        if starts.is_empty() {
+            return theta;
+        }
+        let mut best = (cost(&theta).unwrap_or(f64::INFINITY), theta);
+        for t in starts {
+            if let Some(c) = cost(&t).filter(|&c| c < best.0) {
+                best = (c, t);
+            }
+        }
+        best.1
     }
 
     /// The intervals and the criteria at the end of descents `d`, in the
@@ -915,4 +957,12 @@ pub(super) struct Descended {
     /// Whether a race gave this start up (`race.rs`): then `score` is
     /// empty and nothing else is to be read.
     given_up: bool,
+}
+/// The highest drive any recording of `session` applies, V.
+pub fn peak_drive_v(session: &Session) -> f64 {
+    session
+        .recordings
+        .iter()
+        .flat_map(|r| r.drive().v_v.as_flat())
+        .fold(0.0f64, |m, &v| m.max(v.abs()))
 }

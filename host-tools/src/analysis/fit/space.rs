@@ -41,6 +41,13 @@ pub enum Knob {
     ChargeCubic,
     /// `b` of `v/R2 (1 + b v²)`, 1/V² (electrochemical nonlinearity).
     LeakCubic,
+    /// The reaction behind the double layer (electrochemical
+    /// nonlinearity; [`model_core::Reaction`]): the layer's voltage at
+    /// which its current equals the linear leak's, V (its ratio held at 1;
+    /// fitted as the voltage's logarithm).
+    ReactionRef,
+    /// The reaction's Tafel voltage `b`, V (fitted as `ln b`).
+    ReactionTafel,
     /// `κ` (segment crosstalk).
     Crosstalk,
     /// Dehydration rate, 1/s.
@@ -121,7 +128,16 @@ impl Knob {
     /// Whether the parameter is positive by its nature (its interval is
     /// then reported on a log scale).
     pub fn positive(&self) -> bool {
-        matches!(self, Knob::R1 | Knob::R2 | Knob::C | Knob::P | Knob::Ei)
+        matches!(
+            self,
+            Knob::R1
+                | Knob::R2
+                | Knob::C
+                | Knob::P
+                | Knob::Ei
+                | Knob::ReactionRef
+                | Knob::ReactionTafel
+        )
     }
 
     /// Whether the value is a ramp of `θ`, held at 0 for every `θ ≤ 0`
@@ -157,6 +173,8 @@ impl Knob {
             Knob::QuadraticDrag => "drag_quadratic_n_s2_per_m3",
             Knob::ChargeCubic => "charge_cubic_per_v2",
             Knob::LeakCubic => "leak_cubic_per_v2",
+            Knob::ReactionRef => "reaction_ref_v",
+            Knob::ReactionTafel => "reaction_tafel_v",
             Knob::Crosstalk => "crosstalk",
             Knob::Dehydration => "dehydration_per_s",
             Knob::DryingCurvature => "dehydration_curvature",
@@ -178,6 +196,8 @@ impl Knob {
                 | Knob::C
                 | Knob::ChargeCubic
                 | Knob::LeakCubic
+                | Knob::ReactionRef
+                | Knob::ReactionTafel
                 | Knob::SegmentR1(_)
                 | Knob::SegmentC(_)
         )
@@ -219,6 +239,33 @@ const ADDED_MASS_SCALE: f64 = 1e-2;
 const QUADRATIC_DRAG_SCALE: f64 = 10.0;
 /// Cubic electrochemical terms, 1/V².
 const CUBIC_SCALE: f64 = 1e-2;
+/// The reaction's voltages (where its current equals the linear leak's)
+/// a fit reaches, V: water's electrolysis sets in about 1.2 V, and a
+/// reaction matching the leak below half a volt is a second leak, which
+/// trades with `R2` (literature rig board session 52011 ran it to a
+/// twentieth of a volt and a volt a Tafel voltage, and neither the leak
+/// nor the reaction could then show); above ten, out of any drive's reach.
+const REACTION_REF_MIN_V: f64 = 0.5;
+const REACTION_REF_MAX_V: f64 = 10.0;
+/// The reaction's Tafel voltage a fit starts from, V (water's
+/// electrolysis on platinum: tens of millivolts a decade).
+const TAFEL_START_V: f64 = 0.1;
+/// The reaction's Tafel voltages a fit reaches, V: steeper than a tenth
+/// of the start is a step; electrolysis's Tafel slopes are 30 to 120 mV
+/// a decade (13 to 52 mV an `e`-fold), and one flatter than 0.2 V an
+/// `e`-fold is a leak's, not a reaction's.
+const TAFEL_MIN_V: f64 = 0.01;
+const TAFEL_MAX_V: f64 = 0.2;
+/// The session's highest drive a fit assumes where it was given none
+/// ([`with_session_peak`]), V.
+const PEAK_DRIVE_V: f64 = 3.0;
+/// The reaction's grid of starts ([`Space::reaction_starts`]): voltages
+/// from a volt (below water's 1.23 V, as overpotentials and a layer short
+/// of the drive allow) to the session's peak in this many steps, each
+/// with these Tafel voltages (electrolysis's slopes, steep to flat).
+const REACTION_GRID_LOW_V: f64 = 1.0;
+const REACTION_GRID_STEPS: usize = 5;
+const REACTION_GRID_TAFEL_V: [f64; 3] = [0.025, 0.05, 0.1];
 /// Crosstalk fraction.
 const CROSSTALK_SCALE: f64 = 0.1;
 /// Dehydration rate, 1/s.
@@ -304,6 +351,28 @@ fn instant_or_gain(p: &model_core::Params) -> f64 {
     }
 }
 
+/// The session's highest drive `fixed` carries, V (held in its
+/// reaction's voltage, which a fixed model leaves off:
+/// [`with_session_peak`]), or [`PEAK_DRIVE_V`].
+pub fn session_peak_v(fixed: &ModelSpec) -> f64 {
+    match fixed.ext.reaction_ref_v {
+        v if v > 0.0 && fixed.ext.reaction_ratio == 0.0 => v,
+        _ => PEAK_DRIVE_V,
+    }
+}
+
+/// `fixed` carrying the session's highest drive `peak_v`, V: a reaction
+/// starts with its voltage there (its current the linear leak's at a
+/// voltage the layer never quite reaches: a few percent of the leak's at
+/// most, and at a smaller drive next to nothing), and shows where the
+/// fitted voltage lies below it beyond its interval.
+pub fn with_session_peak(mut fixed: ModelSpec, peak_v: f64) -> ModelSpec {
+    if fixed.ext.reaction_ratio == 0.0 && peak_v > 0.0 {
+        fixed.ext.reaction_ref_v = peak_v.clamp(REACTION_REF_MIN_V, REACTION_REF_MAX_V);
+    }
+    fixed
+}
+
 /// A model structure (baseline plus effects) and its parameter space.
 #[derive(Clone, Debug)]
 pub struct Space {
@@ -330,7 +399,12 @@ impl Space {
                 Effect::BeamStiffness => &[Knob::Ei],
                 Effect::Damping => &[Knob::Zeta, Knob::Beta],
                 Effect::HydrodynamicLoading => &[Knob::AddedMass, Knob::QuadraticDrag],
-                Effect::ElectrochemicalNonlinearity => &[Knob::ChargeCubic, Knob::LeakCubic],
+                Effect::ElectrochemicalNonlinearity => &[
+                    Knob::ChargeCubic,
+                    Knob::LeakCubic,
+                    Knob::ReactionRef,
+                    Knob::ReactionTafel,
+                ],
                 Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
                 Effect::SegmentCrosstalk => &[Knob::Crosstalk],
                 Effect::SegmentVariation => &[],
@@ -375,6 +449,36 @@ impl Space {
             .iter()
             .position(|k| *k == Knob::ChargeCubic)
             .is_some_and(|j| theta[j] * CUBIC_SCALE <= CUBIC_FLOOR * (1.0 - 1e-9))
+    }
+
+    /// Starts for the reaction's two knobs around `theta`, the other
+    /// knobs as there: its voltage on a geometric grid from
+    /// [`REACTION_GRID_LOW_V`] to the session's peak, each with each of
+    /// [`REACTION_GRID_TAFEL_V`]. The descent needs one: the reaction's
+    /// current is exponential in both, so from the peak (where it starts,
+    /// drawing next to nothing) the gradient flattens the Tafel voltage
+    /// rather than lowering the onset (literature rig session 52002 ended
+    /// at the flattest, ΔBIC −11,000, where `finrs fit` from an onset below
+    /// the peak had found −41,000). Empty without the reaction.
+    pub fn reaction_starts(&self, theta: &[f64]) -> Vec<Vec<f64>> {
+        let at = |k: Knob| self.knobs.iter().position(|&x| x == k);
+        let (Some(r), Some(b)) = (at(Knob::ReactionRef), at(Knob::ReactionTafel)) else {
+            return Vec::new();
+        };
+        let peak = session_peak_v(&self.fixed).clamp(REACTION_REF_MIN_V, REACTION_REF_MAX_V);
+        let low = REACTION_GRID_LOW_V.min(peak);
+        let steps = REACTION_GRID_STEPS - 1;
+        (0..=steps)
+            .map(|k| low * (peak / low).powf(k as f64 / steps as f64))
+            .flat_map(|ref_v| {
+                REACTION_GRID_TAFEL_V.map(|tafel_v| {
+                    let mut t = theta.to_vec();
+                    t[r] = ref_v.ln();
+                    t[b] = tafel_v.ln();
+                    t
+                })
+            })
+            .collect()
     }
 
     /// Whether the structure includes `e`.
@@ -438,6 +542,13 @@ impl Space {
                     spec.ext.charge_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_FLOOR)
                 }
                 Knob::LeakCubic => spec.ext.leak_cubic_per_v2 = (t * CUBIC_SCALE).max(CUBIC_FLOOR),
+                Knob::ReactionRef => {
+                    spec.ext.reaction_ratio = 1.0;
+                    spec.ext.reaction_ref_v = t.exp().clamp(REACTION_REF_MIN_V, REACTION_REF_MAX_V);
+                }
+                Knob::ReactionTafel => {
+                    spec.ext.reaction_tafel_v = t.exp().clamp(TAFEL_MIN_V, TAFEL_MAX_V)
+                }
                 Knob::Crosstalk => spec.ext.crosstalk = (t * CROSSTALK_SCALE).clamp(-0.95, 0.95),
                 Knob::Dehydration => spec.dehydration_per_s = ramp(t, DEHYDRATION_SCALE),
                 Knob::DryingCurvature => {
@@ -543,6 +654,26 @@ impl Space {
                 Knob::QuadraticDrag => spec.ext.drag_quadratic_n_s2_per_m3 / QUADRATIC_DRAG_SCALE,
                 Knob::ChargeCubic => spec.ext.charge_cubic_per_v2 / CUBIC_SCALE,
                 Knob::LeakCubic => spec.ext.leak_cubic_per_v2 / CUBIC_SCALE,
+                Knob::ReactionRef => {
+                    // Off, it starts at the session's highest drive.
+                    if spec.ext.reaction_ratio > 0.0 {
+                        spec.ext
+                            .reaction_ref_v
+                            .clamp(REACTION_REF_MIN_V, REACTION_REF_MAX_V)
+                            .ln()
+                    } else {
+                        session_peak_v(&self.fixed).ln()
+                    }
+                }
+                Knob::ReactionTafel => {
+                    // Off, its Tafel voltage is unset: the start's.
+                    let b = spec.ext.reaction_tafel_v;
+                    if spec.ext.reaction_ratio > 0.0 && b > 0.0 {
+                        b.clamp(TAFEL_MIN_V, TAFEL_MAX_V).ln()
+                    } else {
+                        TAFEL_START_V.ln()
+                    }
+                }
                 Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
                 Knob::Dehydration => spec.dehydration_per_s / DEHYDRATION_SCALE,
                 Knob::DryingCurvature => spec.dehydration_curvature,
@@ -571,6 +702,8 @@ impl Space {
             Knob::QuadraticDrag => spec.ext.drag_quadratic_n_s2_per_m3,
             Knob::ChargeCubic => spec.ext.charge_cubic_per_v2,
             Knob::LeakCubic => spec.ext.leak_cubic_per_v2,
+            Knob::ReactionRef => spec.ext.reaction_ref_v,
+            Knob::ReactionTafel => spec.ext.reaction_tafel_v,
             Knob::Crosstalk => spec.ext.crosstalk,
             Knob::Dehydration => spec.dehydration_per_s,
             Knob::DryingCurvature => spec.dehydration_curvature,
@@ -629,6 +762,74 @@ mod tests {
         assert_eq!(at(-1.0), 0.0);
         assert_eq!(at(2.0), 2.0);
         assert_eq!(at(300.0), DRYING_CURVATURE_MAX);
+    }
+
+    #[test]
+    fn the_reaction_starts_at_the_sessions_peak_and_stays_in_its_range() {
+        let fixed = ModelSpec::baseline(Params::main_m_2006());
+        let knob = |space: &Space, k: Knob| space.knobs.iter().position(|&x| x == k).unwrap();
+        // Without a session's peak, the assumed one; with it, that.
+        for (peak, want) in [(0.0, PEAK_DRIVE_V), (2.5, 2.5), (40.0, REACTION_REF_MAX_V)] {
+            let fixed = with_session_peak(fixed, peak);
+            let space = Space::new(&[Effect::ElectrochemicalNonlinearity], 3, fixed);
+            let theta = space.theta(&fixed);
+            let spec = space.spec(&theta);
+            assert!((spec.ext.reaction_ref_v - want).abs() < 1e-12, "{peak}");
+            assert_eq!(spec.ext.reaction_ratio, 1.0);
+            assert!((spec.ext.reaction_tafel_v - TAFEL_START_V).abs() < 1e-12);
+            // The carried peak is no reaction in a model without it.
+            assert_eq!(Space::new(&[], 3, fixed).spec(&[]).ext.reaction_ratio, 0.0);
+            // Far out, each value is held at its bound.
+            let mut far = theta.clone();
+            far[knob(&space, Knob::ReactionRef)] = -50.0;
+            far[knob(&space, Knob::ReactionTafel)] = 50.0;
+            let spec = space.spec(&far);
+            assert_eq!(spec.ext.reaction_ref_v, REACTION_REF_MIN_V);
+            assert_eq!(spec.ext.reaction_tafel_v, TAFEL_MAX_V);
+            // And a fitted reaction's θ gives it back.
+            let back = space.spec(&space.theta(&spec));
+            assert!((back.ext.reaction_ref_v - REACTION_REF_MIN_V).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_reactions_starts_span_a_volt_to_the_peak_at_each_tafel_voltage() {
+        let fixed = with_session_peak(ModelSpec::baseline(Params::main_m_2006()), 3.2);
+        let space = Space::new(&[Effect::ElectrochemicalNonlinearity], 3, fixed);
+        let theta = space.theta(&fixed);
+        let starts = space.reaction_starts(&theta);
+        assert_eq!(
+            starts.len(),
+            REACTION_GRID_STEPS * REACTION_GRID_TAFEL_V.len()
+        );
+        let specs: Vec<ModelSpec> = starts.iter().map(|t| space.spec(t)).collect();
+        let refs: Vec<f64> = specs.iter().map(|s| s.ext.reaction_ref_v).collect();
+        assert!((refs[0] - REACTION_GRID_LOW_V).abs() < 1e-12);
+        assert!((refs[refs.len() - 1] - 3.2).abs() < 1e-12);
+        for s in &specs {
+            assert!(REACTION_GRID_TAFEL_V
+                .iter()
+                .any(|b| (s.ext.reaction_tafel_v - b).abs() < 1e-12));
+            // Every other knob as it was.
+            assert_eq!(
+                s.params.r1_ohm.to_bits(),
+                space.spec(&theta).params.r1_ohm.to_bits()
+            );
+        }
+        // A session whose peak is below a volt starts at its peak alone.
+        let low = Space::new(
+            &[Effect::ElectrochemicalNonlinearity],
+            3,
+            with_session_peak(fixed, 0.8),
+        );
+        let starts = low.reaction_starts(&low.theta(&low.fixed));
+        assert!(starts
+            .iter()
+            .all(|t| (low.spec(t).ext.reaction_ref_v - 0.8).abs() < 1e-12));
+        // Without the reaction, none.
+        assert!(Space::new(&[Effect::Damping], 3, fixed)
+            .reaction_starts(&[])
+            .is_empty());
     }
 
     #[test]
