@@ -36,6 +36,13 @@ const MAX_NEWTON: usize = 100;
 /// layer 200 Tafel voltages over its reference carries no meaning.
 const MAX_EXPONENT: f64 = 200.0;
 
+/// The exponent `2|v|/b` past which `1 ± e^{−2|v|/b}` rounds to 1
+/// (`e^{−38} ≈ 3.1·10⁻¹⁷ < 2⁻⁵⁴`): a layer 19 Tafel voltages up.
+const FALL_NEGLIGIBLE: f64 = 38.0;
+
+/// The solve's tolerance on the layer's voltage, relative to `1 + |w|`.
+const TOLERANCE: f64 = 1e-12;
+
 /// A Butler–Volmer reaction behind one double layer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reaction {
@@ -69,7 +76,13 @@ impl Reaction {
     pub fn current_a(&self, v: f64) -> (f64, f64) {
         let (a, b) = (libm::fabs(v), self.tafel_v);
         let grow = libm::exp(((a - self.ref_v) / b).min(MAX_EXPONENT)) / self.ref_norm;
-        let fall = libm::exp(-2.0 * a / b);
+        // Past FALL_NEGLIGIBLE, 1 ± e^{−2a/b} rounds to 1: the second
+        // exponential would change no bit.
+        let fall = if 2.0 * a / b > FALL_NEGLIGIBLE {
+            0.0
+        } else {
+            libm::exp(-2.0 * a / b)
+        };
         let i = self.ref_a * grow * (1.0 - fall);
         let slope = self.ref_a * grow * (1.0 + fall) / b;
         (if v < 0.0 { -i } else { i }, slope)
@@ -81,7 +94,15 @@ impl Reaction {
     /// i(v_C⁺)`. With `k = R1` and `v_lin = v` it is the layer's steady
     /// voltage under `v`.
     pub fn drive_v(&self, v: f64, v_lin: f64, k: f64, r1_ohm: f64) -> f64 {
-        v - r1_ohm * self.current_a(self.layer_v(v_lin, k)).0
+        let w = self.layer_v(v_lin, k);
+        // At the root `k i(w) = v_lin − w`: the current without another
+        // pair of exponentials, and the step then lands on the root.
+        let i = if k > 0.0 {
+            (v_lin - w) / k
+        } else {
+            self.current_a(w).0
+        };
+        v - r1_ohm * i
     }
 
     /// The root `w` of `w + k i(w) = v_lin`: the current is odd, so the
@@ -118,13 +139,17 @@ impl Reaction {
             } else {
                 lo = w;
             }
-            let mut next = w - f / df;
-            if !(next > lo && next < hi) {
-                next = 0.5 * (lo + hi);
-            }
+            let newton = w - f / df;
+            let bisects = !(newton > lo && newton < hi);
+            let next = if bisects { 0.5 * (lo + hi) } else { newton };
             let step = libm::fabs(next - w);
+            let newton_down = !bisects && f > 0.0;
             w = next;
-            if step <= 1e-12 * (1.0 + w) || hi - lo <= 1e-12 * (1.0 + w) {
+            let tol = TOLERANCE * (1.0 + w);
+            // From above the root, h convex, Newton's step leaves an
+            // error below step²·h''/(2h') ≤ step²/(2b) (i'' ≤ i'/b for
+            // a sinh): under the tolerance, no further evaluation is owed.
+            if step <= tol || hi - lo <= tol || (newton_down && step * step <= self.tafel_v * tol) {
                 break;
             }
             at_w = h(w);
@@ -182,7 +207,26 @@ mod tests {
             let back = w + r1 * r.current_a(w).0;
             assert!((back - v).abs() < 1e-8 * (1.0 + v.abs()), "{v}: {w} {back}");
             assert!(w.abs() <= v.abs() && w * v >= 0.0, "{v}: {w}");
-            assert_eq!(r.drive_v(v, v, r1, r1), w);
+            // The drive takes the current off the root's balance: the
+            // same to the solve's tolerance.
+            assert!((r.drive_v(v, v, r1, r1) - w).abs() < 1e-11, "{v}");
+        }
+    }
+
+    #[test]
+    fn far_up_the_second_exponential_changes_no_bit() {
+        let r = Reaction::new(0.3, 1.5, 0.08, 500.0);
+        // Just past the cut (2v/b = 38 at 1.52 V) and far beyond it.
+        for v in [1.5201f64, 1.6, 3.0, -2.5] {
+            let (a, b) = (v.abs(), 0.08);
+            let fall = (-2.0 * a / b).exp();
+            assert_eq!(1.0 - fall, 1.0, "{v}");
+            assert_eq!(1.0 + fall, 1.0, "{v}");
+            let grow = ((a - 1.5) / b).exp() / (1.0 - (-2.0 * 1.5 / b).exp());
+            let i = 0.3 * 1.5 / 500.0 * grow;
+            let (got, slope) = r.current_a(v);
+            assert!((got - i.copysign(v)).abs() <= 1e-14 * i, "{v}");
+            assert!((slope - i / b).abs() <= 1e-14 * i / b, "{v}");
         }
     }
 
