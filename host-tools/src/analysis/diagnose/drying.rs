@@ -23,21 +23,10 @@ pub fn loss_over(fit: &FitResult, span_s: f64) -> Option<(f64, f64)> {
     let r = fit.estimates[ir].value;
     let c = ic.map_or(0.0, |i| fit.estimates[i].value);
     let (loss, d_r, d_c) = loss_and_gradient(r, c, span_s);
-    // A knob the fit held (an infinite variance) counts as known, as the
-    // joint tests count it ([`FitResult::jointly_excludes`]).
-    let terms: Vec<(usize, f64)> = std::iter::once((ir, d_r))
+    let gradient: Vec<(usize, f64)> = std::iter::once((ir, d_r))
         .chain(ic.map(|i| (i, d_c)))
-        .filter(|&(i, _)| fit.value_covariance[(i, i)].is_finite())
         .collect();
-    let var: f64 = terms
-        .iter()
-        .flat_map(|&(a, ga)| {
-            terms
-                .iter()
-                .map(move |&(b, gb)| ga * gb * fit.value_covariance[(a, b)])
-        })
-        .sum();
-    Some((loss, var.max(0.0).sqrt()))
+    Some((loss, fit.delta_method_se(&gradient)))
 }
 
 /// `L = 1 − (1 + c r T)^(−1/c)` and its derivatives in `r` and `c`.

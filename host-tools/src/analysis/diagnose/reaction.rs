@@ -46,22 +46,8 @@ pub fn departure_at(fit: &FitResult, peak_v: f64) -> Option<(f64, f64)> {
         down[k] -= h;
         (departure(up, peak_v) - departure(down, peak_v)) / (2.0 * h)
     });
-    // A knob the fit held (an infinite variance) counts as known, as the
-    // drying's loss counts it (`drying.rs`).
-    let terms: Vec<(usize, f64)> = idx
-        .into_iter()
-        .zip(grad)
-        .filter(|&(i, _)| fit.value_covariance[(i, i)].is_finite())
-        .collect();
-    let var: f64 = terms
-        .iter()
-        .flat_map(|&(a, ga)| {
-            terms
-                .iter()
-                .map(move |&(b, gb)| ga * gb * fit.value_covariance[(a, b)])
-        })
-        .sum();
-    Some((d, var.max(0.0).sqrt()))
+    let gradient: Vec<(usize, f64)> = idx.into_iter().zip(grad).collect();
+    Some((d, fit.delta_method_se(&gradient)))
 }
 
 /// `D` of `[R1, R2, v_ref, b]` at drive `v`.

@@ -139,6 +139,28 @@ impl FitResult {
         stats::wald_excludes(&d, &sigma, tail)
     }
 
+    /// The standard error of a function of the estimates whose gradient
+    /// is `gradient` (each estimate's index and the derivative there), by
+    /// the delta method over their covariance. A knob the fit held (an
+    /// infinite variance) counts as known, as [`Self::jointly_excludes`]
+    /// counts it.
+    pub fn delta_method_se(&self, gradient: &[(usize, f64)]) -> f64 {
+        let known: Vec<(usize, f64)> = gradient
+            .iter()
+            .copied()
+            .filter(|&(i, _)| self.value_covariance[(i, i)].is_finite())
+            .collect();
+        let var: f64 = known
+            .iter()
+            .flat_map(|&(a, ga)| {
+                known
+                    .iter()
+                    .map(move |&(b, gb)| ga * gb * self.value_covariance[(a, b)])
+            })
+            .sum();
+        var.max(0.0).sqrt()
+    }
+
     /// The parameter file for this fit: the seed's material; `[beam]` when
     /// the fit freed `EI` (its `ρA` from the laminate of the fitted
     /// strip); `[extensions]` when any effect is on.
