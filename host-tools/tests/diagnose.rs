@@ -168,6 +168,25 @@ fn electrochemical_nonlinearity_is_named() {
     let v = verdict_for("electro", &sample(ext), 25);
     assert_eq!(v.causes, ["electrochemical-nonlinearity"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
+    // Its candidate carries the reaction's departure, and no drying loss.
+    let c = joined(&v, "electrochemical-nonlinearity");
+    let d = c.evidence["reaction_departure"];
+    assert!(
+        d.value.is_finite() && d.se.is_finite() && d.se >= 0.0,
+        "{d:?}"
+    );
+    assert!(!c.evidence.contains_key("drying_loss"), "{c:?}");
+}
+
+/// The candidate that joined as `name`.
+fn joined<'a>(
+    v: &'a finrs::analysis::diagnose::Verdict,
+    name: &str,
+) -> &'a finrs::analysis::diagnose::Candidate {
+    v.candidates
+        .iter()
+        .find(|c| c.name == name && c.passed && !c.backward)
+        .unwrap_or_else(|| panic!("no {name} joined: {v:#?}"))
 }
 
 #[test]
@@ -190,6 +209,9 @@ fn dehydration_is_named() {
     let v = verdict_for("dry", &spec, 27);
     assert_eq!(v.causes, ["dehydration"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
+    // The loss its signature read, beyond its error.
+    let loss = joined(&v, "dehydration").evidence["drying_loss"];
+    assert!(loss.value > 2.0 * loss.se && loss.se > 0.0, "{loss:?}");
 }
 
 #[test]

@@ -63,5 +63,5 @@ pub use floors::{sensor_floors, SensorFloor, NOISE_FLOOR_RATIO};
 pub use gates::{DELTA_BIC, FAMILY_ALPHA, HOLDOUT_RSS_GAIN};
 pub use rests::{rest_structure, BenchFinding, RestStructure, REST_STRUCTURE_SHARE};
 pub use search::{diagnose, split, tested_channels, untestable, MAX_CAUSES};
-pub use verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
+pub use verdict::{Candidate, Diagnosis, Evidence, ModelScore, ResidualTest, Untestable, Verdict};
 pub use whiteness::INPUT_LAGS;

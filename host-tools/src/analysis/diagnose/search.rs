@@ -12,7 +12,9 @@ use super::gates::{each_mode_damping_kept, holdout_gain, holdout_gain_passes, Ba
 use super::identify;
 use super::reaction;
 use super::rests::{rest_structure, BenchFinding};
-use super::verdict::{Candidate, Diagnosis, ModelScore, ResidualTest, Untestable, Verdict};
+use super::verdict::{
+    Candidate, Diagnosis, Evidence, ModelScore, ResidualTest, Untestable, Verdict,
+};
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
 use crate::analysis::fit::{above_zero_at, below_zero_at, beyond_at, excludes_at, Estimate};
@@ -662,6 +664,7 @@ impl Search<'_> {
             backward: false,
             lone_drives: true,
             params: [(Knob::Crosstalk.name().to_string(), kappa.value)].into(),
+            evidence: Default::default(),
         });
         if !passed {
             return Ok((self.fixed, None));
@@ -845,8 +848,28 @@ impl Search<'_> {
                 .filter(|est| !est.knob.is_baseline())
                 .map(|est| (est.knob.name().to_string(), est.value))
                 .collect(),
+            evidence: evidence(fit, &self.fixed, self.span_s),
         }
     }
+}
+
+/// The statistics `fit`'s signatures read beyond its knobs' intervals
+/// ([`Candidate::evidence`]).
+fn evidence(
+    fit: &FitResult,
+    fixed: &ModelSpec,
+    span_s: f64,
+) -> std::collections::BTreeMap<String, Evidence> {
+    [
+        (
+            "reaction_departure",
+            reaction::departure_at(fit, session_peak_v(fixed)),
+        ),
+        ("drying_loss", drying::loss_over(fit, span_s)),
+    ]
+    .into_iter()
+    .filter_map(|(name, stat)| stat.map(|(value, se)| (name.to_string(), Evidence { value, se })))
+    .collect()
 }
 
 /// Whiteness of the held-out residuals, baseline and final model side by

@@ -55,6 +55,23 @@ pub struct Candidate {
     pub lone_drives: bool,
     /// Its fitted extra parameters.
     pub params: std::collections::BTreeMap<String, f64>,
+    /// The statistics its signature reads beyond its knobs' own
+    /// intervals, where its fit has them: `reaction_departure`, the
+    /// steady current's departure from linear at the highest drive
+    /// (`reaction.rs`), and `drying_loss`, the moment's gain lost over
+    /// the session (`drying.rs`); each the value and its standard error,
+    /// so that a sweep can show how far from their margins they fall.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub evidence: std::collections::BTreeMap<String, Evidence>,
+}
+
+/// A statistic and its standard error ([`Candidate::evidence`]).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Evidence {
+    /// The value.
+    pub value: f64,
+    /// Its standard error (the delta method over the fit's covariance).
+    pub se: f64,
 }
 
 /// Residual whiteness of one channel of one held-out recording.
