@@ -1,6 +1,6 @@
 //! Speed of the model core: one step, a 20 s run, and the discretisation.
 //!
-//! `cargo bench -p model-core`; the numbers we measured are in BENCHMARKS.md.
+//! `cargo bench -p model-core`; the numbers we measured are in docs/speed.md.
 
 use std::f64::consts::PI;
 use std::hint::black_box;
