@@ -19,8 +19,8 @@ use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
 use crate::analysis::fit::{above_zero_at, below_zero_at, beyond_at, excludes_at, Estimate};
 use crate::analysis::fit::{
-    form, peak_drive_v, profile_cost, session_peak_v, with_session_peak, ChannelFit, Effect,
-    FitError, FitResult, Fitter, Knob, Score,
+    form, profile_cost, session_peak_v, with_session_peak, ChannelFit, Effect, FitError, FitResult,
+    Fitter, Knob, Score,
 };
 use crate::model::predict::ModelSpec;
 use crate::recording::{Fixture, Medium};
@@ -171,7 +171,7 @@ pub fn diagnose(
         train: &train,
         hold: &hold,
         // Carrying the session's highest drive: a reaction shows below it.
-        fixed: with_session_peak(fixed, peak_drive_v(session)),
+        fixed: with_session_peak(fixed, fitter.peak_drive_v()),
         alone: driven_alone(session, &train),
         span_s: span_s(session, &train),
     };

@@ -206,6 +206,9 @@ pub struct Fitter<'a> {
     /// The drift terms of each set of recordings fitted or scored
     /// together, built once per set.
     drift_sets: Mutex<HashMap<Vec<usize>, Arc<DriftSet>>>,
+    /// The highest drive any recording applies, V: where a reaction
+    /// starts and is judged ([`space::with_session_peak`]), read once.
+    peak_drive_v: f64,
 }
 
 impl<'a> Fitter<'a> {
@@ -223,7 +226,17 @@ impl<'a> Fitter<'a> {
             targets: SessionTargets::new(session),
             drift,
             drift_sets: Mutex::new(HashMap::new()),
+            peak_drive_v: session
+                .recordings
+                .iter()
+                .flat_map(|r| r.drive().v_v.as_flat())
+                .fold(0.0f64, |m, &v| m.max(v.abs())),
         }
+    }
+
+    /// The highest drive any recording of the session applies, V.
+    pub fn peak_drive_v(&self) -> f64 {
+        self.peak_drive_v
     }
 
     /// The drift terms of `recordings` fitted or scored together (none
@@ -471,7 +484,7 @@ impl<'a> Fitter<'a> {
     /// `fixed` carrying the session's highest drive, over all its
     /// recordings ([`space::with_session_peak`]).
     fn with_reaction_ref(&self, fixed: ModelSpec) -> ModelSpec {
-        space::with_session_peak(fixed, peak_drive_v(self.session))
+        space::with_session_peak(fixed, self.peak_drive_v)
     }
 
     /// Fits the baseline plus `effects` on `recordings`, from `start` (or
@@ -979,12 +992,4 @@ pub(super) struct Descended {
     /// Whether a race gave this start up (`race.rs`): then `score` is
     /// empty and nothing else is to be read.
     given_up: bool,
-}
-/// The highest drive any recording of `session` applies, V.
-pub fn peak_drive_v(session: &Session) -> f64 {
-    session
-        .recordings
-        .iter()
-        .flat_map(|r| r.drive().v_v.as_flat())
-        .fold(0.0f64, |m, &v| m.max(v.abs()))
 }

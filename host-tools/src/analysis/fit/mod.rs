@@ -39,7 +39,7 @@ pub use data::{Sensor, SessionTargets, Target};
 pub use drift::{Drift, DriftBasis, DRIFT_MAX_DEGREE, DRIFT_SCALE_S};
 pub use effect::Effect;
 pub use error::FitError;
-pub use fitter::{peak_drive_v, FitResult, Fitter, FormCheck, FIT_ELEMENTS};
+pub use fitter::{FitResult, Fitter, FormCheck, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
 pub use space::{difference_step, session_peak_v, with_session_peak, Knob, Space};
 pub use stats::{
