@@ -25,6 +25,7 @@ fn sample(ext: Extensions) -> ModelSpec {
         ext,
         dehydration_per_s: 0.0,
         dehydration_curvature: 0.0,
+        circuit_drying_per_s: 0.0,
         sensors_before_update: false,
     }
 }
@@ -209,8 +210,29 @@ fn dehydration_is_named() {
     let v = verdict_for("dry", &spec, 27);
     assert_eq!(v.causes, ["dehydration"], "{v:#?}");
     assert_eq!(v.verdict, "explained");
-    // The loss its signature read, beyond its error.
-    let loss = joined(&v, "dehydration").evidence["drying_loss"];
+    // The loss its signature read, beyond its error; the currents, which
+    // this strip's drying leaves alone, give the circuit's next to none.
+    let c = joined(&v, "dehydration");
+    let loss = c.evidence["drying_loss"];
+    assert!(loss.value > 2.0 * loss.se && loss.se > 0.0, "{loss:?}");
+    let r_c = c.params["circuit_drying_per_s"];
+    assert!(r_c < 0.1e-3, "{r_c}");
+}
+
+#[test]
+fn a_drying_circuit_is_dehydration_read_off_the_currents() {
+    // The strip conducts and holds less as it dries: every current and
+    // the charge (so the moment) fall by 1/(1 + r_c t), the moment's own
+    // law off.
+    let mut spec = sample(Extensions::NONE);
+    spec.circuit_drying_per_s = 2e-3;
+    let v = verdict_for("dry-circuit", &spec, 27);
+    assert_eq!(v.causes, ["dehydration"], "{v:#?}");
+    assert_eq!(v.verdict, "explained");
+    let c = joined(&v, "dehydration");
+    let r_c = c.params["circuit_drying_per_s"];
+    assert!((r_c - 2e-3).abs() < 0.2e-3, "{r_c}");
+    let loss = c.evidence["drying_loss"];
     assert!(loss.value > 2.0 * loss.se && loss.se > 0.0, "{loss:?}");
 }
 

@@ -20,6 +20,7 @@ fn clean_session(label: &str) -> std::path::PathBuf {
         ext: Extensions::NONE,
         dehydration_per_s: 0.0,
         dehydration_curvature: 0.0,
+        circuit_drying_per_s: 0.0,
         sensors_before_update: false,
     };
     common::write_session(&dir, &spec, &common::short_protocol(), 41);

@@ -51,6 +51,20 @@ pub fn drying_gain(rate_per_s: f64, curvature: f64, t_s: f64) -> f64 {
     }
 }
 
+/// The curvature of the circuit's drying law: `1/(1 + r t)`, a loss that
+/// slows as the water goes. Fixed, not fitted: the circuit's stage runs
+/// before the beam's, which fits the moment's own curvature, and one rate
+/// is what the currents of a session of minutes pin.
+pub const CIRCUIT_CURVATURE: f64 = 1.0;
+
+/// The circuit's admittance gain after drying for `t_s` at rate `r`,
+/// `1/(1 + r t)`: `C` times it, `R1` and `R2` over it. `R1 C` stays, so
+/// the layer's voltage does too, and the currents and the charge are the
+/// wet strip's times the gain.
+pub fn circuit_gain(rate_per_s: f64, t_s: f64) -> f64 {
+    drying_gain(rate_per_s, CIRCUIT_CURVATURE, t_s)
+}
+
 /// [`drying_gain`] at session time `t_start_s + t` for every `t` of
 /// `times_s`: kept ones if there are, else computed and kept.
 pub(super) fn gains(

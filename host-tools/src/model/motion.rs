@@ -92,7 +92,10 @@ pub enum MotionError {
     Wave(#[from] WaveError),
 }
 
-/// The record `finrs tune` sends for `spec`: the board's model.
+/// The record `finrs tune` sends for `spec`: the board's model. The
+/// circuit's drying (`circuit_drying_per_s`) is not in it: the board's
+/// gain tracker measures the strip's admittance as it goes
+/// (docs/model.md, "Holding a motion: the gain tracker").
 pub fn record(spec: &ModelSpec) -> ModelRecord {
     ModelRecord::encode(&StripModel {
         params: spec.params,

@@ -101,6 +101,10 @@ pub struct ExtensionsFile {
     /// Drying curvature `c` (`≥ 0`): the gain is `(1 + c r t)^(−1/c)`,
     /// `e^{−r t}` at 0.
     pub dehydration_curvature: f64,
+    /// Drying rate `r_c` of the circuit's admittance, 1/s: `C`, `1/R1`
+    /// and `1/R2` times `1/(1 + r_c t)` over session time `t`.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub circuit_drying_per_s: f64,
     /// `segment-variation`: each segment's `R1` relative to segment 1's,
     /// minus one, from segment 1 on (segment 1, the reference, is 0);
     /// segments not listed are alike.
@@ -193,11 +197,12 @@ impl ExtensionsFile {
         })
     }
 
-    /// The section for a model's terms and dehydration rate.
+    /// The section for a model's terms and dehydration rates.
     pub fn from_spec(
         ext: &model_core::Extensions,
         dehydration_per_s: f64,
         dehydration_curvature: f64,
+        circuit_drying_per_s: f64,
     ) -> ExtensionsFile {
         ExtensionsFile {
             damping_mass_per_s: ext.damping_mass_per_s,
@@ -218,6 +223,7 @@ impl ExtensionsFile {
             large_deflection: ext.large_deflection,
             dehydration_per_s,
             dehydration_curvature,
+            circuit_drying_per_s,
             segment_r1_deviation: listed(&ext.segment_variation.r1_deviation),
             segment_c_deviation: listed(&ext.segment_variation.c_deviation),
             segment_k_deviation: listed(&ext.segment_variation.k_deviation),
@@ -499,6 +505,7 @@ impl ModelFile {
         for (field, value) in [
             ("dehydration_per_s", ext.dehydration_per_s),
             ("dehydration_curvature", ext.dehydration_curvature),
+            ("circuit_drying_per_s", ext.circuit_drying_per_s),
         ] {
             if !value.is_finite() {
                 return Err(invalid(model_core::ParamError::NotFinite { field, value }));
@@ -529,6 +536,7 @@ impl ModelFile {
             ext: core,
             dehydration_per_s: ext.dehydration_per_s,
             dehydration_curvature: ext.dehydration_curvature,
+            circuit_drying_per_s: ext.circuit_drying_per_s,
             // A bench's, not a parameter file's: the fit finds it.
             sensors_before_update: false,
         })
@@ -644,7 +652,7 @@ mod tests {
         ext.segment_variation.k_deviation[2] = -0.1;
         ext.segment_variation.r1_deviation[1] = 0.05;
         let mut f = ModelFile::main_m_2006();
-        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0, 0.0));
         let text = f.to_toml();
         assert!(
             text.contains("segment_k_deviation = [0.0, 0.0, -0.1]")
@@ -683,7 +691,7 @@ mod tests {
         // above it at 5 %; the free strip undamped.
         ext.modal_damping.blocked[1..].fill(0.05);
         let mut f = ModelFile::main_m_2006();
-        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0, 0.0));
         let text = f.to_toml();
         assert!(
             text.contains("modal_damping_blocked = [0.0, 0.05]")
@@ -709,12 +717,12 @@ mod tests {
         let mut ext = model_core::Extensions::NONE;
         // Off, a written file says nothing of it.
         let mut f = ModelFile::main_m_2006();
-        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0, 0.0));
         assert!(!f.to_toml().contains("reaction"), "{}", f.to_toml());
         ext.reaction_ratio = 0.5;
         ext.reaction_ref_v = 1.6;
         ext.reaction_tafel_v = 0.05;
-        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0));
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 0.0, 0.0, 0.0));
         let text = f.to_toml();
         let back = ModelFile::parse("p.toml", &text).unwrap();
         assert_eq!(back.spec_for(&Geometry::THESIS_2006).unwrap().ext, ext);
@@ -723,6 +731,31 @@ mod tests {
             .and_then(|f| f.spec_for(&Geometry::THESIS_2006).map(|_| ()));
         let err = said(&err.unwrap_err());
         assert!(err.contains("reaction_tafel_v"), "{err}");
+    }
+
+    #[test]
+    fn the_circuits_drying_round_trips_and_a_negative_rate_is_refused() {
+        let ext = model_core::Extensions::NONE;
+        let mut f = ModelFile::main_m_2006();
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 1e-3, 0.5, 0.0));
+        assert!(!f.to_toml().contains("circuit_drying"), "{}", f.to_toml());
+        f.extensions = Some(ExtensionsFile::from_spec(&ext, 1e-3, 0.5, 2e-3));
+        let text = f.to_toml();
+        let spec = ModelFile::parse("p.toml", &text)
+            .and_then(|f| f.spec_for(&Geometry::THESIS_2006))
+            .unwrap();
+        assert_eq!(
+            (spec.dehydration_per_s, spec.circuit_drying_per_s),
+            (1e-3, 2e-3)
+        );
+        let wetter = text.replace(
+            "circuit_drying_per_s = 0.002",
+            "circuit_drying_per_s = -0.002",
+        );
+        let err = ModelFile::parse("p.toml", &wetter)
+            .and_then(|f| f.spec_for(&Geometry::THESIS_2006).map(|_| ()));
+        let err = said(&err.unwrap_err());
+        assert!(err.contains("circuit_drying_per_s"), "{err}");
     }
 
     #[test]

@@ -6,6 +6,8 @@ use model_core::{
     state_len, Circuit, Extensions, Fixture as CoreFixture, ParamError, Params, Strip,
 };
 
+use std::sync::Arc;
+
 use super::{drying, kept_modes};
 use crate::recording::{Channel, Fixture, Recording};
 
@@ -13,7 +15,8 @@ use crate::recording::{Channel, Fixture, Recording};
 pub const ELEMENTS: [usize; 3] = [1, 2, 4];
 
 /// A whole model: the core's parameters, its optional terms, and the
-/// dehydration rate that lowers the moment gain over session time.
+/// dehydration rates that lower the moment gain and the circuit's
+/// admittance over session time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ModelSpec {
     /// The seed's parameters (fitted or preset).
@@ -26,6 +29,12 @@ pub struct ModelSpec {
     /// How drying slows as the strip loses its water, `c ≥ 0` (see
     /// [`drying_gain`]); 0 is a constant rate.
     pub dehydration_curvature: f64,
+    /// Dehydration of the circuit: its admittance falls as
+    /// `s = 1/(1 + r_c t)` over session time `t` (`C s`, `R1/s`, `R2/s`;
+    /// see [`circuit_gain`]), 1/s. The layer's voltage is the same at any
+    /// `s`, so the currents and the charge (and with it the moment) are
+    /// `s` times the wet strip's.
+    pub circuit_drying_per_s: f64,
     /// The bench read each row's currents before it applied the row's
     /// voltage (the finrs board samples at the start of a period, then
     /// drives): the currents are predicted under the previous row's
@@ -34,7 +43,7 @@ pub struct ModelSpec {
     pub sensors_before_update: bool,
 }
 
-pub use super::drying::drying_gain;
+pub use super::drying::{circuit_gain, drying_gain};
 
 impl ModelSpec {
     /// The baseline with these parameters.
@@ -44,6 +53,7 @@ impl ModelSpec {
             ext: Extensions::NONE,
             dehydration_per_s: 0.0,
             dehydration_curvature: 0.0,
+            circuit_drying_per_s: 0.0,
             sensors_before_update: false,
         }
     }
@@ -193,7 +203,8 @@ pub fn predict_blocks(
 }
 
 /// The currents alone, A (`[segment][row]`): the circuit of `spec` over
-/// the drive of `rec` at sample time `dt_s`, without the beam. The same
+/// the drive of `rec` at sample time `dt_s`, the recording starting at
+/// session time `t_start_s`, without the beam. The same
 /// numbers as [`predict`]'s currents, bit for bit (the circuit is upstream
 /// of the beam), at a fraction of the cost: what a fit of the circuit to
 /// the currents runs.
@@ -201,25 +212,29 @@ pub fn predict_currents(
     rec: &Recording,
     spec: &ModelSpec,
     dt_s: f64,
+    t_start_s: f64,
 ) -> Result<Vec<Vec<f64>>, PredictError> {
     fn go<const N: usize>(
         rec: &Recording,
         spec: &ModelSpec,
         dt_s: f64,
+        t_start_s: f64,
     ) -> Result<Vec<Vec<f64>>, ParamError> {
         let circuit = Circuit::<f64, N>::new(&spec.params, &spec.ext, dt_s)?;
         let rows = rec.t_s.len();
         let mut out = vec![Vec::with_capacity(rows); N];
         let mut x = circuit.rest();
         let mut read_under = [0.0; N];
+        let admittance = circuit_gains(spec, t_start_s, &rec.t_s);
         for (row, v_row) in rec.v_v.rows().enumerate() {
             let mut v = [0.0; N];
             v.copy_from_slice(&v_row[..N]);
             if !spec.sensors_before_update || row == 0 {
                 read_under = v;
             }
+            let s = admittance.as_ref().map_or(1.0, |g| g[row]);
             for (c, i) in out.iter_mut().zip(circuit.currents_a(&x, &read_under)) {
-                c.push(i);
+                c.push(s * i);
             }
             circuit.step(&mut x, &v);
             read_under = v;
@@ -227,17 +242,31 @@ pub fn predict_currents(
         Ok(out)
     }
     match rec.meta.segments {
-        1 => go::<1>(rec, spec, dt_s),
-        2 => go::<2>(rec, spec, dt_s),
-        3 => go::<3>(rec, spec, dt_s),
-        4 => go::<4>(rec, spec, dt_s),
-        5 => go::<5>(rec, spec, dt_s),
-        6 => go::<6>(rec, spec, dt_s),
-        7 => go::<7>(rec, spec, dt_s),
-        8 => go::<8>(rec, spec, dt_s),
+        1 => go::<1>(rec, spec, dt_s, t_start_s),
+        2 => go::<2>(rec, spec, dt_s, t_start_s),
+        3 => go::<3>(rec, spec, dt_s, t_start_s),
+        4 => go::<4>(rec, spec, dt_s, t_start_s),
+        5 => go::<5>(rec, spec, dt_s, t_start_s),
+        6 => go::<6>(rec, spec, dt_s, t_start_s),
+        7 => go::<7>(rec, spec, dt_s, t_start_s),
+        8 => go::<8>(rec, spec, dt_s, t_start_s),
         n => return Err(PredictError::Segments(n)),
     }
     .map_err(PredictError::Model)
+}
+
+/// The circuit's admittance gain ([`circuit_gain`]) on every row of a
+/// recording starting at session time `t_start_s`; `None` where the
+/// circuit does not dry.
+fn circuit_gains(spec: &ModelSpec, t_start_s: f64, times_s: &[f64]) -> Option<Arc<[f64]>> {
+    (spec.circuit_drying_per_s != 0.0).then(|| {
+        drying::gains(
+            spec.circuit_drying_per_s,
+            drying::CIRCUIT_CURVATURE,
+            t_start_s,
+            times_s,
+        )
+    })
 }
 
 /// Why the engine refused.
@@ -339,6 +368,7 @@ impl Run<'_> {
                 &self.rec.t_s,
             )
         });
+        let admittance = circuit_gains(spec, self.t_start_s, &self.rec.t_s);
         for (row, v_row) in self.rec.v_v.rows().enumerate() {
             // The row within its block.
             let i = row - first;
@@ -347,8 +377,12 @@ impl Run<'_> {
             if !spec.sensors_before_update || row == 0 {
                 read_under = v;
             }
-            if let Some(gains) = &drying {
-                strip.set_moment_gain(gains[row]);
+            // The circuit's drying scales the charge, so the moment too.
+            let s = admittance.as_ref().map_or(1.0, |g| g[row]);
+            match (&drying, &admittance) {
+                (Some(gains), _) => strip.set_moment_gain(gains[row] * s),
+                (None, Some(_)) => strip.set_moment_gain(s),
+                (None, None) => {}
             }
             // Outputs at this row's instant, then hold its voltage to the next.
             for (c, i) in t
@@ -356,7 +390,7 @@ impl Run<'_> {
                 .iter_mut()
                 .zip(strip.currents_a(&x, &read_under))
             {
-                c.push(i);
+                c.push(s * i);
             }
             if free {
                 if self.camera_rows.is_none_or(|c| c[row]) {
@@ -399,5 +433,77 @@ impl Run<'_> {
         }
         progress(rows as u64);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::synth::{drive_recording_shaped, limits, Drive};
+    use crate::wave::{Wave, WaveOptions};
+
+    /// A 2 V step held 2 s, `fixture`, at 1 kHz.
+    fn step(fixture: Fixture) -> Recording {
+        let drive = Drive {
+            segments: 3,
+            fixture,
+            rest_s: 0.5,
+            duration_s: 2.0,
+            off_s: 0.5,
+            rate_hz: 1000.0,
+        };
+        drive_recording_shaped(
+            &Wave::parse("step:2").unwrap(),
+            &drive,
+            &WaveOptions::steady(2.0),
+            Some(limits(4.0, 200.0).unwrap()),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_drying_circuit_scales_the_currents_and_the_moment_by_its_gain() {
+        let wet = ModelSpec::baseline(Params::baseline_air_example());
+        let dry = ModelSpec {
+            circuit_drying_per_s: 4e-3,
+            ..wet
+        };
+        let t_start_s = 100.0;
+        for fixture in [Fixture::Free, Fixture::Blocked] {
+            let rec = step(fixture);
+            let run = |spec: &ModelSpec| {
+                predict(&rec, spec, 1, 1e-3, t_start_s, None, &mut |_| {}).unwrap()
+            };
+            let (w, d) = (run(&wet), run(&dry));
+            for (row, &t) in rec.t_s.iter().enumerate() {
+                let s = circuit_gain(4e-3, t_start_s + t);
+                assert!(s < 0.72 && s > 0.70, "{s}");
+                for k in 0..3 {
+                    let (iw, id) = (w.currents_a[k][row], d.currents_a[k][row]);
+                    assert!((id - s * iw).abs() <= 1e-12 * iw.abs().max(1e-9), "{row}");
+                }
+            }
+            // The moment follows the charge: the force and the tip, to
+            // within what the gain moves over the run (the beam and the
+            // relaxation answer the gain of a moment before).
+            let (mw, md) = match fixture {
+                Fixture::Free => (&w.tip_y_m, &d.tip_y_m),
+                Fixture::Blocked => (&w.force_n, &d.force_n),
+            };
+            let largest = mw.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            let end_s = rec.t_s[rec.t_s.len() - 1];
+            let moved = circuit_gain(4e-3, t_start_s) - circuit_gain(4e-3, t_start_s + end_s);
+            assert!(largest > 0.0 && moved > 0.0 && moved < 0.01);
+            for (row, &t) in rec.t_s.iter().enumerate() {
+                let s = circuit_gain(4e-3, t_start_s + t);
+                assert!(
+                    (md[row] - s * mw[row]).abs() <= moved * largest,
+                    "{row} {fixture:?}"
+                );
+            }
+            // The circuit alone gives the same currents.
+            let alone = predict_currents(&rec, &dry, 1e-3, t_start_s).unwrap();
+            assert_eq!(alone, d.currents_a);
+        }
     }
 }

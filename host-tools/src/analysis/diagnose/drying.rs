@@ -1,8 +1,10 @@
 //! The dehydration's signature: the moment gain the fitted drying takes
-//! from the strip over the session, `L = 1 − g(r, c, T)` with
-//! `g = (1 + c r T)^(−1/c)` ([`model_core::drying_gain`]), and its
-//! standard error from the fit's covariance of the rate `r` and the
-//! curvature `c` (the delta method).
+//! from the strip over the session, `L = 1 − g(r, c, T) s(r_c, T)` with
+//! the moment's own law `g = (1 + c r T)^(−1/c)`
+//! ([`model_core::drying_gain`]) and the circuit's `s = 1/(1 + r_c T)`
+//! ([`crate::model::predict::circuit_gain`]: the charge falls with the
+//! admittance), and its standard error from the fit's covariance of the
+//! rates `r`, `r_c` and the curvature `c` (the delta method).
 //!
 //! Not the rate's own interval: where the fit bends the law (`c` of a few
 //! or more, a loss front-loaded as a strip that dries then settles gives),
@@ -20,13 +22,24 @@ pub fn loss_over(fit: &FitResult, span_s: f64) -> Option<(f64, f64)> {
     let at = |knob: Knob| fit.estimates.iter().position(|e| e.knob == knob);
     let ir = at(Knob::Dehydration)?;
     let ic = at(Knob::DryingCurvature);
-    let r = fit.estimates[ir].value;
-    let c = ic.map_or(0.0, |i| fit.estimates[i].value);
-    let (loss, d_r, d_c) = loss_and_gradient(r, c, span_s);
+    let is = at(Knob::CircuitDrying);
+    let value = |i: Option<usize>| i.map_or(0.0, |i| fit.estimates[i].value);
+    let (r, c, r_c) = (fit.estimates[ir].value, value(ic), value(is));
+    let (loss, [d_r, d_c, d_rc]) = total_loss_and_gradient(r, c, r_c, span_s);
     let gradient: Vec<(usize, f64)> = std::iter::once((ir, d_r))
         .chain(ic.map(|i| (i, d_c)))
+        .chain(is.map(|i| (i, d_rc)))
         .collect();
     Some((loss, fit.delta_method_se(&gradient)))
+}
+
+/// `L = 1 − g s` at time `t_s` and its derivatives in `r`, `c` and `r_c`:
+/// the moment's each times `s`, and the circuit's `−g ds/dr_c = g t s²`.
+fn total_loss_and_gradient(r: f64, c: f64, r_c: f64, t_s: f64) -> (f64, [f64; 3]) {
+    let (moment_loss, d_r, d_c) = loss_and_gradient(r, c, t_s);
+    let s = crate::model::predict::circuit_gain(r_c, t_s);
+    let g = 1.0 - moment_loss;
+    (1.0 - g * s, [d_r * s, d_c * s, g * t_s * s * s])
 }
 
 /// `L = 1 − (1 + c r T)^(−1/c)` and its derivatives in `r` and `c`.
@@ -79,6 +92,31 @@ mod tests {
                 (d_c - num_c).abs() <= 1e-4 * num_c.abs().max(1e-9),
                 "{r} {c}: {d_c} {num_c}"
             );
+        }
+    }
+
+    #[test]
+    fn the_circuits_drying_adds_to_the_moments_loss_with_its_own_gradient() {
+        let t = 140.0;
+        for &(r, c, r_c) in &[(2e-3, 1.0, 0.0), (2e-3, 0.5, 1e-3), (0.0, 0.0, 3e-3)] {
+            let (l, grad) = total_loss_and_gradient(r, c, r_c, t);
+            let f = |x: [f64; 3]| total_loss_and_gradient(x[0], x[1], x[2], t).0;
+            // The loss is the product's: the moment's gain times the circuit's.
+            let product = model_core::drying_gain(r, c, t) / (1.0 + r_c * t);
+            assert!((l - (1.0 - product)).abs() < 1e-15, "{l} {product}");
+            for k in 0..3 {
+                let x = [r, c, r_c];
+                let h = (1e-6 * x[k]).max(1e-7);
+                let (mut up, mut down) = (x, x);
+                up[k] += h;
+                down[k] = (down[k] - h).max(0.0);
+                let num = (f(up) - f(down)) / (up[k] - down[k]);
+                assert!(
+                    (grad[k] - num).abs() <= 1e-4 * num.abs().max(1e-6),
+                    "{k}: {} {num}",
+                    grad[k]
+                );
+            }
         }
     }
 

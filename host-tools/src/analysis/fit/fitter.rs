@@ -188,6 +188,7 @@ impl FitResult {
                 &self.spec.ext,
                 self.spec.dehydration_per_s,
                 self.spec.dehydration_curvature,
+                self.spec.circuit_drying_per_s,
             ));
         }
         f.mesh = Some(Mesh {
@@ -344,11 +345,16 @@ impl<'a> Fitter<'a> {
                     Stage::Circuit => {
                         let r = &self.session.recordings[i];
                         Traces {
-                            currents_a: predict_currents(r.drive(), &self.as_sampled(spec), r.dt_s)
-                                .map_err(|source| FitError::Model {
-                                    recording: r.name.clone(),
-                                    source,
-                                })?,
+                            currents_a: predict_currents(
+                                r.drive(),
+                                &self.as_sampled(spec),
+                                r.dt_s,
+                                r.t_start_s.unwrap_or(0.0),
+                            )
+                            .map_err(|source| FitError::Model {
+                                recording: r.name.clone(),
+                                source,
+                            })?,
                             ..Traces::default()
                         }
                     }

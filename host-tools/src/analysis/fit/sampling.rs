@@ -151,7 +151,7 @@ mod tests {
                     Some(limits(4.0, 200.0).unwrap()),
                 )
                 .unwrap();
-                let currents = predict_currents(&rec, &spec, dt_s).unwrap();
+                let currents = predict_currents(&rec, &spec, dt_s, 0.0).unwrap();
                 for (seg, c) in currents.into_iter().enumerate() {
                     let counted = c
                         .iter()

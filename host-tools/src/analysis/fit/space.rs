@@ -54,6 +54,10 @@ pub enum Knob {
     Dehydration,
     /// Dehydration curvature (0: constant rate).
     DryingCurvature,
+    /// Dehydration rate of the circuit's admittance, 1/s
+    /// ([`crate::model::predict::circuit_gain`]): the currents and the
+    /// charge fall with it, whatever the drive.
+    CircuitDrying,
     /// Segment `i`'s (index from 0 at the clamp, never 0: the reference)
     /// relative departure of `R1` (segment variation).
     SegmentR1(usize),
@@ -152,6 +156,7 @@ impl Knob {
                 | Knob::QuadraticDrag
                 | Knob::Dehydration
                 | Knob::DryingCurvature
+                | Knob::CircuitDrying
                 | Knob::FreeMode(_)
                 | Knob::BlockedMode(_)
         )
@@ -178,6 +183,7 @@ impl Knob {
             Knob::Crosstalk => "crosstalk",
             Knob::Dehydration => "dehydration_per_s",
             Knob::DryingCurvature => "dehydration_curvature",
+            Knob::CircuitDrying => "circuit_drying_per_s",
             Knob::SegmentR1(i) => SEGMENT_R1_NAMES[*i],
             Knob::SegmentC(i) => SEGMENT_C_NAMES[*i],
             Knob::SegmentK(i) => SEGMENT_K_NAMES[*i],
@@ -198,6 +204,7 @@ impl Knob {
                 | Knob::LeakCubic
                 | Knob::ReactionRef
                 | Knob::ReactionTafel
+                | Knob::CircuitDrying
                 | Knob::SegmentR1(_)
                 | Knob::SegmentC(_)
         )
@@ -405,7 +412,11 @@ impl Space {
                     Knob::ReactionRef,
                     Knob::ReactionTafel,
                 ],
-                Effect::Dehydration => &[Knob::Dehydration, Knob::DryingCurvature],
+                Effect::Dehydration => &[
+                    Knob::CircuitDrying,
+                    Knob::Dehydration,
+                    Knob::DryingCurvature,
+                ],
                 Effect::SegmentCrosstalk => &[Knob::Crosstalk],
                 Effect::SegmentVariation => &[],
             });
@@ -520,6 +531,7 @@ impl Space {
         };
         spec.dehydration_per_s = 0.0;
         spec.dehydration_curvature = 0.0;
+        spec.circuit_drying_per_s = 0.0;
         let p = &mut spec.params;
         // p first: a and b are relative to it (and to each other).
         let (mut a_theta, mut b_theta) = (None, None);
@@ -554,6 +566,7 @@ impl Space {
                 Knob::DryingCurvature => {
                     spec.dehydration_curvature = ramp(t, 1.0).min(DRYING_CURVATURE_MAX)
                 }
+                Knob::CircuitDrying => spec.circuit_drying_per_s = ramp(t, DEHYDRATION_SCALE),
                 Knob::SegmentR1(i) => {
                     spec.ext.segment_variation.r1_deviation[*i] = (t * SEGMENT_SCALE).exp_m1()
                 }
@@ -677,6 +690,7 @@ impl Space {
                 Knob::Crosstalk => spec.ext.crosstalk / CROSSTALK_SCALE,
                 Knob::Dehydration => spec.dehydration_per_s / DEHYDRATION_SCALE,
                 Knob::DryingCurvature => spec.dehydration_curvature,
+                Knob::CircuitDrying => spec.circuit_drying_per_s / DEHYDRATION_SCALE,
                 Knob::SegmentR1(_) | Knob::SegmentC(_) | Knob::SegmentK(_) => {
                     Space::value(*knob, spec).max(-1.0 + 1e-9).ln_1p() / SEGMENT_SCALE
                 }
@@ -707,6 +721,7 @@ impl Space {
             Knob::Crosstalk => spec.ext.crosstalk,
             Knob::Dehydration => spec.dehydration_per_s,
             Knob::DryingCurvature => spec.dehydration_curvature,
+            Knob::CircuitDrying => spec.circuit_drying_per_s,
             Knob::SegmentR1(i) => spec.ext.segment_variation.r1_deviation[i],
             Knob::SegmentC(i) => spec.ext.segment_variation.c_deviation[i],
             Knob::SegmentK(i) => spec.ext.segment_variation.k_deviation[i],
