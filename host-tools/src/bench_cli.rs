@@ -6,6 +6,7 @@
 
 use finrs::bench::run::{run_session, BenchOptions};
 use finrs::link::capture::{self, Firmware, Monitor};
+use finrs::link::defmt_log::Table;
 use finrs::link::qemu::{Pace, VirtualBoard, QEMU};
 use finrs::protocol::Protocol;
 
@@ -58,7 +59,7 @@ fn bench_live(args: BenchLiveArgs) -> anyhow::Result<()> {
 /// The live view on the real terminal.
 fn live_on(
     board: &mut impl finrs::link::board::Board,
-    table: Option<&defmt_decoder::Table>,
+    table: Option<&Table>,
     opts: &finrs::link::capture::CaptureOptions,
 ) -> anyhow::Result<()> {
     use finrs::bench::live::{run_live, Key};

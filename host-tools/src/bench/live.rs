@@ -26,8 +26,9 @@ use ratatui::{Frame, Terminal};
 
 use crate::link::board::Board;
 use crate::link::capture::journal::Journal;
-use crate::link::capture::{finish, show_log, CaptureError, CaptureOptions, Monitor};
+use crate::link::capture::{finish, CaptureError, CaptureOptions, Monitor};
 use crate::link::command::{limit_command, wave_command};
+use crate::link::defmt_log::{Log, Table};
 use crate::link::stream::{Recorder, Summary};
 use crate::wave::WaveOptions;
 
@@ -357,7 +358,7 @@ impl Monitor for Lines {
 /// ends the view; what came is written, with why in its notes.
 pub fn run_live<B: ratatui::backend::Backend>(
     board: &mut impl Board,
-    table: Option<&defmt_decoder::Table>,
+    table: Option<&Table>,
     opts: &CaptureOptions,
     term: &mut Terminal<B>,
     keys: &mut dyn FnMut() -> std::io::Result<Option<Key>>,
@@ -366,8 +367,8 @@ pub fn run_live<B: ratatui::backend::Backend>(
     let mut rec = Recorder::new(opts.setup.clone());
     let mut state = LiveState::new();
     let mut decoder = Decoder::new();
-    let mut defmt = table.map(|t| t.new_stream_decoder());
-    let (lines, mut malformed) = (Lines::default(), 0u64);
+    let mut log = table.map(Log::new);
+    let lines = Lines::default();
     let mut buf = vec![0u8; 16 * 1024];
     let mut drawn = Instant::now() - Duration::from_secs(1);
     let started = Instant::now();
@@ -396,13 +397,12 @@ pub fn run_live<B: ratatui::backend::Backend>(
             rec.event(e);
         }
         let mut m = 0;
-        if let Some(d) = defmt.as_mut() {
+        if let Some(log) = log.as_mut() {
             m = match board.read_log(&mut buf) {
                 Ok(m) => m,
                 Err(e) => break Some(format!("the link failed: {e}")),
             };
-            d.received(&buf[..m]);
-            show_log(d.as_mut(), &lines, &mut malformed);
+            log.show(&buf[..m], &mut |l| lines.line(l));
             for l in lines.0.borrow_mut().drain(..) {
                 state.message(l);
             }

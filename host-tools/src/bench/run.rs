@@ -20,6 +20,7 @@ use crate::link::board::{request_info, Board, Frames, TrackStretch};
 use crate::link::calibrate::{apply_model, CalibrateOptions};
 use crate::link::capture::Monitor;
 use crate::link::command::{at_session_time, wave_command};
+use crate::link::defmt_log::Table;
 use crate::link::probe::ProbeError;
 use crate::link::qemu::world::VIRTUAL_M_PER_PX;
 use crate::link::stream::{Recorder, Setup};
@@ -147,7 +148,7 @@ pub fn run_session(
     protocol: &Protocol,
     out_dir: &Path,
     opts: &BenchOptions,
-    table: Option<&defmt_decoder::Table>,
+    table: Option<&Table>,
     prompt: &mut dyn FnMut(&str) -> std::io::Result<()>,
     monitor: &dyn Monitor,
 ) -> Result<SessionReport, BenchError> {

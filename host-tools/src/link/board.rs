@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 
 use finrs_frames::{Command, Decoder, Event, Info};
 
-use crate::link::capture::{show_log, Link, Monitor, Silent};
+use crate::link::capture::{Link, Monitor, Silent};
+use crate::link::defmt_log::{Log, Table};
 use crate::link::probe::{self, Bounded, ProbeError, Target, COMMAND_DOWN_CHANNEL};
 
 /// The board: its stream, and commands down; on the virtual bench, the
@@ -67,19 +68,17 @@ pub struct Frames<'t> {
     decoder: Decoder,
     pending: VecDeque<Event>,
     buf: Vec<u8>,
-    defmt: Option<Box<dyn defmt_decoder::StreamDecoder + Send + Sync + 't>>,
-    malformed_defmt: u64,
+    log: Option<Log<'t>>,
 }
 
 impl<'t> Frames<'t> {
     /// At the start of the stream, with the ELF's defmt `table` if known.
-    pub fn new(table: Option<&'t defmt_decoder::Table>) -> Self {
+    pub fn new(table: Option<&'t Table>) -> Self {
         Self {
             decoder: Decoder::new(),
             pending: VecDeque::new(),
             buf: vec![0; 16 * 1024],
-            defmt: table.map(|t| t.new_stream_decoder()),
-            malformed_defmt: 0,
+            log: table.map(Log::new),
         }
     }
 
@@ -104,11 +103,10 @@ impl<'t> Frames<'t> {
             self.decoder
                 .push(&self.buf[..n], &mut |e| pending.push_back(e));
             let mut m = 0;
-            if let Some(d) = self.defmt.as_mut() {
+            if let Some(log) = self.log.as_mut() {
                 // The firmware's refusals and faults, in its own words.
                 m = board.read_log(&mut self.buf)?;
-                d.received(&self.buf[..m]);
-                show_log(d.as_mut(), monitor, &mut self.malformed_defmt);
+                log.show(&self.buf[..m], &mut |l| monitor.line(l));
             }
             if n == 0 && m == 0 {
                 std::thread::sleep(Duration::from_millis(2));

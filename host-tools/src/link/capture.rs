@@ -10,6 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::link::causes::with_causes;
+use crate::link::defmt_log::{no_table_notice, read_table, Log, Table};
 use crate::link::probe::{
     self, Bounded, ProbeError, ProbeOptions, ProbeTarget, Target, DEFMT_UP_CHANNEL,
     FORCE_UP_CHANNEL,
@@ -195,7 +196,7 @@ pub struct Connected {
     /// The probe's RTT channels, each read bounded in time.
     pub link: Bounded<ProbeTarget>,
     /// The ELF's defmt table, when there is one.
-    pub table: Option<defmt_decoder::Table>,
+    pub table: Option<Table>,
 }
 
 /// `finrs log` / `finrs run` up to the recording: reads the ELF (if any),
@@ -217,16 +218,12 @@ pub fn connect(
         (Some(p), Some(bytes)) => {
             let name = p.display().to_string();
             let at = probe::rtt_address(&name, bytes)?;
-            // defmt-decoder's error is an anyhow::Error: `{:#}` keeps its causes.
-            let table =
-                defmt_decoder::Table::parse(bytes).map_err(|e| CaptureError::DefmtTable {
-                    elf: name.clone(),
-                    reason: format!("{e:#}"),
-                })?;
+            let table = read_table(bytes).map_err(|reason| CaptureError::DefmtTable {
+                elf: name.clone(),
+                reason,
+            })?;
             if table.is_none() {
-                monitor.line(&format!(
-                    "{name}: no defmt table; the log on channel 0 is not shown"
-                ));
+                monitor.line(&no_table_notice(&name));
             }
             (Some(at), table)
         }
@@ -252,7 +249,7 @@ pub fn connect(
 /// fails) and returns the report.
 pub fn capture(
     link: &mut impl Link,
-    table: Option<&defmt_decoder::Table>,
+    table: Option<&Table>,
     stop: &AtomicBool,
     opts: &CaptureOptions,
     monitor: &dyn Monitor,
@@ -268,12 +265,11 @@ pub fn capture(
         ));
     }
     let mut journal_failed = None;
-    let mut defmt = table.map(|t| t.new_stream_decoder());
+    let mut log = table.map(Log::new);
     let mut rec = Recorder::new(opts.setup.clone());
     let mut buf = vec![0u8; 16 * 1024];
     let started = Instant::now();
     let mut last_status = started;
-    let mut malformed_defmt = 0u64;
     let outcome: Result<(), ProbeError> = loop {
         if stop.load(Ordering::SeqCst) {
             monitor.line("stopped");
@@ -301,13 +297,12 @@ pub fn capture(
         }
         rec.push_bytes(&buf[..n]);
         let mut m = 0;
-        if let Some(decoder) = defmt.as_mut() {
+        if let Some(log) = log.as_mut() {
             m = match link.read_log(&mut buf) {
                 Ok(m) => m,
                 Err(e) => break Err(e),
             };
-            decoder.received(&buf[..m]);
-            show_log(decoder.as_mut(), monitor, &mut malformed_defmt);
+            log.show(&buf[..m], &mut |l| monitor.line(l));
         }
         if last_status.elapsed() >= Duration::from_millis(250) {
             last_status = Instant::now();
@@ -317,6 +312,7 @@ pub fn capture(
             std::thread::sleep(Duration::from_millis(2));
         }
     };
+    let malformed_defmt = log.as_ref().map_or(0, Log::malformed);
     let concluded = conclude(rec, outcome, &opts.out, monitor, malformed_defmt);
     if let Some(j) = journal {
         match &concluded {
@@ -335,27 +331,6 @@ pub fn capture(
         text.push_str(&format!("  journal: {why}\n"));
     }
     Ok(text)
-}
-
-/// Shows every whole defmt frame the decoder holds; counts malformed ones
-/// and says so at the first.
-pub(crate) fn show_log(
-    decoder: &mut dyn defmt_decoder::StreamDecoder,
-    monitor: &dyn Monitor,
-    malformed: &mut u64,
-) {
-    loop {
-        match decoder.decode() {
-            Ok(frame) => monitor.line(&frame.display(false).to_string()),
-            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
-            Err(defmt_decoder::DecodeError::Malformed) => {
-                *malformed += 1;
-                if *malformed == 1 {
-                    monitor.line("defmt: malformed frame (is the ELF the one running?)");
-                }
-            }
-        }
-    }
 }
 
 /// The live status: samples, rate, gaps, faults, corrupt bytes.

@@ -133,7 +133,7 @@ pub struct Started {
     /// The board.
     pub board: VirtualBoard,
     /// The ELF's defmt table.
-    pub table: Option<defmt_decoder::Table>,
+    pub table: Option<crate::link::defmt_log::Table>,
 }
 
 /// The QEMU process and its socket's folder: both gone when dropped, on
@@ -245,9 +245,11 @@ impl VirtualBoard {
     ) -> Result<Started, VirtualError> {
         let bytes = probe::read_elf(elf)?;
         let name = elf.display().to_string();
-        let table = defmt_decoder::Table::parse(&bytes).map_err(|e| VirtualError::DefmtTable {
-            elf: name.clone(),
-            reason: format!("{e:#}"),
+        let table = crate::link::defmt_log::read_table(&bytes).map_err(|reason| {
+            VirtualError::DefmtTable {
+                elf: name.clone(),
+                reason,
+            }
         })?;
         let dir = socket_dir();
         std::fs::create_dir_all(&dir).map_err(|source| VirtualError::Folder {
