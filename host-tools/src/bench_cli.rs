@@ -6,7 +6,7 @@
 
 use finrs::bench::run::{run_session, BenchOptions};
 use finrs::link::capture::{self, Firmware, Monitor};
-use finrs::link::defmt_log::Table;
+use finrs::link::defmt_log::{no_table_notice, Table};
 use finrs::link::qemu::{Pace, VirtualBoard, QEMU};
 use finrs::protocol::Protocol;
 
@@ -39,6 +39,10 @@ fn bench_live(args: BenchLiveArgs) -> anyhow::Result<()> {
             elf.display()
         ))?;
         let started = VirtualBoard::start(QEMU, elf, Pace::RealTime, LIVE_START)?;
+        if started.table.is_none() {
+            // Before the view takes the screen: left on it when the view ends.
+            eprintln!("{}", no_table_notice(&elf.display().to_string()));
+        }
         let mut board = started.board;
         return live_on(&mut board, started.table.as_ref(), &opts);
     }
@@ -98,6 +102,9 @@ fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {
     let status = StatusLine::new();
     let report = if let Some(elf) = &args.qemu {
         let started = VirtualBoard::start(QEMU, elf, Pace::Fast, opts.timeout)?;
+        if started.table.is_none() {
+            status.line(&no_table_notice(&elf.display().to_string()));
+        }
         let mut board = started.board;
         // No operator at a virtual bench: the prompt is shown and passed.
         let mut show = |text: &str| {
