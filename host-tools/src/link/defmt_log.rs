@@ -55,7 +55,7 @@ pub struct Log<'t> {
     #[cfg(feature = "defmt")]
     decoder: Box<dyn defmt_decoder::StreamDecoder + Send + Sync + 't>,
     #[cfg(not(feature = "defmt"))]
-    decoder: (&'t Table, std::convert::Infallible),
+    decoder: &'t Table,
     malformed: u64,
 }
 
@@ -100,7 +100,7 @@ impl<'t> Log<'t> {
         #[cfg(not(feature = "defmt"))]
         {
             let _ = (bytes, line);
-            match self.decoder.1 {}
+            match *self.decoder {}
         }
     }
 

@@ -31,6 +31,7 @@ pub mod world;
 
 use crate::link::board::{Board, TrackStretch};
 use crate::link::capture::Link;
+use crate::link::defmt_log::{read_table, Table};
 use crate::link::probe::{self, ProbeError, TargetError};
 
 /// The QEMU this starts when not told otherwise (Debian's
@@ -133,7 +134,7 @@ pub struct Started {
     /// The board.
     pub board: VirtualBoard,
     /// The ELF's defmt table.
-    pub table: Option<crate::link::defmt_log::Table>,
+    pub table: Option<Table>,
 }
 
 /// The QEMU process and its socket's folder: both gone when dropped, on
@@ -245,11 +246,9 @@ impl VirtualBoard {
     ) -> Result<Started, VirtualError> {
         let bytes = probe::read_elf(elf)?;
         let name = elf.display().to_string();
-        let table = crate::link::defmt_log::read_table(&bytes).map_err(|reason| {
-            VirtualError::DefmtTable {
-                elf: name.clone(),
-                reason,
-            }
+        let table = read_table(&bytes).map_err(|reason| VirtualError::DefmtTable {
+            elf: name.clone(),
+            reason,
         })?;
         let dir = socket_dir();
         std::fs::create_dir_all(&dir).map_err(|source| VirtualError::Folder {
