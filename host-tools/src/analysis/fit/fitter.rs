@@ -565,9 +565,12 @@ impl<'a> Fitter<'a> {
             }
             let baseline = baseline.space.spec(&baseline.theta);
             let modes = mode_start::modes(self.session, recordings, &baseline, &[effects.to_vec()]);
-            let start = effects
-                .iter()
-                .fold(baseline, |spec, &e| mode_start::start(e, &spec, modes));
+            let start = mode_start::start_move(
+                effects,
+                &baseline,
+                modes,
+                self.session.recordings[0].rec.meta.width_m,
+            );
             let d =
                 self.descend_here(recordings, effects, Some(&start), fixed, Some(&modes_lane))?;
             if !d.given_up {

@@ -8,6 +8,7 @@
 use super::modal::{self, Ringing};
 use super::Effect;
 use crate::model::predict::ModelSpec;
+use crate::recording::Medium;
 use crate::session::Session;
 
 /// `(model, measured)` first blocked mode beside `current` on the
@@ -69,6 +70,41 @@ pub fn start(e: Effect, current: &ModelSpec, modes: Option<(Ringing, Ringing)>) 
         }
     }
     start
+}
+
+/// Where a move's terms (its effects together) start beside `current`:
+/// each effect's own start ([`start`]) in turn, except where the move
+/// brings the fluid and a stiffness together. One ring cannot set both
+/// the added mass and `EI` (each alone would take the whole frequency
+/// shift, and the two in turn take it twice), so the fluid starts at the
+/// added mass of a plate of the strip's width in water (`ρ π b² / 4`, the
+/// classical value for a strip moving across its plane; `width_m`, the
+/// session's) and `EI` where the model, with that mass, rings at the
+/// measured frequency.
+pub fn start_move(
+    m: &[Effect],
+    current: &ModelSpec,
+    modes: Option<(Ringing, Ringing)>,
+    width_m: f64,
+) -> ModelSpec {
+    let both = [Effect::BeamStiffness, Effect::HydrodynamicLoading];
+    if !both.iter().all(|e| m.contains(e)) {
+        return m.iter().fold(*current, |spec, &e| start(e, &spec, modes));
+    }
+    let mut spec = m
+        .iter()
+        .filter(|e| !both.contains(e))
+        .fold(*current, |spec, &e| start(e, &spec, modes));
+    let Some((model, data)) = modes else {
+        return spec;
+    };
+    let mass = |s: &ModelSpec| s.params.mass_per_length_kg_per_m + s.ext.added_mass_kg_per_m;
+    let before = mass(&spec);
+    let plate = Medium::Water.density_kg_per_m3() * std::f64::consts::PI * width_m.powi(2) / 4.0;
+    spec.ext.added_mass_kg_per_m = spec.ext.added_mass_kg_per_m.max(plate);
+    // f ∝ √(EI / mass per length).
+    spec.params.ei_nm2 *= (data.hz / model.hz).powi(2) * mass(&spec) / before;
+    spec
 }
 
 /// A second start for a move that brings the fluid (`hydrodynamic-loading`)
@@ -145,6 +181,50 @@ mod tests {
             fluid_without_stand_ins(&fluid, &[Effect::Dehydration], &current, &fixed).is_none()
         );
         assert!(fluid_without_stand_ins(&[Effect::Dehydration], &pair, &current, &fixed).is_none());
+    }
+
+    #[test]
+    fn the_fluid_and_the_stiffness_together_share_the_rings_shift_once() {
+        let current = ModelSpec::baseline(Params::main_m_2006());
+        let model = Ringing {
+            hz: 40.0,
+            damping_ratio: 0.01,
+        };
+        let data = Ringing {
+            hz: 20.0,
+            damping_ratio: 0.06,
+        };
+        let modes = Some((model, data));
+        let width_m = 0.005;
+        let hz2 = |s: &ModelSpec| {
+            s.params.ei_nm2 / (s.params.mass_per_length_kg_per_m + s.ext.added_mass_kg_per_m)
+        };
+        let shift2 = (data.hz / model.hz).powi(2);
+        // Each alone takes the whole shift.
+        for e in [Effect::BeamStiffness, Effect::HydrodynamicLoading] {
+            let alone = start_move(&[e], &current, modes, width_m);
+            assert!((hz2(&alone) / hz2(&current) - shift2).abs() < 1e-12);
+        }
+        let all = [
+            Effect::Damping,
+            Effect::BeamStiffness,
+            Effect::HydrodynamicLoading,
+        ];
+        let together = start_move(&all, &current, modes, width_m);
+        // A plate's added mass, and the ring at the measured frequency
+        // once, not twice.
+        let plate = 1000.0 * std::f64::consts::PI * width_m * width_m / 4.0;
+        assert!((together.ext.added_mass_kg_per_m - plate).abs() < 1e-15);
+        assert!((hz2(&together) / hz2(&current) - shift2).abs() < 1e-12);
+        // The damping as it starts alone.
+        assert_eq!(
+            together.ext.damping_ratio,
+            start(Effect::Damping, &current, modes).ext.damping_ratio
+        );
+        // Without a measured ring, every term starts off.
+        let off = start_move(&all, &current, None, width_m);
+        assert_eq!(off.params.ei_nm2, current.params.ei_nm2);
+        assert_eq!(off.ext.added_mass_kg_per_m, 0.0);
     }
 
     #[test]
