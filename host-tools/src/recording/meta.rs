@@ -33,6 +33,12 @@ impl Medium {
             Medium::Water => 1000.0,
         }
     }
+
+    /// Added mass per length of a plate of width `width_m` moving across
+    /// its plane in the medium, kg/m: `ρ π b² / 4`, the classical value.
+    pub fn plate_added_mass_kg_per_m(self, width_m: f64) -> f64 {
+        self.density_kg_per_m3() * std::f64::consts::PI * width_m.powi(2) / 4.0
+    }
 }
 
 impl Fixture {

@@ -155,11 +155,8 @@ impl Probe {
             Effect::BeamStiffness => out.params.ei_nm2 *= 1.0 - s,
             Effect::Damping => out.ext.damping_ratio += s,
             Effect::HydrodynamicLoading => {
-                let plate = Medium::Water.density_kg_per_m3()
-                    * std::f64::consts::PI
-                    * scales.width_m.powi(2)
-                    / 4.0;
-                out.ext.added_mass_kg_per_m += s * plate;
+                out.ext.added_mass_kg_per_m +=
+                    s * Medium::Water.plate_added_mass_kg_per_m(scales.width_m);
             }
             Effect::ElectrochemicalNonlinearity => {
                 let per_v2 = scales.cubic_per_v2(s);

@@ -405,20 +405,20 @@ impl Search<'_> {
                 .filter(|e| !untestable.iter().any(|u| u.effect == e.name()))
                 .collect();
             let mut moves: Vec<Vec<Effect>> = untried.iter().map(|&e| vec![e]).collect();
+            // A joint move while all its effects are untried and room is
+            // left for them all.
+            let joint = |m: &[Effect]| {
+                m.iter().all(|e| untried.contains(e)) && named.len() + m.len() <= MAX_CAUSES
+            };
             // The blocked mode's frequency and decay are read together: a
             // damped, soft strip leaves a model with either term alone off
             // in the other, and neither alone may then gain (the classic
             // trap of adding one term at a time), so the two are also
             // tried together.
-            if MODE_PAIR.iter().all(|e| untried.contains(e))
-                && found.accepted().len() + MODE_PAIR.len() <= MAX_CAUSES
-            {
+            if joint(&MODE_PAIR) {
                 moves.push(MODE_PAIR.to_vec());
             }
-            if self.expected(Effect::HydrodynamicLoading)
-                && FLUID_AND_PAIR.iter().all(|e| untried.contains(e))
-                && found.accepted().len() + FLUID_AND_PAIR.len() <= MAX_CAUSES
-            {
+            if self.expected(Effect::HydrodynamicLoading) && joint(&FLUID_AND_PAIR) {
                 moves.push(FLUID_AND_PAIR.to_vec());
             }
             if moves.is_empty() {
@@ -735,12 +735,8 @@ impl Search<'_> {
                 effects.extend(m);
                 // The move's terms started on `from` (each by the modes).
                 let fit_from = |from: ModelSpec, modes| {
-                    let start = starts::start_move(
-                        m,
-                        &from,
-                        modes,
-                        self.session.recordings[0].rec.meta.width_m,
-                    );
+                    let start =
+                        starts::start_move(m, &from, modes, self.session.geometry().width_m);
                     self.fitter
                         .fit(self.train, &effects, Some(&start), self.fixed)
                 };

@@ -565,12 +565,8 @@ impl<'a> Fitter<'a> {
             }
             let baseline = baseline.space.spec(&baseline.theta);
             let modes = mode_start::modes(self.session, recordings, &baseline, &[effects.to_vec()]);
-            let start = mode_start::start_move(
-                effects,
-                &baseline,
-                modes,
-                self.session.recordings[0].rec.meta.width_m,
-            );
+            let start =
+                mode_start::start_move(effects, &baseline, modes, self.session.geometry().width_m);
             let d =
                 self.descend_here(recordings, effects, Some(&start), fixed, Some(&modes_lane))?;
             if !d.given_up {

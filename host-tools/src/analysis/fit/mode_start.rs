@@ -100,7 +100,7 @@ pub fn start_move(
     };
     let mass = |s: &ModelSpec| s.params.mass_per_length_kg_per_m + s.ext.added_mass_kg_per_m;
     let before = mass(&spec);
-    let plate = Medium::Water.density_kg_per_m3() * std::f64::consts::PI * width_m.powi(2) / 4.0;
+    let plate = Medium::Water.plate_added_mass_kg_per_m(width_m);
     spec.ext.added_mass_kg_per_m = spec.ext.added_mass_kg_per_m.max(plate);
     // f ∝ √(EI / mass per length).
     spec.params.ei_nm2 *= (data.hz / model.hz).powi(2) * mass(&spec) / before;
