@@ -94,10 +94,24 @@ fn live_on(
     Ok(())
 }
 
+/// The wait for the board's answers when `--timeout-s` is not given:
+/// QEMU's emulated floating point inverts a model several times slower
+/// than the board, and a CI runner's busy cores slow it again.
+fn default_wait_s(args: &BenchRunArgs) -> f64 {
+    if args.qemu.is_some() {
+        60.0
+    } else {
+        10.0
+    }
+}
+
 fn bench_run(args: BenchRunArgs) -> anyhow::Result<()> {
     let protocol = Protocol::read(&args.protocol)?;
     let opts = BenchOptions {
-        timeout: timeout("--timeout-s", args.timeout_s)?,
+        timeout: timeout(
+            "--timeout-s",
+            args.timeout_s.unwrap_or(default_wait_s(&args)),
+        )?,
     };
     let status = StatusLine::new();
     let report = if let Some(elf) = &args.qemu {

@@ -203,9 +203,11 @@ pub struct BenchRunArgs {
     /// the operator's prompts are shown, not waited for.
     #[arg(long, value_name = "ELF", conflicts_with = "elf")]
     pub qemu: Option<PathBuf>,
-    /// Wait this long for the board's answers, s.
-    #[arg(long, default_value_t = 10.0)]
-    pub timeout_s: f64,
+    /// Wait this long for the board's answers, s (default: 10 for a board,
+    /// 60 for `--qemu`, whose emulated board shares the host's cores and
+    /// can take seconds to invert a model when they are busy).
+    #[arg(long)]
+    pub timeout_s: Option<f64>,
     /// Run `finrs diagnose` on the session once it is recorded.
     #[arg(long)]
     pub diagnose: bool,

@@ -43,7 +43,7 @@ pub enum BenchError {
         timeout_s: f64,
     },
     /// A recording's wave is refused for this board.
-    #[error("recording {k} ({name}): {source}")]
+    #[error("recording {k} ({name})")]
     Wave {
         /// Its number, from 1.
         k: usize,
@@ -96,7 +96,7 @@ pub enum BenchError {
     #[error("the prompt failed: {0}")]
     Prompt(String),
     /// The protocol's model could not be read, or the board refused it.
-    #[error("model {}: {source}", path.display())]
+    #[error("model {}", path.display())]
     Model {
         /// The model's file.
         path: PathBuf,

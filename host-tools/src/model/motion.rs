@@ -57,7 +57,7 @@ use crate::wave::{MotionWave, Wave, WaveError, WaveKind, WaveOptions};
 #[derive(Debug, thiserror::Error)]
 pub enum MotionError {
     /// The board's shaper refuses the model or the motion.
-    #[error("wave `{wave}`: {source}")]
+    #[error("wave `{wave}`")]
     Shape {
         /// The wave's text.
         wave: String,
