@@ -10,8 +10,11 @@ use finrs::link::defmt_log::{no_table_notice, Table};
 use finrs::link::qemu::{Pace, VirtualBoard, QEMU};
 use finrs::protocol::Protocol;
 
-/// How long `bench live --qemu` waits for the virtual board's first frame.
-const LIVE_START: std::time::Duration = std::time::Duration::from_secs(10);
+/// How long the virtual board is waited for, s (`bench run --qemu`'s
+/// answers when `--timeout-s` is not given, `bench live --qemu`'s first
+/// frame): QEMU's emulated floating point inverts a model several times
+/// slower than the board, and a CI runner's busy cores slow it again.
+const QEMU_WAIT_S: f64 = 60.0;
 
 use crate::cli::{timeout, BenchLiveArgs, BenchRunArgs, BenchWhat, DiagnoseArgs};
 use crate::commands::{capture_flags, prompt, StatusLine};
@@ -38,7 +41,12 @@ fn bench_live(args: BenchLiveArgs) -> anyhow::Result<()> {
             "the virtual bench, {} in QEMU (finrs bench live)",
             elf.display()
         ))?;
-        let started = VirtualBoard::start(QEMU, elf, Pace::RealTime, LIVE_START)?;
+        let started = VirtualBoard::start(
+            QEMU,
+            elf,
+            Pace::RealTime,
+            std::time::Duration::from_secs_f64(QEMU_WAIT_S),
+        )?;
         if started.table.is_none() {
             // Before the view takes the screen: left on it when the view ends.
             eprintln!("{}", no_table_notice(&elf.display().to_string()));
@@ -94,12 +102,10 @@ fn live_on(
     Ok(())
 }
 
-/// The wait for the board's answers when `--timeout-s` is not given:
-/// QEMU's emulated floating point inverts a model several times slower
-/// than the board, and a CI runner's busy cores slow it again.
+/// The wait for the board's answers when `--timeout-s` is not given.
 fn default_wait_s(args: &BenchRunArgs) -> f64 {
     if args.qemu.is_some() {
-        60.0
+        QEMU_WAIT_S
     } else {
         10.0
     }

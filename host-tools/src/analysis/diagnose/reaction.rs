@@ -19,11 +19,24 @@
 
 use crate::analysis::fit::{FitResult, Knob};
 
-/// The departure `D` of a steady current from linear a strip without
-/// electrolysis is seen to show, within its fit's error: the reaction is
-/// named only where `D`'s interval lies beyond it. (The electrochemical
-/// candidate's own probe, `identify.rs`, is a tenth.)
+/// The departure `D` of a steady current or a charge from linear a strip
+/// without electrolysis is seen to show, within its fit's error: the
+/// effect is named only where the interval of some term's `D` lies beyond
+/// it. (The electrochemical candidate's own probe, `identify.rs`, is a
+/// tenth.)
 pub const REACTION_ALIKE: f64 = 0.05;
+
+/// The cubic `k` (per V²) that departs from linear by `d` between drives
+/// `peak_v / 2` and `peak_v`: the leak's current `v/R2 (1 + k v²)` and the
+/// charge's drive `v + k v³` both give `D = (1 + k v²)/(1 + k v²/4) − 1`,
+/// so `k = 4D / (v² (3 − D))`. One margin for every term of the effect:
+/// a cubic significant at a departure of a percent or two is a strip
+/// drying while its drives rise, not electrolysis (development seed
+/// 54028, drying alone: the leak's and the charge's cubics at 1.3e-3 and
+/// 1.5e-3 /V², 1.5 % and 1.7 % at its 3.91 V, named the reaction).
+pub fn cubic_at_departure(d: f64, peak_v: f64) -> f64 {
+    4.0 * d / (peak_v * peak_v * (3.0 - d))
+}
 
 /// The departure `D` from linear of the steady current the fit's leak
 /// and reaction draw between drives `peak_v / 2` and `peak_v`, and its
@@ -76,6 +89,15 @@ fn steady_a([r1, r2, ref_v, tafel_v]: [f64; 4], v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::{departure, steady_a};
+
+    #[test]
+    fn a_cubic_at_the_margin_departs_by_it() {
+        for &(d, v) in &[(0.05, 3.9), (-0.05, 3.9), (0.2, 2.0)] {
+            let k = super::cubic_at_departure(d, v);
+            let departs = |v: f64| (1.0 + k * v * v) / (1.0 + k * v * v / 4.0) - 1.0;
+            assert!((departs(v) - d).abs() < 1e-12, "{d} {v} {k}");
+        }
+    }
 
     #[test]
     fn the_layer_settles_where_r1_carries_the_reactions_current() {

@@ -975,8 +975,9 @@ fn signature_is_significant(
         // Added mass is what water adds; its drag alone is damping.
         Effect::HydrodynamicLoading => excludes(Knob::AddedMass, 0.0),
         Effect::ElectrochemicalNonlinearity => {
-            let reaction = reaction::departure_at(fit, session_peak_v(fixed));
-            match electrochemistry_alone(&fit.estimates, z, reaction) {
+            let peak_v = session_peak_v(fixed);
+            let reaction = reaction::departure_at(fit, peak_v);
+            match electrochemistry_alone(&fit.estimates, z, peak_v, reaction) {
                 Some(shows) => shows,
                 None => {
                     fit.jointly_excludes(&[(Knob::ChargeCubic, 0.0), (Knob::LeakCubic, 0.0)], tail)
@@ -1089,14 +1090,15 @@ fn signature_tests(e: Effect, fit: &FitResult, alone: &[usize]) -> usize {
 }
 
 /// Whether the electrochemical terms alone show
-/// `electrochemical-nonlinearity` at `z`: yes where the leak grows faster
-/// than the voltage, the steady current of the leak and a reaction behind
-/// the double layer departs from linear by more than
-/// [`reaction::REACTION_ALIKE`] up to the session's highest drive
-/// (`reaction`: the departure and its standard error,
-/// [`reaction::departure_at`]), or the charge departs from linear, each beyond
-/// its interval; no where the leak bends below linear; `None` where the joint
-/// test of the two decides. Electrolysis adds a current that grows faster
+/// `electrochemical-nonlinearity` at `z` up to the session's highest drive
+/// `peak_v`: yes where the leak grows faster than the voltage, the steady
+/// current of the leak and a reaction behind the double layer departs
+/// from linear (`reaction`: the departure and its standard error,
+/// [`reaction::departure_at`]), or the charge departs from linear either
+/// way, each by more than [`reaction::REACTION_ALIKE`] beyond its
+/// interval; no where the leak bends below linear; `None` where the joint
+/// test of the two cubics decides, which needs one of them to depart by
+/// the margin at its value. Electrolysis adds a current that grows faster
 /// than the voltage (Butler–Volmer's `sinh`; docs/FORMAT.md's note on the
 /// catalogue): a leak bending the other way is some other slow current (a
 /// current zero wandering between rests: lab rig seed 20024, a
@@ -1105,17 +1107,35 @@ fn signature_tests(e: Effect, fit: &FitResult, alone: &[usize]) -> usize {
 fn electrochemistry_alone(
     estimates: &[Estimate],
     z: f64,
+    peak_v: f64,
     reaction: Option<(f64, f64)>,
 ) -> Option<bool> {
     let find = |knob: Knob| estimates.iter().find(|est| est.knob == knob);
+    let (up, down) = (
+        reaction::cubic_at_departure(reaction::REACTION_ALIKE, peak_v),
+        reaction::cubic_at_departure(-reaction::REACTION_ALIKE, peak_v),
+    );
+    // Shifted by the margin, "beyond it" is "beyond zero" on the interval.
+    let shifted = |est: &Estimate, by: f64| Estimate {
+        knob: est.knob,
+        value: est.value - by,
+        low: est.low - by,
+        high: est.high - by,
+    };
     let leak = find(Knob::LeakCubic);
+    let charge = find(Knob::ChargeCubic);
     let reacts = reaction.is_some_and(|(d, se)| d - z * se > reaction::REACTION_ALIKE);
-    if leak.is_some_and(|est| above_zero_at(est, z))
-        || reacts
-        || find(Knob::ChargeCubic).is_some_and(|est| excludes_at(est, 0.0, z))
-    {
+    let leak_grows = leak.is_some_and(|est| above_zero_at(&shifted(est, up), z));
+    let charge_bends = charge.is_some_and(|est| {
+        above_zero_at(&shifted(est, up), z) || below_zero_at(&shifted(est, down), z)
+    });
+    let departs_at_value =
+        |est: Option<&Estimate>| est.is_some_and(|est| est.value > up || est.value < down);
+    if leak_grows || reacts || charge_bends {
         Some(true)
-    } else if leak.is_some_and(|est| est.value < 0.0) {
+    } else if leak.is_some_and(|est| est.value < 0.0)
+        || !(departs_at_value(leak) || departs_at_value(charge))
+    {
         Some(false)
     } else {
         None
@@ -1156,6 +1176,8 @@ mod tests {
             high: value + half,
         };
         let z = Bar::of_round(0, 8).z();
+        let peak_v = 4.0;
+        let alone = |e: &[Estimate], r| electrochemistry_alone(e, z, peak_v, r);
         // A leak bending up beyond its interval; one bending down as far.
         let up = [
             est(Knob::ChargeCubic, 0.0, 1e-3),
@@ -1165,33 +1187,45 @@ mod tests {
             est(Knob::ChargeCubic, 0.0, 1e-3),
             est(Knob::LeakCubic, -2e-2, 1e-3),
         ];
-        assert_eq!(electrochemistry_alone(&up, z, None), Some(true));
-        assert_eq!(electrochemistry_alone(&down, z, None), Some(false));
+        assert_eq!(alone(&up, None), Some(true));
+        assert_eq!(alone(&down, None), Some(false));
         // A charge off linear shows it whichever way the leak bends.
         let charge = [
             est(Knob::ChargeCubic, -2e-2, 1e-3),
             est(Knob::LeakCubic, -2e-2, 1e-3),
         ];
-        assert_eq!(electrochemistry_alone(&charge, z, None), Some(true));
-        // Within their intervals, the joint test decides.
+        assert_eq!(alone(&charge, None), Some(true));
+        // Sure, but within the margin at the highest drive: 2e-3 /V² is a
+        // 2.4 % departure at 4 V. The same cubics show it at a drive
+        // twice as high, where they depart by 9 %.
+        let slight = [
+            est(Knob::ChargeCubic, 2e-3, 1e-4),
+            est(Knob::LeakCubic, 2e-3, 1e-4),
+        ];
+        assert_eq!(alone(&slight, None), Some(false));
+        assert_eq!(
+            electrochemistry_alone(&slight, z, 2.0 * peak_v, None),
+            Some(true)
+        );
+        // Beyond the margin at their values but not beyond their
+        // intervals, the joint test decides; within it, nothing does.
         let unsure = [
+            est(Knob::ChargeCubic, 1e-2, 1e-2),
+            est(Knob::LeakCubic, 1e-2, 1e-2),
+        ];
+        assert_eq!(alone(&unsure, None), None);
+        let unsure_and_slight = [
             est(Knob::ChargeCubic, 1e-4, 1e-3),
             est(Knob::LeakCubic, 1e-4, 1e-3),
         ];
-        assert_eq!(electrochemistry_alone(&unsure, z, None), None);
+        assert_eq!(alone(&unsure_and_slight, None), Some(false));
         // A steady current half again over linear at the highest drive,
         // sure to a hundredth, whichever way the leak's cubic bends;
         // one within its interval of the margin is no evidence.
-        assert_eq!(
-            electrochemistry_alone(&down, z, Some((0.5, 0.01))),
-            Some(true)
-        );
+        assert_eq!(alone(&down, Some((0.5, 0.01))), Some(true));
         let unsure_reaction = Some((super::reaction::REACTION_ALIKE + 0.1, 0.1));
-        assert_eq!(
-            electrochemistry_alone(&down, z, unsure_reaction),
-            Some(false)
-        );
-        assert_eq!(electrochemistry_alone(&unsure, z, unsure_reaction), None);
+        assert_eq!(alone(&down, unsure_reaction), Some(false));
+        assert_eq!(alone(&unsure, unsure_reaction), None);
     }
 
     #[test]
