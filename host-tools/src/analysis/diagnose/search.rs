@@ -17,7 +17,7 @@ use super::verdict::{
 };
 use super::whiteness::{self, INPUT_LAGS};
 use crate::analysis::fit::mode_start as starts;
-use crate::analysis::fit::{above_zero_at, below_zero_at, beyond_at, excludes_at, Estimate};
+use crate::analysis::fit::{above_at, below_at, beyond_at, excludes_at, Estimate};
 use crate::analysis::fit::{
     form, profile_cost, session_peak_v, with_session_peak, ChannelFit, Effect, FitError, FitResult,
     Fitter, Knob, Score,
@@ -989,7 +989,7 @@ fn signature_is_significant(
         Effect::BackRelaxation => fit
             .estimates
             .iter()
-            .any(|est| est.knob == Knob::B && below_zero_at(est, z)),
+            .any(|est| est.knob == Knob::B && below_at(est, 0.0, z)),
         // The gain lost over the session, not the rate: the law's
         // curvature trades against its rate ([`drying`]).
         Effect::Dehydration => {
@@ -1005,7 +1005,7 @@ fn signature_is_significant(
         Effect::SegmentCrosstalk => fit
             .estimates
             .iter()
-            .any(|est| est.knob == Knob::Crosstalk && above_zero_at(est, z)),
+            .any(|est| est.knob == Knob::Crosstalk && above_at(est, 0.0, z)),
         // Some segment differs from the reference in some value by more
         // than a strip's segments differ when alike, in a value the
         // session shows apart from the beam's form ([`shows_apart`]).
@@ -1115,20 +1115,11 @@ fn electrochemistry_alone(
         reaction::cubic_at_departure(reaction::REACTION_ALIKE, peak_v),
         reaction::cubic_at_departure(-reaction::REACTION_ALIKE, peak_v),
     );
-    // Shifted by the margin, "beyond it" is "beyond zero" on the interval.
-    let shifted = |est: &Estimate, by: f64| Estimate {
-        knob: est.knob,
-        value: est.value - by,
-        low: est.low - by,
-        high: est.high - by,
-    };
     let leak = find(Knob::LeakCubic);
     let charge = find(Knob::ChargeCubic);
     let reacts = reaction.is_some_and(|(d, se)| d - z * se > reaction::REACTION_ALIKE);
-    let leak_grows = leak.is_some_and(|est| above_zero_at(&shifted(est, up), z));
-    let charge_bends = charge.is_some_and(|est| {
-        above_zero_at(&shifted(est, up), z) || below_zero_at(&shifted(est, down), z)
-    });
+    let leak_grows = leak.is_some_and(|est| above_at(est, up, z));
+    let charge_bends = charge.is_some_and(|est| above_at(est, up, z) || below_at(est, down, z));
     let departs_at_value =
         |est: Option<&Estimate>| est.is_some_and(|est| est.value > up || est.value < down);
     if leak_grows || reacts || charge_bends {

@@ -43,6 +43,5 @@ pub use fitter::{FitResult, Fitter, FormCheck, FIT_ELEMENTS};
 pub use inflation::{profile_cost, Inflation};
 pub use space::{difference_step, session_peak_v, with_session_peak, Knob, Space};
 pub use stats::{
-    above_zero_at, below_zero_at, beyond_at, excludes_at, nrmse, wilson_hilferty, ChannelFit,
-    Estimate, Score,
+    above_at, below_at, beyond_at, excludes_at, nrmse, wilson_hilferty, ChannelFit, Estimate, Score,
 };

@@ -406,14 +406,16 @@ pub fn beyond_at(est: &Estimate, margin: f64, z: f64) -> bool {
         && est.value.abs() - margin > z / Z95 * 0.5 * (est.high - est.low)
 }
 
-/// Whether `est`'s upper end, widened as [`excludes_at`] does, is below 0.
-pub fn below_zero_at(est: &Estimate, z: f64) -> bool {
-    est.high.is_finite() && est.value + z / Z95 * (est.high - est.value) < 0.0
+/// Whether `est`'s upper end, widened as [`excludes_at`] does, is below
+/// `off`.
+pub fn below_at(est: &Estimate, off: f64, z: f64) -> bool {
+    est.high.is_finite() && est.value + z / Z95 * (est.high - est.value) < off
 }
 
-/// Whether `est`'s lower end, widened as [`excludes_at`] does, is above 0.
-pub fn above_zero_at(est: &Estimate, z: f64) -> bool {
-    est.low.is_finite() && est.value - z / Z95 * (est.value - est.low) > 0.0
+/// Whether `est`'s lower end, widened as [`excludes_at`] does, is above
+/// `off`.
+pub fn above_at(est: &Estimate, off: f64, z: f64) -> bool {
+    est.low.is_finite() && est.value - z / Z95 * (est.value - est.low) > off
 }
 
 /// The 95 % interval of `value` with standard error `se`: unbounded for an
@@ -512,7 +514,7 @@ mod tests {
         assert_eq!(est[zeta].value, 0.0);
         assert_eq!((est[zeta].low, est[zeta].high), (0.0, f64::INFINITY));
         // It never counts as excluding 0 or as above it.
-        assert!(!excludes_at(&est[zeta], 0.0, 1.96) && !above_zero_at(&est[zeta], 1.96));
+        assert!(!excludes_at(&est[zeta], 0.0, 1.96) && !above_at(&est[zeta], 0.0, 1.96));
         // A knob off any floor keeps its delta-method interval.
         assert_eq!(est[r1].low, est[r1].value);
         assert_eq!(est[r1].high, est[r1].value);
@@ -568,6 +570,6 @@ mod tests {
         assert!(excludes_at(&ei, 1.0, 0.99 * f) && !excludes_at(&ei, 1.0, 1.01 * f));
         // Below zero: b's upper end.
         let b = est(-1.0, -1.5, -0.5);
-        assert!(below_zero_at(&b, 1.96) && below_zero_at(&b, 3.9) && !below_zero_at(&b, 4.0));
+        assert!(below_at(&b, 0.0, 1.96) && below_at(&b, 0.0, 3.9) && !below_at(&b, 0.0, 4.0));
     }
 }
