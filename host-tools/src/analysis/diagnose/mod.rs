@@ -3,8 +3,8 @@
 //! recordings the fit did not see.
 //!
 //! The session is split: about a third of the recordings (every third,
-//! from the second, keeping each fixture in the training part) are held
-//! out. The baseline is fitted on the rest; then each effect of the
+//! from the second, keeping each kind's first and last run in the
+//! training part) are held out. The baseline is fitted on the rest; then each effect of the
 //! catalogue is added in turn and fitted. An effect is accepted only when
 //! the evidence punishing its extra parameters favours it strongly
 //! (`ΔBIC < −10` on the training part) *and* it lowers the held-out error

@@ -77,15 +77,36 @@ pub const CROSSTALK_ALIKE: f64 = 0.02;
 /// one held-out recording tests the model on one drive alone.
 pub const MIN_HELD_OUT: usize = 2;
 
-/// Splits a session: every third recording from the second is held out,
-/// unless that would leave its kind (fixture and segments driven) without
-/// a training recording. A drive the training part never shows (segment
-/// 3 alone, the only blocked run) is not held out: its prediction would
+/// Splits a session: about every third recording, from the second, is
+/// held out, where it is not its kind's (fixture and segments driven)
+/// first or last run in the session's order and its kind keeps a
+/// training recording; in its place the next, else the one before, where
+/// that one may be. A drive the training part never shows (segment 3
+/// alone, the only blocked run) is not held out: its prediction would
 /// test how well the other recordings pin the knobs it alone moves (each
-/// segment's `K`), not the model's form. Where that holds out fewer than
-/// [`MIN_HELD_OUT`] (a protocol whose every third run is a lone drive),
-/// the other recordings are taken in order, by the same rule, until it
-/// does or none is left.
+/// segment's `K`), not the model's form. A kind's first and last runs
+/// stay in training so that a change over the session (drying, a slow
+/// loss of the strip's) is fitted over the whole time its held-out runs
+/// lie in: a held-out run past the training's last of its kind tests an
+/// extrapolation of the catalogue's law, whose form only approximates a
+/// strip's (development drying seeds 54124 and 54232: the force's loss
+/// seen only on held-out blocked runs, its fit worse than none on
+/// training). Nor is a drive beyond every training recording's held out
+/// (a step to 4 V where the others reach 2.5 V): its prediction would
+/// test an extrapolation in voltage, where the reaction departs (the
+/// tests' six-run protocol, `host-tools/tests/common`, with its travelling
+/// sine kept as its kind's last run, held out the 4 V step and named no
+/// reaction). Each fixture the session has is held out where an inner run
+/// of it may be: free runs alone show the beam's stiffness, and blocked
+/// ones the force a drying takes (null seed 61012 held out two blocked
+/// runs and lost its `beam-stiffness`). A fixture's first run is not held
+/// out for it: the ten-run protocol's first blocked step, held out, left
+/// its load cell at 6.5 times the floor in tests/rig's beam-stiffness
+/// session and 443 times in the hydrodynamic one, and each named a false
+/// `damping`. Where that
+/// holds out fewer than [`MIN_HELD_OUT`], the other recordings are taken
+/// in order, by the same rules, until it does; then the ends too; then
+/// none is left.
 pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
     let n = session.recordings.len();
     let kinds: Vec<_> = session
@@ -93,23 +114,64 @@ pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
         .iter()
         .map(|r| (r.rec.meta.fixture, r.driven()))
         .collect();
+    let end = |i: usize| {
+        !(0..i).any(|j| kinds[j] == kinds[i]) || !(i + 1..n).any(|j| kinds[j] == kinds[i])
+    };
+    let peaks: Vec<f64> = session
+        .recordings
+        .iter()
+        .map(|r| {
+            r.drive()
+                .v_v
+                .rows()
+                .flat_map(|v| v.iter().map(|x| x.abs()))
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    // Whether run `i` may join `hold`: an inner run (or, `ends_too`, any)
+    // whose kind keeps a training recording, and whose drive some
+    // training recording reaches (within the DAQ's reading of a repeat).
+    let may = |i: usize, ends_too: bool, hold: &[usize]| {
+        let training = |j: usize| j != i && !hold.contains(&j);
+        i < n
+            && !hold.contains(&i)
+            && (ends_too || !end(i))
+            && (0..n).any(|j| training(j) && kinds[j] == kinds[i])
+            && (ends_too || (0..n).any(|j| training(j) && peaks[j] >= 0.99 * peaks[i]))
+    };
     let mut hold: Vec<usize> = Vec::new();
-    let consider = |i: usize, hold: &mut Vec<usize>| {
-        let left = (0..n)
-            .filter(|&j| j != i && !hold.contains(&j) && kinds[j] == kinds[i])
-            .count();
-        if left > 0 {
+    let pattern = || (1..n).step_by(3);
+    for p in pattern() {
+        if let Some(i) = [p, p + 1, p - 1]
+            .into_iter()
+            .find(|&i| may(i, false, &hold))
+        {
             hold.push(i);
         }
-    };
-    for i in (1..n).step_by(3) {
-        consider(i, &mut hold);
     }
-    for i in (2..n).step_by(3).chain((0..n).step_by(3)) {
+    for fixture in [Fixture::Free, Fixture::Blocked] {
+        let of_it = |i: &usize| kinds[*i].0 == fixture;
+        if hold.iter().any(of_it) {
+            continue;
+        }
+        // An inner run only: held out, a blocked kind's first step (the
+        // ten-run protocol's 2 V) left the load cell at 6.5 times its
+        // floor on tests/rig's beam_stiffness (77e08cd's CI).
+        if let Some(i) = (0..n).filter(of_it).find(|&i| may(i, false, &hold)) {
+            hold.push(i);
+        }
+    }
+    let others = || (2..n).step_by(3).chain((0..n).step_by(3));
+    let fallback = others()
+        .map(|i| (i, false))
+        .chain(pattern().chain(others()).map(|i| (i, true)));
+    for (i, ends_too) in fallback {
         if hold.len() >= MIN_HELD_OUT {
             break;
         }
-        consider(i, &mut hold);
+        if may(i, ends_too, &hold) {
+            hold.push(i);
+        }
     }
     hold.sort_unstable();
     let train = (0..n).filter(|i| !hold.contains(i)).collect();
@@ -991,9 +1053,10 @@ fn signature_is_significant(
             .iter()
             .any(|est| est.knob == Knob::B && below_at(est, 0.0, z)),
         // The gain lost over the session, not the rate: the law's
-        // curvature trades against its rate ([`drying`]).
+        // curvature trades against its rate ([`drying`]); beyond what a
+        // strip that does not dry seems to lose.
         Effect::Dehydration => {
-            drying::loss_over(fit, span_s).is_some_and(|(loss, se)| loss - z * se > 0.0)
+            drying::loss_over(fit, span_s).is_some_and(|(loss, se)| drying::shows(loss, se, z))
         }
         // A neighbour bent the driven segment's way: charge reaching it
         // (through the polymer past the cut, or a shared electrode) has
@@ -1246,22 +1309,29 @@ mod tests {
     }
 
     #[test]
-    fn the_split_holds_out_only_drives_the_training_part_also_shows() {
+    fn the_split_holds_out_only_drives_the_training_part_shows_before_and_after() {
         let session = example();
         let (train, hold) = split(&session);
-        // Every third from the second, but not segment 3's lone run: the
-        // training part has no other drive of segment 3 alone.
+        // Every third from the second, but not the last of the free drives
+        // of all three segments (05: the one before, 04, in its place)
+        // nor segment 3's lone run (08, whose neighbours are lone runs
+        // too). Both blocked runs are their kind's ends: none is held out.
         assert_eq!(
             names(&session, &hold),
-            ["02_free_step_2.5V.csv", "05_free_sine_travel.csv"]
+            ["02_free_step_2.5V.csv", "04_free_chirp.csv"]
         );
         assert_eq!(train.len() + hold.len(), session.recordings.len());
+        let kind = |j: usize| {
+            let r = &session.recordings[j];
+            (r.rec.meta.fixture, r.driven())
+        };
         for &i in &hold {
-            let kind = |j: usize| {
-                let r = &session.recordings[j];
-                (r.rec.meta.fixture, r.driven())
-            };
-            assert!(train.iter().any(|&j| kind(j) == kind(i)));
+            // Its kind keeps a later run in training, and the free runs
+            // an earlier one too.
+            assert!(train.iter().any(|&j| j > i && kind(j) == kind(i)));
+            if kind(i).0 == Fixture::Free {
+                assert!(train.iter().any(|&j| j < i && kind(j) == kind(i)));
+            }
         }
     }
 
