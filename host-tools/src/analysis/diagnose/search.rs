@@ -99,11 +99,11 @@ pub const MIN_HELD_OUT: usize = 2;
 /// reaction). Each fixture the session has is held out where an inner run
 /// of it may be: free runs alone show the beam's stiffness, and blocked
 /// ones the force a drying takes (null seed 61012 held out two blocked
-/// runs and lost its `beam-stiffness`). A fixture's first run is not held
-/// out for it: the ten-run protocol's first blocked step, held out, left
-/// its load cell at 6.5 times the floor in tests/rig's beam-stiffness
-/// session and 443 times in the hydrodynamic one, and each named a false
-/// `damping`. Where that
+/// runs and lost its `beam-stiffness`). Only an inner run of its kind is
+/// held out for a fixture, as for the pattern: the ten-run protocol's
+/// first blocked step, held out, left its load cell at 6.5 times the
+/// floor in tests/rig's beam-stiffness session and 443 times in the
+/// hydrodynamic one, and each named a false `damping`. Where that
 /// holds out fewer than [`MIN_HELD_OUT`], the other recordings are taken
 /// in order, by the same rules, until it does; then the ends too; then
 /// none is left.
@@ -154,9 +154,7 @@ pub fn split(session: &Session) -> (Vec<usize>, Vec<usize>) {
         if hold.iter().any(of_it) {
             continue;
         }
-        // An inner run only: held out, a blocked kind's first step (the
-        // ten-run protocol's 2 V) left the load cell at 6.5 times its
-        // floor on tests/rig's beam_stiffness (77e08cd's CI).
+        // An inner run only (`false`); the doc comment says why.
         if let Some(i) = (0..n).filter(of_it).find(|&i| may(i, false, &hold)) {
             hold.push(i);
         }
