@@ -33,14 +33,15 @@ fn workspace() -> PathBuf {
 
 /// The QEMU firmware with the serial link and `features`, built from
 /// `firmware/` (its `.cargo/config.toml`: target, linker) into
-/// `target/qemu`, the QEMU tests' own target folder (this `cargo test`
-/// holds the workspace's), and copied aside: the tests build in turn into
-/// one place and run at once.
+/// `target/qemu-bench`, this file's own target folder (`scripts/test`
+/// runs the other crates' QEMU tests, which build into `target/qemu`,
+/// beside this one), and copied aside: the tests build in turn into one
+/// place and run at once.
 fn build_firmware(features: &str) -> PathBuf {
     static BUILD: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _turn = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
-    let target_dir = workspace().join("target/qemu");
+    let target_dir = workspace().join("target/qemu-bench");
     let status = Command::new(cargo)
         .current_dir(workspace().join("firmware"))
         .args(["build", "--release", "--locked", "-p", "finrs-firmware"])
@@ -272,9 +273,21 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
         elf.display(),
         out.display()
     ));
-    pty.keys(b"", 3000);
-    pty.keys(b"w", 500);
-    pty.keys(b"step:1\r", 3000);
+    // Each key once the view shows the last was taken, and the end once
+    // the board has run on for 1.5 s of its own time with the wave: not
+    // after fixed waits, since under load QEMU and the view start late
+    // and the board's clock runs behind the wall's (a run beside other
+    // tests quit before the wave had driven a sample: 0 rows at 1 V).
+    let limit = Duration::from_secs(120);
+    pty.wait_until("the board's Info frame", limit, |s| s.contains("segments,"));
+    pty.keys(b"w", 0);
+    pty.wait_until("the wave prompt", limit, |s| s.contains("Esc to cancel"));
+    pty.keys(b"step:1\r", 0);
+    let sent = pty.wait_until("the wave sent", limit, |s| s.contains("wave step:1"));
+    let at_send = samples_shown(&sent).expect("the view shows its samples");
+    pty.wait_until("1.5 s of samples after the wave", limit, |s| {
+        samples_shown(s).is_some_and(|n| n >= at_send + 1500)
+    });
     pty.keys(b"q", 0);
     let (status, screen) = pty.finish(
         Duration::from_secs(30),
@@ -296,6 +309,19 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
         .count();
     assert!(held > 500, "{held} rows at 1 V of {}", rec.t_s.len());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The count of samples the live view's status line shows (`N samples,
+/// …`).
+fn samples_shown(screen: &str) -> Option<usize> {
+    let line = screen.lines().find(|l| l.contains(" samples, "))?;
+    let before = &line[..line.find(" samples, ")?];
+    let digits: String = before
+        .chars()
+        .rev()
+        .take_while(|c| c.is_ascii_digit())
+        .collect();
+    digits.chars().rev().collect::<String>().parse().ok()
 }
 
 /// `finrs bench run PROTOCOL --qemu ELF --out OUT`, which must succeed;

@@ -3,12 +3,21 @@
 
 use std::io::{Read, Write};
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// The program under its pseudo-terminal.
 pub struct Pty {
     child: Child,
     stdin: ChildStdin,
+    /// All it drew so far, read as it comes by `reader`.
+    screen: Arc<Mutex<Vec<u8>>>,
+    reader: JoinHandle<()>,
+    /// The terminal's screen, as drawn so far.
+    terminal: vt100::Parser,
+    /// How much of `screen` `terminal` has drawn.
+    drawn: usize,
 }
 
 impl Pty {
@@ -26,7 +35,26 @@ impl Pty {
             .spawn()
             .unwrap();
         let stdin = child.stdin.take().unwrap();
-        Pty { child, stdin }
+        let mut stdout = child.stdout.take().unwrap();
+        let screen = Arc::new(Mutex::new(Vec::new()));
+        let into = Arc::clone(&screen);
+        let reader = std::thread::spawn(move || {
+            let mut chunk = [0u8; 4096];
+            while let Ok(n) = stdout.read(&mut chunk) {
+                if n == 0 {
+                    break;
+                }
+                into.lock().unwrap().extend_from_slice(&chunk[..n]);
+            }
+        });
+        Pty {
+            child,
+            stdin,
+            screen,
+            reader,
+            terminal: vt100::Parser::new(40, 100, 0),
+            drawn: 0,
+        }
     }
 
     /// Types `bytes`, then waits `wait_ms`.
@@ -34,6 +62,35 @@ impl Pty {
         self.stdin.write_all(bytes).unwrap();
         self.stdin.flush().unwrap();
         std::thread::sleep(Duration::from_millis(wait_ms));
+    }
+
+    /// Waits up to `limit` until the screen, as a terminal shows it
+    /// (its text, row by row), passes `shows`, else fails with the screen
+    /// and `what` it waited for. The screen's text and not the bytes
+    /// drawn: a terminal program redraws only the cells that changed.
+    /// Returns the screen that passed.
+    pub fn wait_until(
+        &mut self,
+        what: &str,
+        limit: Duration,
+        shows: impl Fn(&str) -> bool,
+    ) -> String {
+        let started = Instant::now();
+        loop {
+            {
+                let bytes = self.screen.lock().unwrap();
+                self.terminal.process(&bytes[self.drawn..]);
+                self.drawn = bytes.len();
+            }
+            let text = self.terminal.screen().contents();
+            if shows(&text) {
+                return text;
+            }
+            if started.elapsed() > limit {
+                panic!("not shown within {limit:?}: {what}; the screen:\n{text}");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
     }
 
     /// Waits up to `limit` for the program to end (else kills it and
@@ -51,13 +108,8 @@ impl Pty {
             std::thread::sleep(Duration::from_millis(20));
         };
         drop(self.stdin);
-        let mut screen = String::new();
-        self.child
-            .stdout
-            .take()
-            .unwrap()
-            .read_to_string(&mut screen)
-            .unwrap();
+        self.reader.join().unwrap();
+        let screen = String::from_utf8_lossy(&self.screen.lock().unwrap()).to_string();
         (status, screen)
     }
 }

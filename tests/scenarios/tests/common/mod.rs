@@ -18,9 +18,10 @@ pub fn workspace() -> PathBuf {
 ///
 /// The target directory is `target/qemu`, not the workspace's: this
 /// `cargo test` holds that one's lock. It is shared by every QEMU test
-/// (same target, most dependencies in common); cargo runs test binaries
-/// one after another, and a binary that builds from several threads
-/// serialises its own builds.
+/// of this crate (same target, most dependencies in common); cargo runs
+/// test binaries one after another, and a binary that builds from several
+/// threads serialises its own builds. The host tool's virtual bench,
+/// which `scripts/test` runs beside these, builds into its own.
 pub fn build_release(
     dir: &Path,
     package: &str,
