@@ -263,15 +263,6 @@ mod app {
         }
     }
 
-    /// Between interrupts: the board's `idle_wait` (RTIC's own idle is a
-    /// busy `loop {}`).
-    #[idle]
-    fn idle(_: idle::Context) -> ! {
-        loop {
-            board::idle_wait();
-        }
-    }
-
     /// Paces the sample task where no hardware does (QEMU).
     #[task(priority = 4)]
     async fn pace(_: pace::Context) {

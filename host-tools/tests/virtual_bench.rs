@@ -285,7 +285,7 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
     pty.keys(b"step:1\r", 0);
     let sent = pty.wait_until("the wave sent", limit, |s| s.contains("wave step:1"));
     let at_send = samples_shown(&sent).expect("the view shows its samples");
-    pty.wait_until("1.5 s of samples after the wave", limit, |s| {
+    let last = pty.wait_until("1.5 s of samples after the wave", limit, |s| {
         samples_shown(s).is_some_and(|n| n >= at_send + 1500)
     });
     pty.keys(b"q", 0);
@@ -307,7 +307,16 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
         .rows()
         .filter(|v| v.iter().all(|&x| (x - 1.0).abs() < 1e-6))
         .count();
-    assert!(held > 500, "{held} rows at 1 V of {}", rec.t_s.len());
+    let peak_v = rec
+        .v_v
+        .rows()
+        .flatten()
+        .fold(0.0f64, |m, &x| m.max(x.abs()));
+    assert!(
+        held > 500,
+        "{held} rows at 1 V of {} (peak {peak_v} V; {at_send} samples shown when the wave was sent); the view before q:\n{last}",
+        rec.t_s.len()
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

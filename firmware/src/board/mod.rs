@@ -15,7 +15,6 @@
 //! - `CommandIn`: `read(&mut [u8]) -> usize`, never blocking;
 //! - `pace()` and `housekeeping(&mut Housekeeping)`: the board's async
 //!   chores (pacing the sample interrupt where no hardware does, flushing);
-//! - `idle_wait()`: what the idle loop does between interrupts;
 //! - outputs at zero on panic and HardFault.
 
 #[cfg(feature = "qemu")]

@@ -509,17 +509,6 @@ fn to_counts(c: f32) -> u16 {
     }
 }
 
-/// Sleeps until an interrupt (WFI). Under `-icount sleep=off` QEMU then
-/// moves the guest's clock straight to the next timer deadline (QEMU's
-/// `-icount` documentation) instead of running a busy loop's
-/// instructions at 32 ns each, which kept a host core busy for the whole
-/// run; under `sleep=on` (the live view) it sleeps on the wall's clock.
-/// An interrupt pending before the WFI ends it at once (ARMv7-M, WFI), so
-/// none is missed.
-pub fn idle_wait() {
-    cortex_m::asm::wfi();
-}
-
 /// Pends the sample interrupt every millisecond of SysTick time.
 pub async fn pace() -> ! {
     let mut next = Mono::now();

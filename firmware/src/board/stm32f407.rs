@@ -1006,14 +1006,6 @@ fn secondary_done(adc: &pac::adc1::RegisterBlock) -> bool {
     false
 }
 
-/// Busy, as RTIC's own idle: a sleeping core also stops the clock a
-/// debug probe reads RTT through unless the probe sets DBGMCU_CR's
-/// DBG_SLEEP (RM0090, DBGMCU), which is for a board test to show before
-/// the board sleeps.
-pub fn idle_wait() {
-    cortex_m::asm::nop();
-}
-
 /// The ADC trigger timer paces the sample task: nothing to do.
 pub async fn pace() -> ! {
     loop {
