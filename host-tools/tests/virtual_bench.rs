@@ -323,14 +323,10 @@ fn the_live_view_drives_the_virtual_bench_from_its_keys() {
 /// The count of samples the live view's status line shows (`N samples,
 /// …`).
 fn samples_shown(screen: &str) -> Option<usize> {
+    // The line opens with the border: `│1793 samples, …`.
     let line = screen.lines().find(|l| l.contains(" samples, "))?;
-    let before = &line[..line.find(" samples, ")?];
-    let digits: String = before
-        .chars()
-        .rev()
-        .take_while(|c| c.is_ascii_digit())
-        .collect();
-    digits.chars().rev().collect::<String>().parse().ok()
+    let count = line.trim_start_matches(|c: char| !c.is_ascii_digit());
+    count.split(' ').next()?.parse().ok()
 }
 
 /// `finrs bench run PROTOCOL --qemu ELF --out OUT`, which must succeed;
