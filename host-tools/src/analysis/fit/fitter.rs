@@ -647,15 +647,21 @@ impl<'a> Fitter<'a> {
     }
 
     /// The descents of `space` on `recordings` from `start`, in the pool,
-    /// and the score at their end. Where the circuit's stage drives the
-    /// charge's cubic to its floor ([`Space::charge_cubic_at_floor`]),
-    /// the stages run again with it held at its start, and the lower cost
-    /// ([`profile_cost`]) is kept: on the literature rig's electrolysis (a
-    /// Tafel current behind `R1`) the floor's moment fitted the camera and
-    /// the load cell worse than the model without the effect (`finrs fit`
-    /// on development seed 52127's training recordings: BIC +22,000, the
-    /// leak alone −54,000), and on others far better (52086: the
-    /// reaction's ΔBIC in the search −143,000, −4,000 held).
+    /// and the score at their end. The charge's cubic is fitted in the
+    /// circuit's stage, on the currents alone, and shapes the moment the
+    /// beam's stage must then follow: where it leaves the fit worse than
+    /// its start ([`profile_cost`]), or at its floor
+    /// ([`Space::charge_cubic_at_floor`]), the stages run again with it
+    /// held at its start, and the lower cost is kept. On the literature
+    /// rig's electrolysis (a Tafel current behind `R1`) the floor's moment
+    /// fitted the camera and the load cell worse than the model without
+    /// the effect (`finrs fit` on development seed 52127's training
+    /// recordings: BIC +22,000, the leak alone −54,000), and on others far
+    /// better (52086: the reaction's ΔBIC in the search −143,000, −4,000
+    /// held). Off its floor too (development seed 50043's eight training
+    /// recordings, the damping and the stiffness beside: BIC +269,000
+    /// over the model without the reaction, its cubic −0.008/V², the
+    /// force's misfit fourfold; held, −74,000).
     fn descend_space_here(
         &self,
         recordings: &[usize],
@@ -665,7 +671,16 @@ impl<'a> Fitter<'a> {
         lane: Option<&Lane<'_>>,
     ) -> Result<Descended, FitError> {
         let free = self.descend_stages(recordings, space.clone(), start, patience, lane, false)?;
-        if !space.charge_cubic_at_floor(&free.circuit_theta) || free.given_up {
+        if free.given_up || !space.knobs.contains(&Knob::ChargeCubic) {
+            return Ok(free);
+        }
+        // One simulation at the start, where the floor does not already
+        // say to try; a start the model refuses is not a cost to beat.
+        let worse_than_start = || {
+            self.score_here(recordings, &space.spec(&space.start_theta(start)))
+                .is_ok_and(|begun| profile_cost(&free.score) > profile_cost(&begun))
+        };
+        if !space.charge_cubic_at_floor(&free.circuit_theta) && !worse_than_start() {
             return Ok(free);
         }
         let held = self.descend_stages(recordings, space, start, patience, lane, true)?;
