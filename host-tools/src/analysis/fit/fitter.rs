@@ -658,10 +658,11 @@ impl<'a> Fitter<'a> {
     /// the effect (`finrs fit` on development seed 52127's training
     /// recordings: BIC +22,000, the leak alone −54,000), and on others far
     /// better (52086: the reaction's ΔBIC in the search −143,000, −4,000
-    /// held). Off its floor too (development seed 50043's eight training
-    /// recordings, the damping and the stiffness beside: BIC +269,000
-    /// over the model without the reaction, its cubic −0.008/V², the
-    /// force's misfit fourfold; held, −74,000).
+    /// held). Off its floor too: on development seed 50043's eight
+    /// training recordings, started at the damped, stiffer model as the
+    /// diagnosis starts it, the cubic at −0.0076/V² left the BIC 61,000
+    /// above that model's, the load cell's misfit fourfold
+    /// (`tests/rig/tests/electrolysis_fit.rs`).
     fn descend_space_here(
         &self,
         recordings: &[usize],

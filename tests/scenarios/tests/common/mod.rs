@@ -20,11 +20,12 @@ pub fn workspace() -> PathBuf {
 /// locks a target directory while it builds or checks a build there (not
 /// while the tests it built run), and `scripts/test` starts the other
 /// streams' `cargo test` beside these tests: a build into the
-/// workspace's would wait on them, and they on it. It is shared by every QEMU test of this crate (same target,
-/// most dependencies in common); cargo runs test binaries one after
-/// another, and a binary that builds from several threads serialises its
-/// own builds. The host tool's virtual bench, which `scripts/test` runs
-/// beside these, builds into its own.
+/// workspace's would wait on them, and they on it. It is shared by every
+/// QEMU test of this crate (same target, most dependencies in common);
+/// cargo runs test binaries one after another, and a binary that builds
+/// from several threads serialises its own builds. The host tool's
+/// virtual bench, which `scripts/test` runs beside these, builds into its
+/// own.
 pub fn build_release(
     dir: &Path,
     package: &str,
