@@ -1224,6 +1224,24 @@ mod tests {
             .collect()
     }
 
+    /// The example session with only these recordings, in this order.
+    fn example_in_order(order: &[&str]) -> Session {
+        let mut session = example();
+        let recordings = order
+            .iter()
+            .map(|name| {
+                session
+                    .recordings
+                    .iter()
+                    .find(|r| r.name == *name)
+                    .unwrap_or_else(|| panic!("{name} not in the example"))
+                    .clone()
+            })
+            .collect();
+        session.recordings = recordings;
+        session
+    }
+
     #[test]
     fn only_a_leak_growing_faster_than_the_voltage_is_electrolysis() {
         let est = |knob, value: f64, half: f64| Estimate {
@@ -1340,10 +1358,9 @@ mod tests {
 
     #[test]
     fn a_split_whose_every_third_run_is_a_lone_drive_holds_out_others() {
-        let mut session = example();
         // Keep segment 1 alone and segment 3 alone at the pattern's
         // positions (1 and 4): the pattern alone holds out nothing.
-        let order = [
+        let session = example_in_order(&[
             "01_free_step_1.0V.csv",
             "06_free_single_seg1.csv",
             "02_free_step_2.5V.csv",
@@ -1351,17 +1368,7 @@ mod tests {
             "08_free_single_seg3.csv",
             "09_blocked_step_2.0V.csv",
             "10_blocked_step_4.0V.csv",
-        ];
-        let take = |name: &str| {
-            session
-                .recordings
-                .iter()
-                .find(|r| r.name == name)
-                .unwrap_or_else(|| panic!("{name} not in the example"))
-                .clone()
-        };
-        let recordings: Vec<_> = order.iter().map(|n| take(n)).collect();
-        session.recordings = recordings;
+        ]);
         let (train, hold) = split(&session);
         assert_eq!(hold.len(), MIN_HELD_OUT, "{:?}", names(&session, &hold));
         for &i in &hold {
@@ -1376,30 +1383,17 @@ mod tests {
 
     #[test]
     fn a_split_short_of_inner_runs_holds_out_a_kinds_end_before_the_highest_drive() {
-        let mut session = example();
         // One kind of three free steps whose inner run is the 4 V one
         // (dev seed 50074's shape): no inner run may be held out, so the
         // ends are, and the 4 V step stays in training.
-        let order = [
+        let session = example_in_order(&[
             "01_free_step_1.0V.csv",
             "03_free_step_4.0V.csv",
             "08_free_single_seg3.csv",
             "09_blocked_step_2.0V.csv",
             "02_free_step_2.5V.csv",
             "07_free_single_seg2.csv",
-        ];
-        let recordings: Vec<_> = order
-            .iter()
-            .map(|name| {
-                session
-                    .recordings
-                    .iter()
-                    .find(|r| r.name == *name)
-                    .unwrap_or_else(|| panic!("{name} not in the example"))
-                    .clone()
-            })
-            .collect();
-        session.recordings = recordings;
+        ]);
         let (train, hold) = split(&session);
         assert_eq!(
             names(&session, &hold),
